@@ -1,0 +1,62 @@
+#pragma once
+// Statistics of one or more metrics over a mesh, split between elements that a smoother can
+// move (at least one free vertex) and those it cannot (all vertices fixed).
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/mesh/simplex_mesh.hpp"
+
+namespace paloverde {
+
+struct QualityStatistics {
+    ElementId count = 0;
+    double min = 0.0, max = 0.0, mean = 0.0, rms = 0.0;
+    ElementId worst_element = -1;  // where min is attained
+    // Equal-width bins over [min, max].
+    std::vector<ElementId> histogram;
+};
+
+struct MetricReport {
+    std::string name;
+    QualityStatistics all;
+    QualityStatistics movable;  // elements with at least one free vertex
+    QualityStatistics frozen;   // elements whose vertices are all fixed
+};
+
+struct QualityReport {
+    VertexId vertices = 0;
+    VertexId free_vertices = 0;
+    ElementId elements = 0;
+    ElementId frozen_elements = 0;  // all vertices fixed
+    ElementId inverted = 0;         // decided by an exact orientation predicate
+    ElementId inverted_frozen = 0;  // of those, how many no smoother can fix
+    ElementId degenerate = 0;       // exactly zero volume
+    std::vector<MetricReport> metrics;
+
+    const MetricReport* metric(std::string_view name) const;
+    std::string to_text() const;
+    // {"vertices", "elements", "inverted", ..., "metrics": {"<name>": {"min","max","mean","rms",...}}}
+    std::string to_json() const;
+};
+
+class QualityAssessor {
+public:
+    // The default set for the mesh's kind: the shape metrics, scaled volume, and the minimum
+    // dihedral angle (tetrahedra) or minimum angle (triangles).
+    QualityAssessor();
+    explicit QualityAssessor(const std::vector<std::string>& metric_names, int histogram_bins = 10);
+
+    // Metrics that do not support the mesh's element kind are left out of the report.
+    QualityReport assess(const SimplexMesh& mesh) const { return assess(mesh, mesh.coordinates()); }
+    QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates) const;
+
+private:
+    std::vector<std::string> names_;
+    int bins_ = 10;
+};
+
+}  // namespace paloverde

@@ -1,0 +1,31 @@
+#pragma once
+// Renumbering for locality: solvers stream over elements and gather their corners, which is
+// 4-5x faster when neighbouring elements have neighbouring vertex ids (reverse Cuthill-McKee).
+// The user's numbering is kept for output by mapping back through `old_vertex`.
+#include <span>
+#include <vector>
+
+#include "paloverde/mesh/simplex_mesh.hpp"
+
+namespace paloverde {
+
+struct Renumbering {
+    std::vector<VertexId> old_vertex;    // new id -> original id
+    std::vector<ElementId> old_element;  // new id -> original id
+};
+
+// Vertices in reverse Cuthill-McKee order; elements sorted by `last_group` (elements flagged 1
+// go after all others) and then by their smallest new vertex id.
+Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t> last_group = {});
+
+// The mesh with vertices and elements in the new order (fixed flags and global ids follow).
+SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order);
+
+// The vertex-to-vertex graph (compressed rows, sorted neighbours, no self loops).
+struct VertexGraph {
+    std::vector<std::int64_t> offsets;
+    std::vector<VertexId> neighbours;
+};
+VertexGraph vertex_graph(const SimplexMesh& mesh);
+
+}  // namespace paloverde

@@ -1,0 +1,99 @@
+#pragma once
+// The native mesh: one kind of simplex (triangles or tetrahedra), stored as flat arrays so that
+// solvers stream over coordinates and connectivity without indirection.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "paloverde/core/types.hpp"
+#include "paloverde/mesh/mesh.hpp"
+
+namespace paloverde {
+
+class SimplexMesh final : public Mesh {
+public:
+    SimplexMesh() = default;
+    // Validates the arrays (sizes, finite coordinates, indices in range, no repeated corner in an
+    // element) and throws MeshError naming the first offending vertex or element. Vertices start
+    // free; global ids start as 0..n-1.
+    SimplexMesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity);
+
+    // Copies any Mesh through its batch interface.
+    static SimplexMesh copy_of(const Mesh& mesh);
+
+    ElementKind kind() const noexcept { return kind_; }
+    int corners() const noexcept { return corner_count(kind_); }
+    VertexId num_vertices() const noexcept { return static_cast<VertexId>(coordinates_.size() / 3); }
+    ElementId num_elements() const noexcept {
+        return static_cast<ElementId>(connectivity_.size() / corner_count(kind_));
+    }
+
+    // 3 doubles per vertex.
+    std::span<const double> coordinates() const noexcept { return coordinates_; }
+    std::span<double> coordinates() noexcept { return coordinates_; }
+    Vec3 point(VertexId v) const noexcept {
+        return {coordinates_[3 * v], coordinates_[3 * v + 1], coordinates_[3 * v + 2]};
+    }
+    // corners() ids per element.
+    std::span<const VertexId> connectivity() const noexcept { return connectivity_; }
+    std::span<const VertexId> element(ElementId e) const noexcept {
+        return std::span<const VertexId>(connectivity_).subspan(static_cast<std::size_t>(e) * corners(),
+                                                                 corners());
+    }
+
+    // Vertex -> incident elements, compressed rows.
+    std::span<const ElementId> elements_of(VertexId v) const noexcept {
+        return std::span<const ElementId>(vertex_elements_)
+            .subspan(vertex_element_offsets_[v], vertex_element_offsets_[v + 1] - vertex_element_offsets_[v]);
+    }
+    std::span<const std::int64_t> vertex_element_offsets() const noexcept { return vertex_element_offsets_; }
+    std::span<const ElementId> vertex_elements() const noexcept { return vertex_elements_; }
+
+    // 1 for vertices that must not move.
+    std::span<const std::uint8_t> fixed() const noexcept { return fixed_; }
+    void set_fixed(std::vector<std::uint8_t> fixed);
+    // Fixes exactly the vertices on the boundary (faces of one tetrahedron, edges of one triangle).
+    void fix_boundary();
+    VertexId num_free_vertices() const noexcept;
+
+    std::span<const GlobalId> global_ids() const noexcept { return global_ids_; }
+    void set_global_ids(std::vector<GlobalId> ids);
+
+    // Triangle meshes: whether all vertices lie in one plane, and that plane's unit normal, which
+    // defines a triangle's orientation (its signed area). Tetrahedral meshes: always planar=false.
+    bool is_planar() const noexcept { return planar_; }
+    const Vec3& plane_normal() const noexcept { return plane_normal_; }
+
+    // Mesh interface.
+    ElementKind element_kind() const override { return kind_; }
+    std::size_t vertex_count() const override { return static_cast<std::size_t>(num_vertices()); }
+    std::size_t element_count() const override { return static_cast<std::size_t>(num_elements()); }
+    void get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const override;
+    void set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) override;
+    void get_connectivity(std::span<const ElementId> elements, std::span<VertexId> corners) const override;
+    void get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> fixed) const override;
+
+private:
+    void build_adjacency();
+    void find_plane();
+
+    ElementKind kind_ = ElementKind::Tetrahedron;
+    std::vector<double> coordinates_;
+    std::vector<VertexId> connectivity_;
+    std::vector<std::int64_t> vertex_element_offsets_{0};
+    std::vector<ElementId> vertex_elements_;
+    std::vector<std::uint8_t> fixed_;
+    std::vector<GlobalId> global_ids_;
+    bool planar_ = false;
+    Vec3 plane_normal_{0.0, 0.0, 1.0};
+};
+
+// Throws MeshError naming two elements with the same set of vertices, if there are any.
+void check_no_duplicate_elements(const SimplexMesh& mesh);
+
+// Vertices on the boundary: on a face that belongs to one tetrahedron, or an edge that belongs
+// to one triangle. Returns one flag per vertex.
+std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const VertexId> connectivity,
+                                            VertexId num_vertices);
+
+}  // namespace paloverde

@@ -1,0 +1,75 @@
+#pragma once
+// A quality metric rates one element: larger is better, `ideal_value()` (1 for the shape
+// metrics) for the regular simplex, <= 0 for inverted elements of the orientation-aware ones.
+// Solvers use the batch calls, one virtual call per block of elements; the one-element calls
+// are for tests, local patches and users.
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "paloverde/core/types.hpp"
+
+namespace paloverde {
+
+class SimplexMesh;
+
+// What a metric needs to know about the mesh it rates: how triangles are oriented and the
+// size that scale-free volumes are measured against.
+struct MetricScale {
+    // Triangles of a planar mesh are oriented by this normal; in a non-planar (surface) mesh
+    // every triangle counts as positively oriented.
+    bool oriented_triangles = true;
+    Vec3 plane_normal{0.0, 0.0, 1.0};
+    // Volume (area for triangles) that scale-free volumes are divided by: the mean absolute
+    // element volume of the mesh.
+    double reference_volume = 1.0;
+
+    static MetricScale of(const SimplexMesh& mesh);
+};
+
+class QualityMetric {
+public:
+    virtual ~QualityMetric() = default;
+
+    virtual std::string_view name() const = 0;
+    virtual bool supports(ElementKind) const { return true; }
+    virtual bool has_gradient() const { return true; }
+    virtual double ideal_value() const { return 1.0; }
+
+    void set_scale(const MetricScale& scale) { scale_ = scale; }
+    const MetricScale& scale() const { return scale_; }
+    void prepare(const SimplexMesh& mesh) { scale_ = MetricScale::of(mesh); }
+
+    // One element; `corners` holds corner_count(kind) points of 3 doubles.
+    virtual double value(ElementKind kind, const double* corners) const = 0;
+    // Also writes d(value)/d(corner coordinates), 3 doubles per corner.
+    virtual double value_and_gradient(ElementKind kind, const double* corners, double* gradient) const = 0;
+
+    // Qualities of elements [first, last) of `mesh` at the vertex positions `coordinates` (the
+    // mesh's own or trial positions of the same layout): quality[e - first].
+    virtual void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+                          ElementId last, double* quality) const = 0;
+    // gradient[3(v - base) + c] += weight[e - first] * d(quality of e)/d(x_v,c) for the elements
+    // [first, last) (a `base` lets a buffer cover only the vertices these elements touch).
+    virtual void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+                                     ElementId last, const double* weight, double* gradient,
+                                     VertexId base = 0) const = 0;
+
+protected:
+    MetricScale scale_;
+};
+
+struct MetricOptions {
+    // Steepness of the logistic blend in the untangling metric, per unit of scale-free volume.
+    double hybrid_sharpness = 10.0;
+    void validate() const;  // throws OptionError
+};
+
+// Names: aspect_ratio, mean_ratio, inverse_condition, edge_ratio, scaled_volume,
+// untangle_hybrid, min_dihedral_deg (tetrahedra), min_angle_deg (triangles).
+std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options = {});
+const std::vector<std::string>& metric_names();
+
+}  // namespace paloverde

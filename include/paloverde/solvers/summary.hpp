@@ -1,0 +1,63 @@
+#pragma once
+// What a solver run did and why it stopped, in the spirit of Ceres' Solver::Summary.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+
+namespace paloverde {
+
+enum class TerminationReason {
+    TargetReached,       // the worst quality reached the requested target
+    Converged,           // the worst quality stopped rising (relative progress below tolerance)
+    GradientVanished,    // the objective's gradient is (relatively) zero
+    NoImprovingStep,     // no step along the search direction improves without harming the worst element
+    IterationLimit,
+    TimeLimit,
+    CannotUntangle,      // inverted elements remain that moving the free vertices did not fix
+    NothingToMove,       // no free vertex, or no element with one
+};
+
+std::string_view to_string(TerminationReason reason);
+
+struct IterationRecord {
+    int iteration = 0;
+    std::string phase;  // "untangle" or "shape"
+    double worst_quality = 0.0;       // of this iterate
+    double best_worst_quality = 0.0;  // of the best iterate so far: what the phase hands back
+    double mean_quality = 0.0;
+    long inverted = 0;   // elements with a non-positive quality in this phase's metric
+    double mu = 0.0, t = 0.0;
+    double objective = 0.0;
+    double step = 0.0;   // largest vertex displacement of the accepted step, over the reference length
+    double gain = 0.0;   // how much the accepted step raised the objective (0: no step)
+    double seconds = 0.0;
+};
+
+struct Summary {
+    std::string solver;
+    TerminationReason reason = TerminationReason::NothingToMove;
+    std::string message;   // why, in a sentence a user can act on
+    int iterations = 0;    // all phases
+    int untangle_iterations = 0;
+    long quality_passes = 0;   // evaluations of every element's quality
+    long gradient_passes = 0;  // evaluations of the whole gradient
+    double seconds = 0.0;
+    std::string quality_metric;       // the metric worst_* refer to
+    double worst_before = 0.0, worst_after = 0.0;  // over elements with a free vertex
+    QualityReport before, after;
+    std::vector<IterationRecord> history;
+
+    // The mesh handed back has no inverted element (decided exactly).
+    bool valid() const { return after.inverted == 0; }
+    // Valid, and stopped for a reason that is not a failure.
+    bool success() const;
+
+    std::string brief_report() const;
+    std::string full_report() const;
+    std::string history_csv() const;
+    std::string to_json() const;
+};
+
+}  // namespace paloverde

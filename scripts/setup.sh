@@ -1,0 +1,61 @@
+#!/usr/bin/env bash
+# Sets up Paloverde on Debian bookworm and runs the main job or every test.
+#   bash scripts/setup.sh run     install packages, build, untangle + improve the bundled example
+#   bash scripts/setup.sh test    install packages, build, run every test
+#   bash scripts/setup.sh build   install packages and build only
+# Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+# Every Debian package the project needs, in one place.
+PACKAGES=(
+  build-essential cmake
+  libopenmpi-dev openmpi-bin          # MPI
+  libmetis-dev                        # partitioning
+  libcgal-dev                         # exact predicates
+  libopenmesh-dev                     # the OpenMesh adapter
+  libboost-test-dev                   # tests
+  libcli11-dev nlohmann-json3-dev     # command line, JSON
+  zlib1g-dev                          # compressed .vtu
+)
+
+install_packages() {
+  local missing=()
+  for p in "${PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  local sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  echo "Installing: ${missing[*]}"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+BUILD_DIR=${PALOVERDE_BUILD_DIR:-build}
+build() {
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
+  cmake --build "$BUILD_DIR" -j "$(nproc)"
+}
+
+case "${1:-}" in
+  run)
+    install_packages
+    build
+    "$BUILD_DIR/bin/paloverde" improve examples/data/tangled_cube.vtk -o "$BUILD_DIR/tangled_cube_improved.vtk"
+    echo "Improved mesh written to $BUILD_DIR/tangled_cube_improved.vtk"
+    ;;
+  test)
+    install_packages
+    build
+    ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)"
+    ;;
+  build)
+    install_packages
+    build
+    ;;
+  *)
+    echo "usage: bash scripts/setup.sh run|test|build" >&2
+    exit 2
+    ;;
+esac

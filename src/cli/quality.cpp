@@ -1,0 +1,39 @@
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/io/atomic_file.hpp"
+#include "paloverde/io/mesh_io.hpp"
+
+namespace paloverde::cli {
+
+void add_quality_command(CLI::App& app, int& exit_code) {
+    struct Options {
+        std::string mesh;
+        bool json = false;
+        std::string json_file;
+        bool free_all = false;
+    };
+    auto options = std::make_shared<Options>();
+    CLI::App* cmd = app.add_subcommand("quality", "Report the quality of a mesh: min/max/mean/rms of each metric, "
+                                                  "inverted elements, and the elements no smoother can move");
+    cmd->add_option("mesh", options->mesh, "Mesh file (.vtk .vtu .msh .mesh .node/.ele)")->required();
+    cmd->add_flag("--json", options->json, "Print the report as JSON instead of a table");
+    cmd->add_option("--json-file", options->json_file, "Also write the JSON report to this file");
+    cmd->add_flag("--no-fixed-boundary", options->free_all,
+                  "Without a `fixed` field in the file, treat every vertex as free (default: boundary fixed)");
+    cmd->callback([options, &exit_code] {
+        ReadOptions read;
+        read.fix_boundary = !options->free_all;
+        const MeshFile file = read_mesh(options->mesh, read);
+        const QualityReport report = QualityAssessor().assess(file.mesh);
+        if (options->json) std::cout << report.to_json() << "\n";
+        else std::cout << options->mesh << ": " << to_string(file.mesh.kind()) << " mesh\n" << report.to_text();
+        if (!options->json_file.empty()) write_text_file(options->json_file, report.to_json() + "\n");
+        exit_code = kDone;
+    });
+}
+
+}  // namespace paloverde::cli

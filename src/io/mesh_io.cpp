@@ -1,0 +1,208 @@
+#include "paloverde/io/mesh_io.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/atomic_file.hpp"
+#include "raw_mesh.hpp"
+
+namespace paloverde {
+
+namespace {
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+// Keeps the tuples of `field` that belong to the kept cells.
+Field narrow_cell_field(const Field& field, std::span<const std::size_t> kept_cells, const std::string& path) {
+    Field out{field.name, field.components, {}};
+    out.values.reserve(kept_cells.size() * static_cast<std::size_t>(field.components));
+    const std::size_t tuples = field.values.size() / static_cast<std::size_t>(field.components);
+    for (std::size_t cell : kept_cells) {
+        if (cell >= tuples)
+            throw FileError(path, 0, "cell field '" + field.name + "' has " + std::to_string(tuples) +
+                                         " values, fewer than the cells");
+        const auto first = field.values.begin() + static_cast<std::ptrdiff_t>(cell * field.components);
+        out.values.insert(out.values.end(), first, first + field.components);
+    }
+    return out;
+}
+// Swaps two corners of every tetrahedron if their signed volumes sum to less than zero.
+// Indices are checked here because the mesh has not been validated yet.
+bool orient_by_total_volume(const std::vector<double>& xyz, std::vector<VertexId>& tets) {
+    const std::size_t n = xyz.size() / 3;
+    double total = 0.0;
+    for (std::size_t e = 0; e + 3 < tets.size(); e += 4) {
+        const VertexId* c = &tets[e];
+        if (std::any_of(c, c + 4, [&](VertexId v) { return v < 0 || static_cast<std::size_t>(v) >= n; })) return false;
+        double d[3][3];
+        for (int i = 0; i < 3; ++i)
+            for (int k = 0; k < 3; ++k) d[i][k] = xyz[3 * static_cast<std::size_t>(c[i + 1]) + k] - xyz[3 * static_cast<std::size_t>(c[0]) + k];
+        total += d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
+                 d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0]);
+    }
+    if (!(total < 0.0)) return false;
+    for (std::size_t e = 0; e + 3 < tets.size(); e += 4) std::swap(tets[e + 2], tets[e + 3]);
+    return true;
+}
+
+}  // namespace
+
+MeshFormat format_from_extension(const std::filesystem::path& path) {
+    const std::string ext = lower(path.extension().string());
+    if (ext == ".vtk") return MeshFormat::VtkLegacy;
+    if (ext == ".vtu") return MeshFormat::Vtu;
+    if (ext == ".msh") return MeshFormat::Gmsh;
+    if (ext == ".mesh") return MeshFormat::Medit;
+    if (ext == ".node" || ext == ".ele") return MeshFormat::TetGen;
+    throw FileError(path.string(), 0,
+                    "unknown mesh file extension '" + ext + "' (expected .vtk, .vtu, .msh, .mesh, .node or .ele)");
+}
+
+std::string_view to_string(MeshFormat format) {
+    switch (format) {
+        case MeshFormat::FromExtension: return "from-extension";
+        case MeshFormat::VtkLegacy: return "vtk";
+        case MeshFormat::Vtu: return "vtu";
+        case MeshFormat::Gmsh: return "gmsh";
+        case MeshFormat::Medit: return "medit";
+        case MeshFormat::TetGen: return "tetgen";
+    }
+    return "unknown";
+}
+
+void WriteOptions::validate(const std::filesystem::path& path) const {
+    const MeshFormat f = format == MeshFormat::FromExtension ? format_from_extension(path) : format;
+    if (f == MeshFormat::TetGen) throw OptionError("writing TetGen .node/.ele files is not supported; use .vtk, .vtu, .msh or .mesh");
+    if (f == MeshFormat::Gmsh && gmsh_version != "2.2")
+        throw OptionError("gmsh_version '" + gmsh_version + "' cannot be written; the Gmsh writer writes version 2.2");
+    if (f == MeshFormat::Medit && encoding == Encoding::Binary) {
+        // Medit's binary variant (.meshb) is a different extension; .mesh is always ASCII.
+    }
+}
+
+const Field* MeshFile::point_field(std::string_view name) const {
+    for (const Field& f : point_fields)
+        if (f.name == name) return &f;
+    return nullptr;
+}
+
+const Field* MeshFile::cell_field(std::string_view name) const {
+    for (const Field& f : cell_fields)
+        if (f.name == name) return &f;
+    return nullptr;
+}
+
+namespace io {
+
+MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& options) {
+    const bool tets = !raw.tetrahedra.empty();
+    if (!tets && raw.triangles.empty())
+        throw FileError(path, 0, "the file holds no triangles or tetrahedra (empty mesh)");
+    const ElementKind kind = tets ? ElementKind::Tetrahedron : ElementKind::Triangle;
+    std::vector<VertexId>& connectivity = tets ? raw.tetrahedra : raw.triangles;
+    const std::vector<std::size_t>& kept = tets ? raw.tetrahedron_cells : raw.triangle_cells;
+
+    MeshFile out;
+    if (raw.orient_by_total_volume && tets) out.reoriented = orient_by_total_volume(raw.coordinates, connectivity);
+    try {
+        out.mesh = SimplexMesh(kind, std::move(raw.coordinates), std::move(connectivity));
+        check_no_duplicate_elements(out.mesh);
+    } catch (const MeshError& e) {
+        throw FileError(path, 0, e.what());
+    }
+    const auto n = static_cast<std::size_t>(out.mesh.num_vertices());
+    for (Field& f : raw.point_fields) {
+        if (f.components < 1 || f.values.size() != n * static_cast<std::size_t>(f.components))
+            throw FileError(path, 0, "point field '" + f.name + "' has " + std::to_string(f.values.size()) +
+                                         " values for " + std::to_string(n) + " points");
+    }
+    for (const Field& f : raw.cell_fields) out.cell_fields.push_back(narrow_cell_field(f, kept, path));
+    out.point_fields = std::move(raw.point_fields);
+
+    if (const Field* fixed = out.point_field("fixed"); fixed && fixed->components == 1) {
+        std::vector<std::uint8_t> flags(n);
+        for (std::size_t v = 0; v < n; ++v) {
+            const double value = fixed->values[v];
+            if (!std::isfinite(value)) throw FileError(path, 0, "point field 'fixed' is not finite at vertex " + std::to_string(v));
+            flags[v] = value != 0.0;
+        }
+        out.mesh.set_fixed(std::move(flags));
+        out.fixed_from_file = true;
+    } else if (options.fix_boundary) {
+        out.mesh.fix_boundary();
+    }
+    for (const char* name : {"GlobalNodeIds", "GLOBAL_ID"}) {
+        if (const Field* ids = out.point_field(name); ids && ids->components == 1) {
+            std::vector<GlobalId> global(n);
+            for (std::size_t v = 0; v < n; ++v) {
+                const double id = ids->values[v];
+                if (!(id >= 0.0 && id < 9.0e15 && std::floor(id) == id))
+                    throw FileError(path, 0, std::string("point field '") + name + "' has an invalid id at vertex " + std::to_string(v));
+                global[v] = static_cast<GlobalId>(id);
+            }
+            out.mesh.set_global_ids(std::move(global));
+            break;
+        }
+    }
+    return out;
+}
+
+}  // namespace io
+
+MeshFile read_mesh(const std::filesystem::path& path, const ReadOptions& options) {
+    const MeshFormat format = options.format == MeshFormat::FromExtension ? format_from_extension(path) : options.format;
+    if (!std::filesystem::exists(path)) throw FileError(path.string(), 0, "no such file");
+    const std::string name = path.string();
+    io::RawMesh raw;
+    switch (format) {
+        case MeshFormat::VtkLegacy: raw = io::read_vtk_legacy(name); break;
+        case MeshFormat::Vtu: raw = io::read_vtu(name); break;
+        case MeshFormat::Gmsh: raw = io::read_gmsh(name); break;
+        case MeshFormat::Medit: raw = io::read_medit(name); break;
+        case MeshFormat::TetGen: raw = io::read_tetgen(name); break;
+        case MeshFormat::FromExtension: break;
+    }
+    return io::finish_mesh(std::move(raw), name, options);
+}
+
+void write_mesh(const std::filesystem::path& path,
+                const SimplexMesh& mesh,
+                const WriteOptions& options,
+                std::span<const Field> point_fields,
+                std::span<const Field> cell_fields) {
+    options.validate(path);
+    const MeshFormat format = options.format == MeshFormat::FromExtension ? format_from_extension(path) : options.format;
+    if (mesh.num_elements() == 0) throw MeshError("refusing to write " + path.string() + ": the mesh has no elements");
+    for (const Field& f : point_fields)
+        if (f.components < 1 || f.values.size() != static_cast<std::size_t>(mesh.num_vertices()) * f.components)
+            throw Error("point field '" + f.name + "' does not have one tuple per vertex");
+    for (const Field& f : cell_fields)
+        if (f.components < 1 || f.values.size() != static_cast<std::size_t>(mesh.num_elements()) * f.components)
+            throw Error("cell field '" + f.name + "' does not have one tuple per element");
+
+    std::vector<Field> points(point_fields.begin(), point_fields.end());
+    const bool has_fixed = std::any_of(points.begin(), points.end(), [](const Field& f) { return f.name == "fixed"; });
+    if (options.write_fixed && !has_fixed) {
+        Field fixed{"fixed", 1, std::vector<double>(mesh.fixed().begin(), mesh.fixed().end())};
+        points.push_back(std::move(fixed));
+    }
+    const io::MeshToWrite data{mesh, points, cell_fields};
+
+    AtomicFile file(path, true);
+    switch (format) {
+        case MeshFormat::VtkLegacy: io::write_vtk_legacy(file.stream(), data, options.encoding); break;
+        case MeshFormat::Vtu: io::write_vtu(file.stream(), data, options.encoding); break;
+        case MeshFormat::Gmsh: io::write_gmsh(file.stream(), data, options.encoding); break;
+        case MeshFormat::Medit: io::write_medit(file.stream(), data); break;
+        case MeshFormat::TetGen:
+        case MeshFormat::FromExtension: break;
+    }
+    file.commit();
+}
+
+}  // namespace paloverde

@@ -1,0 +1,216 @@
+#include "text_scanner.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <utility>
+
+#include "paloverde/core/error.hpp"
+
+namespace paloverde::io {
+
+namespace {
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
+}  // namespace
+
+TextScanner::TextScanner(std::string path) : path_(std::move(path)) {
+    std::ifstream in(path_, std::ios::binary);
+    if (!in) throw FileError(path_, 0, "cannot open the file (missing or unreadable)");
+    in.seekg(0, std::ios::end);
+    const auto size = in.tellg();
+    if (size < 0) throw FileError(path_, 0, "cannot read the file");
+    data_.resize(static_cast<std::size_t>(size));
+    in.seekg(0);
+    in.read(data_.data(), static_cast<std::streamsize>(data_.size()));
+    if (!in) throw FileError(path_, 0, "cannot read the file");
+}
+
+void TextScanner::skip_space() {
+    while (pos_ < data_.size() && is_space(data_[pos_])) {
+        if (data_[pos_] == '\n') ++line_;
+        ++pos_;
+    }
+}
+
+bool TextScanner::at_end() {
+    skip_space();
+    return pos_ >= data_.size();
+}
+
+std::string_view TextScanner::token() {
+    skip_space();
+    const std::size_t begin = pos_;
+    while (pos_ < data_.size() && !is_space(data_[pos_])) ++pos_;
+    return std::string_view(data_).substr(begin, pos_ - begin);
+}
+
+std::string_view TextScanner::expect_token(std::string_view what) {
+    const std::string_view t = token();
+    if (t.empty()) fail("unexpected end of file: expected " + std::string(what));
+    return t;
+}
+
+void TextScanner::expect_keyword(std::string_view keyword) {
+    const std::string_view t = expect_token(keyword);
+    if (t != keyword) fail("expected '" + std::string(keyword) + "', found '" + std::string(t.substr(0, 64)) + "'");
+}
+
+double TextScanner::real(std::string_view what) {
+    const std::string_view t = expect_token(what);
+    double value = 0.0;
+    if (!parse_real(t, value)) fail("expected " + std::string(what) + ", found '" + std::string(t.substr(0, 64)) + "'");
+    return value;
+}
+
+double TextScanner::finite_real(std::string_view what) {
+    const double value = real(what);
+    if (!std::isfinite(value)) fail(std::string(what) + " is not finite");
+    return value;
+}
+
+std::int64_t TextScanner::integer(std::string_view what) {
+    const std::string_view t = expect_token(what);
+    std::int64_t value = 0;
+    if (!parse_integer(t, value))
+        fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'");
+    return value;
+}
+
+std::int64_t TextScanner::count(std::string_view what, std::int64_t max_plausible) {
+    const std::int64_t value = integer(what);
+    if (value < 0) fail(std::string(what) + " is negative (" + std::to_string(value) + ")");
+    if (value > max_plausible)
+        fail(std::string(what) + " of " + std::to_string(value) + " cannot fit in the rest of the file (" +
+             std::to_string(remaining()) + " bytes)");
+    return value;
+}
+
+std::string_view TextScanner::rest_of_line() {
+    const std::size_t begin = pos_;
+    while (pos_ < data_.size() && data_[pos_] != '\n') ++pos_;
+    std::size_t end = pos_;
+    if (end > begin && data_[end - 1] == '\r') --end;
+    if (pos_ < data_.size()) {
+        ++pos_;
+        ++line_;
+    }
+    return std::string_view(data_).substr(begin, end - begin);
+}
+
+void TextScanner::skip_line() { rest_of_line(); }
+
+std::string_view TextScanner::bytes(std::size_t n, std::string_view what) {
+    if (n > remaining())
+        fail_at_byte("file ends inside " + std::string(what) + " (" + std::to_string(n) + " bytes needed, " +
+                     std::to_string(remaining()) + " left)");
+    const std::string_view out = std::string_view(data_).substr(pos_, n);
+    pos_ += n;
+    return out;
+}
+
+void TextScanner::skip_one_newline() {
+    while (pos_ < data_.size() && (data_[pos_] == ' ' || data_[pos_] == '\t' || data_[pos_] == '\r')) ++pos_;
+    if (pos_ < data_.size() && data_[pos_] == '\n') {
+        ++pos_;
+        ++line_;
+    }
+}
+
+void TextScanner::fail(const std::string& message) const {
+    if (byte_offsets_) fail_at_byte(message);
+    throw FileError(path_, line_, message);
+}
+
+void TextScanner::fail_at_byte(const std::string& message) const { throw FileError::at_byte(path_, pos_, message); }
+
+bool parse_real(std::string_view token, double& value) {
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+    const char* end = token.data() + token.size();
+    const auto result = std::from_chars(token.data(), end, value);
+    if (result.ec == std::errc::result_out_of_range) {
+        // Underflow to a denormal or zero is fine; overflow becomes infinity (rejected by callers
+        // that need finite values).
+        value = std::strtod(std::string(token).c_str(), nullptr);
+        return true;
+    }
+    return result.ec == std::errc() && result.ptr == end && !token.empty();
+}
+
+bool parse_integer(std::string_view token, std::int64_t& value) {
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+    const char* end = token.data() + token.size();
+    const auto result = std::from_chars(token.data(), end, value);
+    return result.ec == std::errc() && result.ptr == end && !token.empty();
+}
+
+bool host_is_little_endian() {
+    const std::uint16_t probe = 1;
+    return *reinterpret_cast<const unsigned char*>(&probe) == 1;
+}
+
+namespace {
+constexpr char kAlphabet[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+int base64_value(char c) {
+    if (c >= 'A' && c <= 'Z') return c - 'A';
+    if (c >= 'a' && c <= 'z') return c - 'a' + 26;
+    if (c >= '0' && c <= '9') return c - '0' + 52;
+    if (c == '+') return 62;
+    if (c == '/') return 63;
+    return -1;
+}
+}  // namespace
+
+std::string base64_encode(std::string_view bytes) {
+    std::string out;
+    out.reserve((bytes.size() + 2) / 3 * 4);
+    std::size_t i = 0;
+    for (; i + 2 < bytes.size(); i += 3) {
+        const unsigned v = (static_cast<unsigned char>(bytes[i]) << 16) |
+                           (static_cast<unsigned char>(bytes[i + 1]) << 8) | static_cast<unsigned char>(bytes[i + 2]);
+        out += kAlphabet[(v >> 18) & 63];
+        out += kAlphabet[(v >> 12) & 63];
+        out += kAlphabet[(v >> 6) & 63];
+        out += kAlphabet[v & 63];
+    }
+    if (i < bytes.size()) {
+        unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+        if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
+        out += kAlphabet[(v >> 18) & 63];
+        out += kAlphabet[(v >> 12) & 63];
+        out += i + 1 < bytes.size() ? kAlphabet[(v >> 6) & 63] : '=';
+        out += '=';
+    }
+    return out;
+}
+
+bool base64_decode(std::string_view text, std::string& bytes) {
+    bytes.clear();
+    bytes.reserve(text.size() / 4 * 3);
+    unsigned buffer = 0;
+    int bits = 0;
+    bool padding = false;
+    for (char c : text) {
+        if (is_space(c)) continue;
+        if (c == '=') {
+            padding = true;
+            continue;
+        }
+        const int v = base64_value(c);
+        // Data after padding starts a new block (VTK concatenates a base64 header and body).
+        if (v < 0) return false;
+        if (padding) {
+            buffer = 0;
+            bits = 0;
+            padding = false;
+        }
+        buffer = (buffer << 6) | static_cast<unsigned>(v);
+        bits += 6;
+        if (bits >= 8) {
+            bits -= 8;
+            bytes += static_cast<char>((buffer >> bits) & 0xFF);
+        }
+    }
+    return true;
+}
+
+}  // namespace paloverde::io

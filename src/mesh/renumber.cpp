@@ -1,0 +1,147 @@
+#include "paloverde/mesh/renumber.hpp"
+
+#include <algorithm>
+#include <numeric>
+
+namespace paloverde {
+
+VertexGraph vertex_graph(const SimplexMesh& mesh) {
+    VertexGraph graph;
+    const VertexId n = mesh.num_vertices();
+    graph.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
+    std::vector<VertexId> scratch;
+    // Two passes over the incident elements: count the distinct neighbours, then fill them.
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+            std::partial_sum(graph.offsets.begin(), graph.offsets.end(), graph.offsets.begin());
+            graph.neighbours.resize(static_cast<std::size_t>(graph.offsets.back()));
+        }
+        for (VertexId v = 0; v < n; ++v) {
+            scratch.clear();
+            for (ElementId e : mesh.elements_of(v))
+                for (VertexId w : mesh.element(e))
+                    if (w != v) scratch.push_back(w);
+            std::sort(scratch.begin(), scratch.end());
+            scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
+            if (pass == 0) graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(scratch.size());
+            else std::copy(scratch.begin(), scratch.end(), graph.neighbours.begin() + graph.offsets[v]);
+        }
+    }
+    return graph;
+}
+
+namespace {
+
+// Breadth-first levels from `start` within its component; returns the visit order.
+std::vector<VertexId> bfs(const VertexGraph& g, VertexId start, std::vector<int>& level) {
+    std::vector<VertexId> order{start};
+    level[start] = 0;
+    for (std::size_t head = 0; head < order.size(); ++head) {
+        const VertexId v = order[head];
+        for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i) {
+            const VertexId w = g.neighbours[i];
+            if (level[w] < 0) {
+                level[w] = level[v] + 1;
+                order.push_back(w);
+            }
+        }
+    }
+    return order;
+}
+
+// A vertex far from everything in its component (George-Liu pseudo-peripheral search).
+VertexId pseudo_peripheral(const VertexGraph& g, VertexId start) {
+    const auto degree = [&](VertexId v) { return g.offsets[v + 1] - g.offsets[v]; };
+    std::vector<int> level(g.offsets.size() - 1, -1);
+    int eccentricity = -1;
+    for (int round = 0; round < 8; ++round) {
+        std::fill(level.begin(), level.end(), -1);  // O(n) per round; a handful of rounds
+        const auto order = bfs(g, start, level);
+        const int depth = level[order.back()];
+        if (depth <= eccentricity) break;
+        eccentricity = depth;
+        VertexId best = order.back();
+        for (auto it = order.rbegin(); it != order.rend() && level[*it] == depth; ++it)
+            if (degree(*it) < degree(best)) best = *it;
+        start = best;
+    }
+    return start;
+}
+
+}  // namespace
+
+Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t> last_group) {
+    const VertexGraph g = vertex_graph(mesh);
+    const VertexId n = mesh.num_vertices();
+    const auto degree = [&](VertexId v) { return g.offsets[v + 1] - g.offsets[v]; };
+    std::vector<VertexId> order;
+    order.reserve(static_cast<std::size_t>(n));
+    std::vector<char> placed(static_cast<std::size_t>(n), 0);
+    std::vector<VertexId> ranked(static_cast<std::size_t>(n));
+    std::iota(ranked.begin(), ranked.end(), VertexId{0});
+    std::stable_sort(ranked.begin(), ranked.end(), [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
+    std::vector<VertexId> neighbours;
+    for (VertexId seed : ranked) {  // one Cuthill-McKee sweep per connected component
+        if (placed[seed]) continue;
+        const VertexId start = pseudo_peripheral(g, seed);
+        std::size_t head = order.size();
+        order.push_back(start);
+        placed[start] = 1;
+        for (; head < order.size(); ++head) {
+            const VertexId v = order[head];
+            neighbours.clear();
+            for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i)
+                if (!placed[g.neighbours[i]]) neighbours.push_back(g.neighbours[i]);
+            std::stable_sort(neighbours.begin(), neighbours.end(),
+                             [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
+            for (VertexId w : neighbours) {
+                placed[w] = 1;
+                order.push_back(w);
+            }
+        }
+    }
+    std::reverse(order.begin(), order.end());
+
+    Renumbering result;
+    result.old_vertex = std::move(order);
+    std::vector<VertexId> new_id(static_cast<std::size_t>(n));
+    for (VertexId i = 0; i < n; ++i) new_id[result.old_vertex[i]] = i;
+
+    const ElementId m = mesh.num_elements();
+    std::vector<std::pair<std::int64_t, ElementId>> keys(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        VertexId lowest = n;
+        for (VertexId v : mesh.element(e)) lowest = std::min(lowest, new_id[v]);
+        const std::int64_t group = !last_group.empty() && last_group[e] ? 1 : 0;
+        keys[e] = {group * (static_cast<std::int64_t>(n) + 1) + lowest, e};
+    }
+    std::sort(keys.begin(), keys.end());
+    result.old_element.resize(static_cast<std::size_t>(m));
+    for (ElementId i = 0; i < m; ++i) result.old_element[i] = keys[i].second;
+    return result;
+}
+
+SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
+    const VertexId n = mesh.num_vertices();
+    std::vector<VertexId> new_id(static_cast<std::size_t>(n));
+    for (VertexId i = 0; i < n; ++i) new_id[order.old_vertex[i]] = i;
+    std::vector<double> xyz(3 * static_cast<std::size_t>(n));
+    std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n));
+    std::vector<GlobalId> global(static_cast<std::size_t>(n));
+    for (VertexId i = 0; i < n; ++i) {
+        const VertexId old = order.old_vertex[i];
+        for (int c = 0; c < 3; ++c) xyz[3 * i + c] = mesh.coordinates()[3 * static_cast<std::size_t>(old) + c];
+        fixed[i] = mesh.fixed()[old];
+        global[i] = mesh.global_ids()[old];
+    }
+    std::vector<VertexId> connectivity;
+    connectivity.reserve(mesh.connectivity().size());
+    for (ElementId old : order.old_element)
+        for (VertexId v : mesh.element(old)) connectivity.push_back(new_id[v]);
+    SimplexMesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
+    out.set_fixed(std::move(fixed));
+    out.set_global_ids(std::move(global));
+    return out;
+}
+
+}  // namespace paloverde

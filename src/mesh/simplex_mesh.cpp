@@ -1,0 +1,217 @@
+#include "paloverde/mesh/simplex_mesh.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "paloverde/core/error.hpp"
+
+namespace paloverde {
+
+SimplexMesh::SimplexMesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity)
+    : kind_(kind), coordinates_(std::move(coordinates)), connectivity_(std::move(connectivity)) {
+    const int k = corners();
+    if (coordinates_.size() % 3 != 0) throw MeshError("coordinate array length is not a multiple of 3");
+    if (connectivity_.size() % static_cast<std::size_t>(k) != 0)
+        throw MeshError("connectivity length is not a multiple of " + std::to_string(k));
+    if (coordinates_.size() / 3 > static_cast<std::size_t>(std::numeric_limits<VertexId>::max()) ||
+        connectivity_.size() / k > static_cast<std::size_t>(std::numeric_limits<ElementId>::max()))
+        throw MeshError("mesh too large for one process: partition it across more ranks");
+    const VertexId n = num_vertices();
+    for (VertexId v = 0; v < n; ++v)
+        for (int c = 0; c < 3; ++c)
+            if (!std::isfinite(coordinates_[3 * v + c]))
+                throw MeshError("vertex " + std::to_string(v) + " has a non-finite coordinate");
+    const ElementId m = num_elements();
+    for (ElementId e = 0; e < m; ++e) {
+        const VertexId* c = connectivity_.data() + static_cast<std::size_t>(e) * k;
+        for (int i = 0; i < k; ++i) {
+            if (c[i] < 0 || c[i] >= n)
+                throw MeshError("element " + std::to_string(e) + " refers to vertex " + std::to_string(c[i]) +
+                                ", outside 0.." + std::to_string(n - 1));
+            for (int j = 0; j < i; ++j)
+                if (c[i] == c[j])
+                    throw MeshError("element " + std::to_string(e) + " repeats vertex " + std::to_string(c[i]));
+        }
+    }
+    fixed_.assign(static_cast<std::size_t>(n), 0);
+    global_ids_.resize(static_cast<std::size_t>(n));
+    std::iota(global_ids_.begin(), global_ids_.end(), GlobalId{0});
+    build_adjacency();
+    find_plane();
+}
+
+SimplexMesh SimplexMesh::copy_of(const Mesh& source) {
+    const auto n = static_cast<VertexId>(source.vertex_count());
+    const auto m = static_cast<ElementId>(source.element_count());
+    std::vector<VertexId> vertices(static_cast<std::size_t>(n));
+    std::iota(vertices.begin(), vertices.end(), VertexId{0});
+    std::vector<ElementId> elements(static_cast<std::size_t>(m));
+    std::iota(elements.begin(), elements.end(), ElementId{0});
+    std::vector<double> xyz(3 * vertices.size());
+    source.get_coordinates(vertices, xyz);
+    std::vector<VertexId> connectivity(elements.size() * corner_count(source.element_kind()));
+    source.get_connectivity(elements, connectivity);
+    std::vector<std::uint8_t> fixed(vertices.size());
+    source.get_fixed(vertices, fixed);
+    SimplexMesh mesh(source.element_kind(), std::move(xyz), std::move(connectivity));
+    mesh.set_fixed(std::move(fixed));
+    return mesh;
+}
+
+void SimplexMesh::build_adjacency() {
+    const VertexId n = num_vertices();
+    const int k = corners();
+    vertex_element_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
+    for (VertexId v : connectivity_) ++vertex_element_offsets_[static_cast<std::size_t>(v) + 1];
+    std::partial_sum(vertex_element_offsets_.begin(), vertex_element_offsets_.end(), vertex_element_offsets_.begin());
+    vertex_elements_.resize(connectivity_.size());
+    std::vector<std::int64_t> next(vertex_element_offsets_.begin(), vertex_element_offsets_.end() - 1);
+    for (std::size_t i = 0; i < connectivity_.size(); ++i)
+        vertex_elements_[next[connectivity_[i]]++] = static_cast<ElementId>(i / k);
+}
+
+void SimplexMesh::find_plane() {
+    planar_ = false;
+    plane_normal_ = {0.0, 0.0, 1.0};
+    if (kind_ != ElementKind::Triangle || num_elements() == 0) return;
+    // The area-weighted normal: inverted triangles subtract, so a tangled but mostly valid planar
+    // mesh keeps the orientation of its majority.
+    Vec3 sum{0.0, 0.0, 0.0};
+    for (ElementId e = 0; e < num_elements(); ++e) {
+        const auto c = element(e);
+        const Vec3 a = point(c[0]), b = point(c[1]), d = point(c[2]);
+        const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        sum[0] += u[1] * w[2] - u[2] * w[1];
+        sum[1] += u[2] * w[0] - u[0] * w[2];
+        sum[2] += u[0] * w[1] - u[1] * w[0];
+    }
+    const double length = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+    Vec3 lo{coordinates_[0], coordinates_[1], coordinates_[2]}, hi = lo;
+    for (VertexId v = 0; v < num_vertices(); ++v)
+        for (int i = 0; i < 3; ++i) {
+            lo[i] = std::min(lo[i], coordinates_[3 * v + i]);
+            hi[i] = std::max(hi[i], coordinates_[3 * v + i]);
+        }
+    const double diagonal = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    if (!(length > 0.0) || !(diagonal > 0.0)) return;
+    Vec3 normal{sum[0] / length, sum[1] / length, sum[2] / length};
+    // Snap to an axis when the mesh lies in a coordinate plane, so orientation there is exact.
+    for (int i = 0; i < 3; ++i)
+        if (std::abs(normal[i]) > 1.0 - 1e-12) {
+            normal = {0.0, 0.0, 0.0};
+            normal[i] = sum[i] > 0 ? 1.0 : -1.0;
+        }
+    const Vec3 origin = point(connectivity_[0]);
+    // Coordinates often come from single-precision files: allow float rounding, nothing more.
+    const double tolerance = 1e-6 * diagonal;
+    for (VertexId v = 0; v < num_vertices(); ++v) {
+        if (vertex_element_offsets_[v] == vertex_element_offsets_[v + 1]) continue;
+        double distance = 0.0;
+        for (int i = 0; i < 3; ++i) distance += (coordinates_[3 * v + i] - origin[i]) * normal[i];
+        if (std::abs(distance) > tolerance) return;
+    }
+    planar_ = true;
+    plane_normal_ = normal;
+}
+
+void SimplexMesh::set_fixed(std::vector<std::uint8_t> fixed) {
+    if (fixed.size() != static_cast<std::size_t>(num_vertices()))
+        throw MeshError("fixed flags: " + std::to_string(fixed.size()) + " given for " +
+                        std::to_string(num_vertices()) + " vertices");
+    fixed_ = std::move(fixed);
+}
+
+void SimplexMesh::fix_boundary() { fixed_ = boundary_vertices(kind_, connectivity_, num_vertices()); }
+
+VertexId SimplexMesh::num_free_vertices() const noexcept {
+    return static_cast<VertexId>(std::count(fixed_.begin(), fixed_.end(), std::uint8_t{0}));
+}
+
+void SimplexMesh::set_global_ids(std::vector<GlobalId> ids) {
+    if (ids.size() != static_cast<std::size_t>(num_vertices()))
+        throw MeshError("global ids: " + std::to_string(ids.size()) + " given for " + std::to_string(num_vertices()) +
+                        " vertices");
+    global_ids_ = std::move(ids);
+}
+
+void SimplexMesh::get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const {
+    for (std::size_t i = 0; i < vertices.size(); ++i)
+        for (int c = 0; c < 3; ++c) xyz[3 * i + c] = coordinates_[3 * static_cast<std::size_t>(vertices[i]) + c];
+}
+
+void SimplexMesh::set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) {
+    for (std::size_t i = 0; i < vertices.size(); ++i)
+        for (int c = 0; c < 3; ++c) coordinates_[3 * static_cast<std::size_t>(vertices[i]) + c] = xyz[3 * i + c];
+}
+
+void SimplexMesh::get_connectivity(std::span<const ElementId> elements, std::span<VertexId> out) const {
+    const int k = corners();
+    for (std::size_t i = 0; i < elements.size(); ++i)
+        for (int c = 0; c < k; ++c) out[i * k + c] = connectivity_[static_cast<std::size_t>(elements[i]) * k + c];
+}
+
+void SimplexMesh::get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> out) const {
+    for (std::size_t i = 0; i < vertices.size(); ++i) out[i] = fixed_[static_cast<std::size_t>(vertices[i])];
+}
+
+void check_no_duplicate_elements(const SimplexMesh& mesh) {
+    const int k = mesh.corners();
+    struct Key {
+        std::array<VertexId, 4> corners;
+        ElementId element;
+    };
+    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_elements()));
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        Key& key = keys[static_cast<std::size_t>(e)];
+        key.corners = {-1, -1, -1, -1};
+        std::copy_n(mesh.element(e).begin(), k, key.corners.begin());
+        std::sort(key.corners.begin(), key.corners.begin() + k);
+        key.element = e;
+    }
+    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+        return a.corners != b.corners ? a.corners < b.corners : a.element < b.element;
+    });
+    for (std::size_t i = 1; i < keys.size(); ++i)
+        if (keys[i].corners == keys[i - 1].corners)
+            throw MeshError("elements " + std::to_string(keys[i - 1].element) + " and " +
+                            std::to_string(keys[i].element) + " have the same vertices (duplicate element)");
+}
+
+std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const VertexId> connectivity,
+                                            VertexId num_vertices) {
+    std::vector<std::uint8_t> boundary(static_cast<std::size_t>(num_vertices), 0);
+    const int k = corner_count(kind);
+    const int face_size = k - 1;
+    // Each face (the element minus one corner) as a sorted tuple; a face seen once is on the boundary.
+    std::vector<std::array<VertexId, 3>> faces;
+    faces.reserve(connectivity.size());
+    for (std::size_t e = 0; e < connectivity.size(); e += k)
+        for (int skip = 0; skip < k; ++skip) {
+            std::array<VertexId, 3> face{0, 0, -1};
+            int f = 0;
+            for (int i = 0; i < k; ++i)
+                if (i != skip) face[f++] = connectivity[e + i];
+            // Sort the 2 or 3 ids in place (a triangle's edge keeps -1 last).
+            if (face[0] > face[1]) std::swap(face[0], face[1]);
+            if (face_size == 3) {
+                if (face[1] > face[2]) std::swap(face[1], face[2]);
+                if (face[0] > face[1]) std::swap(face[0], face[1]);
+            }
+            faces.push_back(face);
+        }
+    std::sort(faces.begin(), faces.end());
+    for (std::size_t i = 0; i < faces.size();) {
+        std::size_t j = i + 1;
+        while (j < faces.size() && faces[j] == faces[i]) ++j;
+        if (j - i == 1)
+            for (int c = 0; c < face_size; ++c) boundary[faces[i][c]] = 1;
+        i = j;
+    }
+    return boundary;
+}
+
+}  // namespace paloverde

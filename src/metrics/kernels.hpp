@@ -1,0 +1,250 @@
+#pragma once
+// The metric formulas, one struct each. tet()/tri() return the value and, when `g` is not null,
+// write the gradient with respect to the corners (3 doubles per corner). Inlined into the batch
+// loops of KernelMetric, so a pass over the mesh makes no call per element.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string_view>
+
+#include "geometry.hpp"
+
+namespace paloverde::metrics {
+
+inline constexpr double kTetAspectScale = 72.0 * std::numbers::sqrt3;  // 1 for the regular tet
+inline constexpr double kTriAspectScale = 4.0 * std::numbers::sqrt3;   // 1 for the equilateral triangle
+
+inline double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
+
+// Triangles: the aspect ratio, mean ratio and inverse condition number all equal
+// 4*sqrt(3)*area / (sum of squared edges).
+inline double triangle_shape(const TriGeometry& t, double* g) {
+    if (!(t.edge_sum > 0.0)) {
+        if (g) std::fill(g, g + 9, 0.0);
+        return 0.0;
+    }
+    const double q = kTriAspectScale * t.area / t.edge_sum;
+    if (g)
+        for (int i = 0; i < 3; ++i)
+            store(g, i, (kTriAspectScale / t.edge_sum) * t.darea[i] - (q / t.edge_sum) * t.dedge_sum[i]);
+    return q;
+}
+
+inline double tet_aspect(const TetGeometry& t, double* g) {
+    if (!(t.edge_sum > 0.0)) {
+        if (g) std::fill(g, g + 12, 0.0);
+        return 0.0;
+    }
+    const double inv = 1.0 / (t.edge_sum * std::sqrt(t.edge_sum));
+    const double q = kTetAspectScale * t.volume * inv;
+    if (g)
+        for (int i = 0; i < 4; ++i)
+            store(g, i, (kTetAspectScale * inv) * t.dvolume[i] - (1.5 * q / t.edge_sum) * t.dedge_sum[i]);
+    return q;
+}
+
+// The paper's aspect ratio: 72*sqrt(3)*V / (sum l^2)^(3/2), the mean ratio to the power 3/2.
+struct AspectRatio {
+    static constexpr std::string_view name = "aspect_ratio";
+    double tet(const double* x, double* g, const MetricScale&) const { return tet_aspect(TetGeometry(x), g); }
+    double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
+};
+
+// Mean ratio: 12 * (3|V|)^(2/3) / (sum l^2), signed by V. Its gradient is unbounded as V -> 0;
+// the cube root is floored at a tiny fraction of the element's size to stay finite there.
+struct MeanRatio {
+    static constexpr std::string_view name = "mean_ratio";
+    double tet(const double* x, double* g, const MetricScale&) const {
+        const TetGeometry t(x);
+        if (!(t.edge_sum > 0.0)) {
+            if (g) std::fill(g, g + 12, 0.0);
+            return 0.0;
+        }
+        const double three_v = std::max(3.0 * std::abs(t.volume), 1e-30 * t.edge_sum * std::sqrt(t.edge_sum));
+        const double root = std::cbrt(three_v);
+        const double q = sign_of(t.volume) * 12.0 * root * root / t.edge_sum;
+        if (g) {
+            const double dq_dv = 12.0 * 2.0 / root / t.edge_sum;  // d/dV of 12 (3|V|)^(2/3) / L
+            for (int i = 0; i < 4; ++i) store(g, i, dq_dv * t.dvolume[i] - (q / t.edge_sum) * t.dedge_sum[i]);
+        }
+        return q;
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
+};
+
+// Inverse condition number of S = E W^-1 (E: edge vectors from corner 0, W: those of the unit
+// regular tet): 3 det S / (|S|_F |adj S|_F), signed by det S.
+struct InverseCondition {
+    static constexpr std::string_view name = "inverse_condition";
+    double tet(const double* x, double* g, const MetricScale&) const {
+        const P a = load(x, 0);
+        const P e1 = load(x, 1) - a, e2 = load(x, 2) - a, e3 = load(x, 3) - a;
+        constexpr double r3 = std::numbers::sqrt3, r6 = 2.449489742783178098;
+        const P s1 = e1, s2 = (1.0 / r3) * (2.0 * e2 - e1), s3 = (1.0 / r6) * (3.0 * e3 - e1 - e2);
+        const P c23 = cross(s2, s3), c31 = cross(s3, s1), c12 = cross(s1, s2);
+        const double det = dot(s1, c23);
+        const double n = std::sqrt(dot(s1, s1) + dot(s2, s2) + dot(s3, s3));
+        const double c = std::sqrt(dot(c23, c23) + dot(c31, c31) + dot(c12, c12));
+        if (!(n * c > 0.0)) {
+            if (g) std::fill(g, g + 12, 0.0);
+            return 0.0;
+        }
+        const double q = 3.0 * det / (n * c);
+        if (g) {
+            const double s11 = dot(s1, s1), s22 = dot(s2, s2), s33 = dot(s3, s3);
+            const double s12 = dot(s1, s2), s13 = dot(s1, s3), s23 = dot(s2, s3);
+            // d|adj S|^2 / d s_j, from |a x b|^2 = |a|^2 |b|^2 - (a.b)^2.
+            const P dc1 = 2.0 * ((s22 + s33) * s1 - s12 * s2 - s13 * s3);
+            const P dc2 = 2.0 * ((s11 + s33) * s2 - s12 * s1 - s23 * s3);
+            const P dc3 = 2.0 * ((s11 + s22) * s3 - s13 * s1 - s23 * s2);
+            const double k = 3.0 / (n * c), kn = q / (n * n), kc = q / (2.0 * c * c);
+            const P g1 = k * c23 - kn * s1 - kc * dc1;
+            const P g2 = k * c31 - kn * s2 - kc * dc2;
+            const P g3 = k * c12 - kn * s3 - kc * dc3;
+            // Back from S to E (dS = dE W^-1), then from edges to corners.
+            const P ge1 = g1 - (1.0 / r3) * g2 - (1.0 / r6) * g3;
+            const P ge2 = (2.0 / r3) * g2 - (1.0 / r6) * g3;
+            const P ge3 = (3.0 / r6) * g3;
+            store(g, 1, ge1);
+            store(g, 2, ge2);
+            store(g, 3, ge3);
+            store(g, 0, -(ge1 + ge2 + ge3));
+        }
+        return q;
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
+};
+
+// Shortest over longest edge, signed by the orientation. Not smooth where two edges tie.
+struct EdgeRatio {
+    static constexpr std::string_view name = "edge_ratio";
+    template <int K, int E>
+    static double ratio(const double* x, double* g, double orientation, const int (&edges)[E][2]) {
+        double shortest = INFINITY, longest = 0.0;
+        int imin = 0, imax = 0;
+        for (int i = 0; i < E; ++i) {
+            const P d = load(x, edges[i][1]) - load(x, edges[i][0]);
+            const double l = norm(d);
+            if (l < shortest) shortest = l, imin = i;
+            if (l > longest) longest = l, imax = i;
+        }
+        if (g) std::fill(g, g + 3 * K, 0.0);
+        if (!(longest > 0.0) || orientation == 0.0) return 0.0;
+        const double r = shortest / longest;
+        if (g) {
+            auto add = [&](int edge, double scale) {
+                const int p = edges[edge][0], q = edges[edge][1];
+                const P d = load(x, q) - load(x, p);
+                const P dl = (scale / norm(d)) * d;  // d length / d corner q
+                store(g, q, load(g, q) + dl);
+                store(g, p, load(g, p) - dl);
+            };
+            add(imin, orientation / longest);
+            add(imax, -orientation * r / longest);
+        }
+        return orientation * r;
+    }
+    double tet(const double* x, double* g, const MetricScale&) const {
+        return ratio<4>(x, g, sign_of(TetGeometry(x).volume), kTetEdges);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        return ratio<3>(x, g, sign_of(TriGeometry(x, s).area), kTriEdges);
+    }
+};
+
+// Signed volume (area) over the mesh's reference volume: scale-free, 1 for an average element.
+struct ScaledVolume {
+    static constexpr std::string_view name = "scaled_volume";
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        const TetGeometry t(x);
+        const double inv = 1.0 / s.reference_volume;
+        if (g)
+            for (int i = 0; i < 4; ++i) store(g, i, inv * t.dvolume[i]);
+        return t.volume * inv;
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        const double inv = 1.0 / s.reference_volume;
+        if (g)
+            for (int i = 0; i < 3; ++i) store(g, i, inv * t.darea[i]);
+        return t.area * inv;
+    }
+};
+
+// The untangling metric: a logistic blend of the scale-free volume v and the aspect ratio q,
+//   Q = w v + (1 - w) q,   w = 1 / (1 + exp(alpha v)).
+// Inverted elements are rated by their volume (Q ~ v < 0), valid ones by their shape (Q ~ q);
+// Q > 0 exactly when the element is positively oriented.
+struct UntangleHybrid {
+    static constexpr std::string_view name = "untangle_hybrid";
+    double alpha = 10.0;
+
+    double blend(double volume, double q, const P* dvolume, const double* qgrad, int corners, double* g,
+                 const MetricScale& s) const {
+        const double v = volume / s.reference_volume;
+        const double w = 1.0 / (1.0 + std::exp(alpha * v));
+        if (g) {
+            // dw/dv = -alpha w (1 - w)
+            const double dq_dvolume = (w - alpha * w * (1.0 - w) * (v - q)) / s.reference_volume;
+            for (int i = 0; i < corners; ++i) store(g, i, dq_dvolume * dvolume[i] + (1.0 - w) * load(qgrad, i));
+        }
+        return w * v + (1.0 - w) * q;
+    }
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        const TetGeometry t(x);
+        double qgrad[12];
+        const double q = tet_aspect(t, g ? qgrad : nullptr);
+        return blend(t.volume, q, t.dvolume, qgrad, 4, g, s);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        double qgrad[9];
+        const double q = triangle_shape(t, g ? qgrad : nullptr);
+        return blend(t.area, q, t.darea, qgrad, 3, g, s);
+    }
+};
+
+// Smallest dihedral angle of a tetrahedron in degrees (70.53 for the regular tet), negative for
+// an inverted one. Assessment only.
+struct MinDihedralAngle {
+    static constexpr std::string_view name = "min_dihedral_deg";
+    static constexpr bool assessment_only = true;
+    static constexpr ElementKind only_kind = ElementKind::Tetrahedron;
+    static constexpr double ideal = 70.528779365509308631;  // acos(1/3) in degrees
+    double tet(const double* x, double* g, const MetricScale&) const {
+        const TetGeometry t(x);
+        double smallest = INFINITY;
+        // dvolume[k] is the inward normal of the face opposite corner k.
+        for (int k = 0; k < 4; ++k)
+            for (int l = k + 1; l < 4; ++l) {
+                const double angle =
+                    std::atan2(norm(cross(t.dvolume[k], t.dvolume[l])), -dot(t.dvolume[k], t.dvolume[l]));
+                smallest = std::min(smallest, angle);
+            }
+        if (g) std::fill(g, g + 12, 0.0);
+        return sign_of(t.volume) * smallest * (180.0 / std::numbers::pi);
+    }
+    double tri(const double*, double*, const MetricScale&) const { return 0.0; }
+};
+
+// Smallest corner angle of a triangle in degrees (60 for the equilateral one), negative for an
+// inverted one. Assessment only.
+struct MinCornerAngle {
+    static constexpr std::string_view name = "min_angle_deg";
+    static constexpr bool assessment_only = true;
+    static constexpr ElementKind only_kind = ElementKind::Triangle;
+    static constexpr double ideal = 60.0;
+    double tet(const double*, double*, const MetricScale&) const { return 0.0; }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        double smallest = INFINITY;
+        for (int i = 0; i < 3; ++i) {
+            const P u = t.corner[(i + 1) % 3] - t.corner[i], v = t.corner[(i + 2) % 3] - t.corner[i];
+            smallest = std::min(smallest, std::atan2(norm(cross(u, v)), dot(u, v)));
+        }
+        if (g) std::fill(g, g + 9, 0.0);
+        return sign_of(t.area) * smallest * (180.0 / std::numbers::pi);
+    }
+};
+
+}  // namespace paloverde::metrics

@@ -1,0 +1,162 @@
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "kernels.hpp"
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/simplex_mesh.hpp"
+
+namespace paloverde {
+
+namespace metrics {
+namespace {
+
+template <class K>
+constexpr bool assessment_only() {
+    if constexpr (requires { K::assessment_only; }) return K::assessment_only;
+    return false;
+}
+
+// Gathers each element's corners into a small buffer, calls the inlined kernel, and scatters the
+// weighted gradient: one virtual call per batch, none per element.
+template <class Kernel>
+class KernelMetric final : public QualityMetric {
+public:
+    explicit KernelMetric(Kernel kernel = {}) : kernel_(kernel) {}
+
+    std::string_view name() const override { return Kernel::name; }
+    bool supports(ElementKind kind) const override {
+        if constexpr (requires { Kernel::only_kind; }) return kind == Kernel::only_kind;
+        return true;
+    }
+    bool has_gradient() const override { return !assessment_only<Kernel>(); }
+    double ideal_value() const override {
+        if constexpr (requires { Kernel::ideal; }) return Kernel::ideal;
+        return 1.0;
+    }
+
+    double value(ElementKind kind, const double* corners) const override {
+        return kind == ElementKind::Tetrahedron ? kernel_.tet(corners, nullptr, scale_)
+                                                : kernel_.tri(corners, nullptr, scale_);
+    }
+    double value_and_gradient(ElementKind kind, const double* corners, double* gradient) const override {
+        require_gradient();
+        return kind == ElementKind::Tetrahedron ? kernel_.tet(corners, gradient, scale_)
+                                                : kernel_.tri(corners, gradient, scale_);
+    }
+
+    void evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                  double* quality) const override {
+        if (mesh.kind() == ElementKind::Tetrahedron)
+            evaluate_kind<4>(mesh, xyz, first, last, quality);
+        else
+            evaluate_kind<3>(mesh, xyz, first, last, quality);
+    }
+
+    void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                             const double* weight, double* gradient, VertexId base) const override {
+        require_gradient();
+        if (mesh.kind() == ElementKind::Tetrahedron)
+            accumulate_kind<4>(mesh, xyz, first, last, weight, gradient, base);
+        else
+            accumulate_kind<3>(mesh, xyz, first, last, weight, gradient, base);
+    }
+
+private:
+    void require_gradient() const {
+        if (assessment_only<Kernel>())
+            throw OptionError("metric '" + std::string(Kernel::name) + "' is for assessment only and has no gradient");
+    }
+
+    template <int K>
+    double kernel(const double* x, double* g) const {
+        if constexpr (K == 4) return kernel_.tet(x, g, scale_);
+        else return kernel_.tri(x, g, scale_);
+    }
+
+    template <int K>
+    void evaluate_kind(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                       double* quality) const {
+        const VertexId* conn = mesh.connectivity().data();
+        const double* coords = xyz.data();
+        double x[3 * K];
+        for (ElementId e = first; e < last; ++e) {
+            const VertexId* c = conn + static_cast<std::size_t>(e) * K;
+            for (int i = 0; i < K; ++i)
+                for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+            quality[e - first] = kernel<K>(x, nullptr);
+        }
+    }
+
+    template <int K>
+    void accumulate_kind(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                         const double* weight, double* gradient, VertexId base) const {
+        const VertexId* conn = mesh.connectivity().data();
+        const double* coords = xyz.data();
+        double x[3 * K], g[3 * K];
+        for (ElementId e = first; e < last; ++e) {
+            const double w = weight[e - first];
+            if (w == 0.0) continue;
+            const VertexId* c = conn + static_cast<std::size_t>(e) * K;
+            for (int i = 0; i < K; ++i)
+                for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+            kernel<K>(x, g);
+            for (int i = 0; i < K; ++i)
+                for (int d = 0; d < 3; ++d) gradient[3 * static_cast<std::size_t>(c[i] - base) + d] += w * g[3 * i + d];
+        }
+    }
+
+    Kernel kernel_;
+};
+
+}  // namespace
+}  // namespace metrics
+
+MetricScale MetricScale::of(const SimplexMesh& mesh) {
+    MetricScale scale;
+    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    scale.plane_normal = mesh.plane_normal();
+    const ElementId m = mesh.num_elements();
+    if (m == 0) return scale;
+    std::vector<double> volume(static_cast<std::size_t>(m));
+    scale.reference_volume = 1.0;
+    auto unit = make_metric("scaled_volume");
+    unit->set_scale(scale);
+    unit->evaluate(mesh, mesh.coordinates(), 0, m, volume.data());
+    double sum = 0.0;
+    for (double v : volume) sum += std::abs(v);
+    // A mesh of only degenerate elements keeps 1: there is no size to measure against.
+    if (sum > 0.0 && std::isfinite(sum)) scale.reference_volume = sum / m;
+    return scale;
+}
+
+void MetricOptions::validate() const {
+    if (!(hybrid_sharpness > 0.0) || !std::isfinite(hybrid_sharpness))
+        throw OptionError("hybrid_sharpness must be a positive number (got " + std::to_string(hybrid_sharpness) + ")");
+}
+
+const std::vector<std::string>& metric_names() {
+    static const std::vector<std::string> names{"aspect_ratio", "mean_ratio",      "inverse_condition",
+                                                "edge_ratio",   "scaled_volume",   "untangle_hybrid",
+                                                "min_dihedral_deg", "min_angle_deg"};
+    return names;
+}
+
+std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options) {
+    using namespace metrics;
+    options.validate();
+    if (name == AspectRatio::name) return std::make_unique<KernelMetric<AspectRatio>>();
+    if (name == MeanRatio::name) return std::make_unique<KernelMetric<MeanRatio>>();
+    if (name == InverseCondition::name) return std::make_unique<KernelMetric<InverseCondition>>();
+    if (name == EdgeRatio::name) return std::make_unique<KernelMetric<EdgeRatio>>();
+    if (name == ScaledVolume::name) return std::make_unique<KernelMetric<ScaledVolume>>();
+    if (name == UntangleHybrid::name)
+        return std::make_unique<KernelMetric<UntangleHybrid>>(UntangleHybrid{options.hybrid_sharpness});
+    if (name == MinDihedralAngle::name) return std::make_unique<KernelMetric<MinDihedralAngle>>();
+    if (name == MinCornerAngle::name) return std::make_unique<KernelMetric<MinCornerAngle>>();
+    std::string known;
+    for (const auto& n : metric_names()) known += (known.empty() ? "" : ", ") + n;
+    throw OptionError("unknown quality metric '" + std::string(name) + "' (known: " + known + ")");
+}
+
+}  // namespace paloverde

@@ -1,0 +1,53 @@
+#pragma once
+// The arrays a solver works on: the mesh renumbered for locality with the movable elements
+// (those with a free vertex) first, and the machinery for passes over them that give the same
+// result for any number of threads.
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "paloverde/mesh/renumber.hpp"
+#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/parallel/reducer.hpp"
+
+namespace paloverde::detail {
+
+class Workspace {
+public:
+    Workspace(const SimplexMesh& mesh, bool renumber);
+
+    const SimplexMesh& mesh() const { return mesh_; }
+    ElementId movable_elements() const { return movable_; }
+    std::span<const std::uint8_t> fixed() const { return mesh_.fixed(); }
+    double reference_length() const { return reference_length_; }
+    const MetricScale& scale() const { return scale_; }
+
+    // Qualities of the movable elements at positions xyz.
+    void evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const;
+    // gradient = sum_e weight[e] * grad q_e over the movable elements, zero at fixed vertices.
+    // Elements are split into fixed lanes whose partial sums are added in lane order.
+    void gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
+                  std::span<double> gradient);
+
+    // Coordinates in the caller's numbering.
+    void copy_back(std::span<const double> xyz, SimplexMesh& original) const;
+
+private:
+    struct Lane {
+        ElementId first, last;   // elements
+        VertexId low, high;      // vertices they touch: [low, high]
+        std::size_t offset;      // into lane_buffer_, 3 doubles per vertex
+    };
+    void build_lanes();
+
+    SimplexMesh mesh_;
+    std::vector<VertexId> old_vertex_;  // empty when not renumbered
+    ElementId movable_ = 0;
+    MetricScale scale_;
+    double reference_length_ = 1.0;
+    std::vector<Lane> lanes_;
+    std::vector<double> lane_buffer_;
+};
+
+}  // namespace paloverde::detail

@@ -1,0 +1,124 @@
+// The `paloverde` command line end to end: output, exit codes, and clear errors for bad input.
+#include <boost/test/unit_test.hpp>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "paloverde/io/mesh_io.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+using pv::test::run_cli;
+
+namespace {
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+std::string read_text(const std::filesystem::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+bool has(const std::string& text, const std::string& word) { return text.find(word) != std::string::npos; }
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(cli)
+
+BOOST_AUTO_TEST_CASE(quality_json_has_the_documented_keys) {
+    const auto mesh = pv::test::shared_data("mesquite/tets/cub_wedge_like.vtk");
+    const auto result = run_cli("quality --json " + quoted(mesh));
+    BOOST_TEST_REQUIRE(result.exit_code == 0);
+    const auto j = nlohmann::json::parse(result.output);
+    BOOST_TEST(j["vertices"].get<int>() == 21156);
+    BOOST_TEST(j["elements"].get<int>() == 112393);
+    BOOST_TEST(j["inverted"].get<int>() == 0);
+    for (const char* metric : {"aspect_ratio", "mean_ratio", "min_dihedral_deg"})
+        for (const char* stat : {"min", "max", "mean", "rms"}) BOOST_TEST(j["metrics"][metric].contains(stat));
+    BOOST_TEST(std::abs(j["metrics"]["min_dihedral_deg"]["movable"]["min"].get<double>() - 6.10) < 0.01);
+}
+
+BOOST_AUTO_TEST_CASE(improve_untangles_writes_history_and_json_and_exits_zero) {
+    const pv::test::ScratchDir dir("cli_improve");
+    const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
+    const auto result = run_cli("improve " + quoted(input) + " -o " + quoted(dir / "out.vtu") + " --history " +
+                                quoted(dir / "h.csv") + " --json " + quoted(dir / "s.json"));
+    BOOST_TEST_INFO(result.output);
+    BOOST_TEST_REQUIRE(result.exit_code == 0);
+    BOOST_TEST(pv::read_mesh(dir / "out.vtu").mesh.num_elements() == 408);
+    const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
+    BOOST_TEST(summary["inverted_before"].get<int>() == 9);
+    BOOST_TEST(summary["inverted_after"].get<int>() == 0);
+    BOOST_TEST(has(read_text(dir / "h.csv"), "iteration,phase,worst_quality"));
+    const auto after = run_cli("quality --json " + quoted(dir / "out.vtu"));
+    BOOST_TEST(nlohmann::json::parse(after.output)["inverted"].get<int>() == 0);
+}
+
+BOOST_AUTO_TEST_CASE(a_target_that_is_not_reached_exits_three) {
+    const pv::test::ScratchDir dir("cli_target");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    const auto result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") +
+                                " --iterations 3 --target 0.99");
+    BOOST_TEST(result.exit_code == 3);
+}
+
+BOOST_AUTO_TEST_CASE(bad_input_gives_a_clear_message_and_a_nonzero_exit) {
+    const pv::test::ScratchDir dir("cli_bad");
+    pv::test::write_file(dir / "truncated.vtk",
+                         "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0");
+    pv::test::write_file(dir / "nan.vtk",
+                         "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0 "
+                         "0\n0 nan 0\n0 0 1\nCELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+    pv::test::write_file(dir / "range.vtk",
+                         "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 4 double\n0 0 0\n1 0 "
+                         "0\n0 1 0\n0 0 1\nCELLS 1 5\n4 0 1 2 9\nCELL_TYPES 1\n10\n");
+    pv::test::write_file(dir / "empty.vtk", "");
+    struct Case {
+        std::string file, words;
+    };
+    for (const Case& c : {Case{"missing.vtk", "no such file"}, Case{"truncated.vtk", "truncated.vtk:5"},
+                          Case{"nan.vtk", "nan.vtk:8"}, Case{"range.vtk", "9"}, Case{"empty.vtk", "empty.vtk"},
+                          Case{"mesh.xyz", "extension"}}) {
+        const auto result = run_cli("quality " + quoted(dir / c.file));
+        BOOST_TEST_CONTEXT(c.file << ": " << result.output) {
+            BOOST_TEST(result.exit_code == 1);
+            BOOST_TEST(has(result.output, c.words));
+            BOOST_TEST(!has(result.output, "terminate"));
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(a_failed_write_keeps_the_previous_output) {
+    const pv::test::ScratchDir dir("cli_atomic");
+    const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
+    pv::test::write_file(dir / "previous.msh", "keep me");
+    // An impossible option fails before anything is written.
+    auto result = run_cli("improve " + quoted(input) + " -o " + quoted(dir / "previous.msh") + " --barrier-shrink 7");
+    BOOST_TEST(result.exit_code == 2);
+    BOOST_TEST(has(result.output, "barrier_shrink"));
+    BOOST_TEST(read_text(dir / "previous.msh") == "keep me");
+    // So does an output directory that does not exist, leaving no partial file anywhere.
+    result = run_cli("convert " + quoted(input) + " " + quoted(dir / "no" / "such" / "dir.vtk"));
+    BOOST_TEST(result.exit_code == 1);
+    BOOST_TEST(!std::filesystem::exists(dir / "no"));
+}
+
+BOOST_AUTO_TEST_CASE(bad_usage_exits_two) {
+    BOOST_TEST(run_cli("").exit_code == 2);
+    BOOST_TEST(run_cli("frobnicate").exit_code == 2);
+    BOOST_TEST(run_cli("improve").exit_code == 2);
+    BOOST_TEST(run_cli("quality --help").exit_code == 0);
+}
+
+BOOST_AUTO_TEST_CASE(convert_round_trips_through_every_writable_format) {
+    const pv::test::ScratchDir dir("cli_convert");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    const auto original = pv::read_mesh(input);
+    for (const char* name : {"a.vtk", "b.vtu", "c.msh", "d.mesh"}) {
+        BOOST_TEST_REQUIRE(run_cli("convert " + quoted(input) + " " + quoted(dir / name)).exit_code == 0);
+        const auto copy = pv::read_mesh(dir / name);
+        BOOST_TEST(copy.mesh.num_elements() == original.mesh.num_elements());
+        BOOST_TEST(std::equal(copy.mesh.coordinates().begin(), copy.mesh.coordinates().end(),
+                              original.mesh.coordinates().begin()));
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()

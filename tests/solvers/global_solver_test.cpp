@@ -1,0 +1,177 @@
+// The global log-barrier solver: never worse, never inverts a valid element, untangles what it
+// can, scale-free, thread-count independent, and says why it stopped.
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/perturb.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+
+namespace {
+
+pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
+
+// Checks that hold for every run: the history never lets the best worst quality fall or the
+// count of non-positive elements rise within a phase, and every accepted step raised F.
+void check_history(const pv::Summary& summary) {
+    const auto& h = summary.history;
+    for (std::size_t i = 1; i < h.size(); ++i) {
+        if (h[i].phase != h[i - 1].phase) continue;
+        BOOST_TEST(h[i].inverted <= h[i - 1].inverted);
+        if (h[i].inverted == h[i - 1].inverted) BOOST_TEST(h[i].best_worst_quality >= h[i - 1].best_worst_quality);
+        if (h[i].step > 0.0) BOOST_TEST(h[i].gain > 0.0);
+    }
+}
+
+void check_never_worse(const pv::Summary& summary) {
+    BOOST_TEST(summary.after.inverted <= summary.before.inverted);
+    if (summary.before.inverted == 0) BOOST_TEST(summary.worst_after >= summary.worst_before);
+    check_history(summary);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(global_solver)
+
+BOOST_AUTO_TEST_CASE(untangles_the_mesquite_tangled_mesh) {
+    auto mesh = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
+    const auto summary = pv::GlobalSolver().improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.before.inverted == 9);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+    BOOST_TEST(summary.untangle_iterations > 0);
+    BOOST_TEST(summary.success());
+    check_never_worse(summary);
+}
+
+BOOST_DATA_TEST_CASE(improves_valid_shared_meshes_without_making_anything_worse,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/flat-tet-sphere.vtk", "stellar/house2.node",
+                                  "mesquite/tris/tri_20258.vtk"}),
+                     name) {
+    auto mesh = shared_mesh(name);
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    const auto summary = pv::GlobalSolver().improve(mesh);
+    BOOST_TEST_MESSAGE(name << ": " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted == 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    check_never_worse(summary);
+    // Fixed vertices did not move.
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.fixed()[v])
+            for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);
+}
+
+BOOST_AUTO_TEST_CASE(scaled_meshes_give_the_same_result) {
+    // Every tolerance is relative, so a mesh scaled by 1e-4 or 1e4 follows the same path; only
+    // rounding (cube roots, hypot) differs.
+    const auto reference = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 40;
+    auto baseline = reference;
+    const auto base_summary = pv::GlobalSolver(options).improve(baseline);
+    for (double scale : {1e-4, 1e4, std::ldexp(1.0, -20)}) {
+        auto mesh = reference;
+        for (double& x : mesh.coordinates()) x *= scale;
+        const auto summary = pv::GlobalSolver(options).improve(mesh);
+        BOOST_TEST_CONTEXT("scale " << scale) {
+            BOOST_TEST(summary.after.inverted == 0);
+            BOOST_TEST(summary.untangle_iterations == base_summary.untangle_iterations);
+            BOOST_TEST(summary.worst_after == base_summary.worst_after, boost::test_tools::tolerance(1e-6));
+            double largest = 0.0;
+            for (std::size_t i = 0; i < mesh.coordinates().size(); ++i)
+                largest = std::max(largest, std::abs(mesh.coordinates()[i] / scale - baseline.coordinates()[i]));
+            BOOST_TEST(largest < 1e-6);  // the mesh spans 10 units
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
+    auto one = shared_mesh("mesquite/tets/cube-clip-5.vtk");
+    pv::PerturbOptions perturb;
+    perturb.amount = 0.7;
+    pv::perturb(one, perturb);
+    auto two = one;
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 25;
+    options.threads = 1;
+    const auto s1 = pv::GlobalSolver(options).improve(one);
+    options.threads = 2;
+    const auto s2 = pv::GlobalSolver(options).improve(two);
+    BOOST_TEST(s1.iterations == s2.iterations);
+    BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
+}
+
+BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things_worse) {
+    for (const char* objective : {"log_barrier", "p_mean", "min_quality"}) {
+        auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+        pv::GlobalSolverOptions options;
+        options.objective = objective;
+        options.direction = pv::GlobalSolverOptions::Direction::SteepestAscent;
+        options.termination.max_iterations = 30;
+        const auto summary = pv::GlobalSolver(options).improve(mesh);
+        BOOST_TEST_CONTEXT(objective << ": " << summary.brief_report()) {
+            check_never_worse(summary);
+            BOOST_TEST(summary.worst_after >= summary.worst_before);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    mesh.set_fixed(std::vector<std::uint8_t>(mesh.num_vertices(), 1));
+    const auto summary = pv::GlobalSolver().improve(mesh);
+    BOOST_TEST((summary.reason == pv::TerminationReason::NothingToMove));
+    BOOST_TEST(!summary.success());
+    BOOST_TEST(summary.message.find("fixed") != std::string::npos);
+    pv::SimplexMesh empty;
+    BOOST_TEST((pv::GlobalSolver().improve(empty).reason == pv::TerminationReason::NothingToMove));
+}
+
+BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled) {
+    // Two tets; the second is inverted and all its vertices are fixed. The first has a free,
+    // badly placed vertex that can still be improved.
+    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron,
+                         {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
+                         {0, 1, 2, 3, 0, 2, 1, 4});
+    mesh.set_fixed({1, 1, 1, 0, 1});
+    const auto summary = pv::GlobalSolver().improve(mesh);
+    BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
+    BOOST_TEST(summary.after.inverted == 1);
+    BOOST_TEST(summary.after.inverted_frozen == 1);
+    BOOST_TEST(!summary.success());
+    BOOST_TEST(summary.worst_after >= summary.worst_before);
+}
+
+BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
+    auto expect = [](auto change, const std::string& word) {
+        pv::GlobalSolverOptions options;
+        change(options);
+        BOOST_CHECK_EXCEPTION(pv::GlobalSolver{options}, pv::OptionError, [&](const pv::OptionError& e) {
+            return std::string(e.what()).find(word) != std::string::npos;
+        });
+    };
+    expect([](auto& o) { o.objective = "lp"; }, "log_barrier");
+    expect([](auto& o) { o.shape_metric = "min_dihedral_deg"; }, "gradient");
+    expect([](auto& o) { o.objective_options.barrier_shrink = 0.0; }, "barrier_shrink");
+    expect([](auto& o) { o.termination.max_iterations = -1; }, "max_iterations");
+    expect([](auto& o) { o.threads = -2; }, "threads");
+}
+
+BOOST_AUTO_TEST_CASE(surface_triangle_meshes_are_refused) {
+    // A tetrahedron's surface: triangles not in one plane.
+    pv::SimplexMesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
+                         {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+    mesh.set_fixed({0, 1, 1, 1});
+    BOOST_CHECK_THROW(pv::GlobalSolver().improve(mesh), pv::MeshError);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

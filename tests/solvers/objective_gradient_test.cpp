@@ -1,0 +1,81 @@
+// The whole objective's gradient (metric gradients weighted by the objective and summed over the
+// mesh by the solver's workspace) against finite differences.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/perturb.hpp"
+#include "paloverde/objectives/objective_function.hpp"
+#include "solvers/workspace.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+
+BOOST_AUTO_TEST_SUITE(objective_gradient)
+
+BOOST_AUTO_TEST_CASE(whole_mesh_gradient_matches_finite_differences) {
+    for (const char* metric_name : {"aspect_ratio", "mean_ratio", "inverse_condition", "untangle_hybrid"}) {
+        for (const char* objective_name : {"log_barrier", "p_mean"}) {
+            auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk")).mesh;
+            if (std::string(objective_name) == "p_mean") {
+                // p-mean needs positive qualities: use an untangled mesh.
+                mesh = pv::read_mesh(pv::test::shared_data("stellar/house2.node")).mesh;
+            }
+            pv::detail::Workspace work(mesh, true);
+            auto metric = pv::make_metric(metric_name);
+            metric->set_scale(work.scale());
+            auto objective = pv::make_objective(objective_name);
+            const pv::Reducer serial;
+            std::vector<double> x(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
+            const auto m = static_cast<std::size_t>(work.movable_elements());
+            std::vector<double> q(m), w(m), g(x.size());
+            work.evaluate(*metric, x, q);
+            objective->update(q, serial);  // fixes t and mu for the comparison
+            auto F = [&](const std::vector<double>& at) {
+                std::vector<double> qq(m);
+                work.evaluate(*metric, at, qq);
+                return objective->value(qq, serial);
+            };
+            objective->value_and_weights(q, w, serial);
+            work.gradient(*metric, x, w, g);
+            double largest = 0.0;
+            for (double gi : g) largest = std::max(largest, std::abs(gi));
+            const double h = 1e-7 * work.reference_length();
+            int checked = 0;
+            for (std::size_t i = 0; i < x.size() && checked < 60; i += 7) {
+                if (work.fixed()[i / 3]) {
+                    BOOST_TEST(g[i] == 0.0);
+                    continue;
+                }
+                auto plus = x, minus = x;
+                plus[i] += h;
+                minus[i] -= h;
+                const double fd = (F(plus) - F(minus)) / (2 * h);
+                BOOST_TEST_CONTEXT(metric_name << " / " << objective_name << " coordinate " << i << ": " << g[i] << " vs "
+                                               << fd) {
+                    BOOST_TEST(std::abs(g[i] - fd) <= 1e-5 * largest);
+                }
+                ++checked;
+            }
+            BOOST_TEST(checked > 10);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(barrier_t_solves_its_optimality_condition) {
+    const std::vector<double> q{0.2, 0.5, 0.9, 0.3, 0.7};
+    pv::LogBarrier barrier(0.5, 0.01);
+    const pv::Reducer serial;
+    barrier.update(q, serial);
+    double s = 0.0;
+    for (double v : q) s += 1.0 / (v - barrier.t());
+    BOOST_TEST(barrier.mu() * s == 1.0, boost::test_tools::tolerance(1e-10));
+    BOOST_TEST(barrier.t() < 0.2);
+    barrier.advance();
+    barrier.update(q, serial);
+    BOOST_TEST(barrier.mu() == 0.005);
+    const double t_small_mu = barrier.t();
+    BOOST_TEST(t_small_mu > 0.19);  // t climbs towards the worst quality as mu shrinks
+}
+
+BOOST_AUTO_TEST_SUITE_END()
