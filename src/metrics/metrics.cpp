@@ -54,12 +54,16 @@ public:
     }
 
     void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
-                             const double* weight, double* gradient, VertexId base) const override {
+                             const GradientTarget& target) const override {
         require_gradient();
-        if (mesh.kind() == ElementKind::Tetrahedron)
-            accumulate_kind<4>(mesh, xyz, first, last, weight, gradient, base);
-        else
-            accumulate_kind<3>(mesh, xyz, first, last, weight, gradient, base);
+        const bool curvature = target.curvature && target.curvature_weight;
+        if (mesh.kind() == ElementKind::Tetrahedron) {
+            if (curvature) accumulate_kind<4, true>(mesh, xyz, first, last, target);
+            else accumulate_kind<4, false>(mesh, xyz, first, last, target);
+        } else {
+            if (curvature) accumulate_kind<3, true>(mesh, xyz, first, last, target);
+            else accumulate_kind<3, false>(mesh, xyz, first, last, target);
+        }
     }
 
 private:
@@ -69,9 +73,15 @@ private:
     }
 
     template <int K>
-    double kernel(const double* x, double* g) const {
-        if constexpr (K == 4) return kernel_.tet(x, g, scale_);
-        else return kernel_.tri(x, g, scale_);
+    double kernel(const double* x, double* g, const MetricScale& scale) const {
+        if constexpr (K == 4) return kernel_.tet(x, g, scale);
+        else return kernel_.tri(x, g, scale);
+    }
+    // The scale of element e: the mesh's, with e's own reference volume when there are some.
+    const MetricScale& scale_of(ElementId e, MetricScale& local) const {
+        if (scale_.element_reference_volume.empty()) return scale_;
+        local.reference_volume = scale_.element_reference_volume[static_cast<std::size_t>(e)];
+        return local;
     }
 
     template <int K>
@@ -80,29 +90,44 @@ private:
         const VertexId* conn = mesh.connectivity().data();
         const double* coords = xyz.data();
         double x[3 * K];
+        MetricScale local = scale_;
         for (ElementId e = first; e < last; ++e) {
             const VertexId* c = conn + static_cast<std::size_t>(e) * K;
             for (int i = 0; i < K; ++i)
                 for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-            quality[e - first] = kernel<K>(x, nullptr);
+            quality[e - first] = kernel<K>(x, nullptr, scale_of(e, local));
         }
     }
 
-    template <int K>
+    template <int K, bool Curvature>
     void accumulate_kind(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
-                         const double* weight, double* gradient, VertexId base) const {
+                         const GradientTarget& target) const {
         const VertexId* conn = mesh.connectivity().data();
         const double* coords = xyz.data();
         double x[3 * K], g[3 * K];
+        MetricScale local = scale_;
         for (ElementId e = first; e < last; ++e) {
-            const double w = weight[e - first];
-            if (w == 0.0) continue;
+            const double w = target.weight[e - first];
+            const double cw = Curvature ? target.curvature_weight[e - first] : 0.0;
+            if (w == 0.0 && cw == 0.0) continue;
             const VertexId* c = conn + static_cast<std::size_t>(e) * K;
             for (int i = 0; i < K; ++i)
                 for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-            kernel<K>(x, g);
-            for (int i = 0; i < K; ++i)
-                for (int d = 0; d < 3; ++d) gradient[3 * static_cast<std::size_t>(c[i] - base) + d] += w * g[3 * i + d];
+            kernel<K>(x, g, scale_of(e, local));
+            for (int i = 0; i < K; ++i) {
+                const auto v = static_cast<std::size_t>(c[i] - target.base);
+                const double* gi = g + 3 * i;
+                for (int d = 0; d < 3; ++d) target.gradient[3 * v + d] += w * gi[d];
+                if constexpr (Curvature) {
+                    double* m = target.curvature + 6 * v;
+                    m[0] += cw * gi[0] * gi[0];
+                    m[1] += cw * gi[0] * gi[1];
+                    m[2] += cw * gi[0] * gi[2];
+                    m[3] += cw * gi[1] * gi[1];
+                    m[4] += cw * gi[1] * gi[2];
+                    m[5] += cw * gi[2] * gi[2];
+                }
+            }
         }
     }
 
@@ -128,6 +153,32 @@ MetricScale MetricScale::of(const SimplexMesh& mesh) {
     // A mesh of only degenerate elements keeps 1: there is no size to measure against.
     if (sum > 0.0 && std::isfinite(sum)) scale.reference_volume = sum / m;
     return scale;
+}
+
+std::vector<double> MetricScale::local_reference_volumes(const SimplexMesh& mesh) {
+    const MetricScale global = of(mesh);
+    const ElementId m = mesh.num_elements();
+    std::vector<double> volume(static_cast<std::size_t>(m));
+    MetricScale unit = global;
+    unit.reference_volume = 1.0;
+    auto measure = make_metric("scaled_volume");
+    measure->set_scale(unit);
+    measure->evaluate(mesh, mesh.coordinates(), 0, m, volume.data());
+    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh.num_vertices()), 0.0);
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const auto elements = mesh.elements_of(v);
+        for (ElementId e : elements) vertex_mean[v] += std::abs(volume[e]);
+        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
+    }
+    std::vector<double> out(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        double sum = 0.0;
+        for (VertexId v : mesh.element(e)) sum += vertex_mean[v];
+        const double local = sum / mesh.corners();
+        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
+        out[e] = local > 1e-12 * global.reference_volume ? local : global.reference_volume;
+    }
+    return out;
 }
 
 void MetricOptions::validate() const {

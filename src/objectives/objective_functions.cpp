@@ -23,18 +23,16 @@ LogBarrier::LogBarrier(double shrink, double initial_mu) : shrink_(shrink), mu_(
 }
 
 void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
+    double local[2] = {static_cast<double>(q.size()), 0.0};  // count, sum
+    for (double v : q) local[1] += v;
     const double qmin = reducer.min(local_min(q));
-    const auto [n, total] = [&] {
-        double s[2] = {static_cast<double>(q.size()), 0.0};
-        for (double v : q) s[1] += v;
-        reducer.sum(s);
-        return std::pair{s[0], s[1]};
-    }();
+    reducer.sum(local);
+    const double n = local[0];
     if (n == 0.0) return;
     if (mu_ <= 0.0) {
         // Start t half the spread below the worst quality, and take the mu for which that t is
         // optimal.
-        const double mean = total / n;
+        const double mean = local[1] / n;
         double gap = 0.5 * (mean - qmin);
         if (!(gap > 0.0)) gap = 0.1 * std::max(std::abs(qmin), 1e-12);
         const double t0 = qmin - gap;
@@ -49,12 +47,12 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     double lo = qmin - n * mu_, hi = qmin;
     double t = (t_ > lo && t_ < hi) ? t_ : 0.5 * (lo + hi);
     for (int iteration = 0; iteration < 200; ++iteration) {
-        const auto local = detail::blocked_sums<2>(q.size(), [&](std::size_t i, auto& acc) {
+        const auto partial = detail::blocked_sums<2>(q.size(), [&](std::size_t i, auto& acc) {
             const double r = 1.0 / (q[i] - t);
             acc[0] += r;
             acc[1] += r * r;
         });
-        double s[2] = {local[0], local[1]};
+        double s[2] = {partial[0], partial[1]};
         reducer.sum(s);
         const double h = mu_ * s[0] - 1.0;  // = -dF/dt
         if (h > 0.0) hi = t;
@@ -81,6 +79,17 @@ double LogBarrier::value(std::span<const double> q, const Reducer& reducer) cons
 double LogBarrier::value_and_weights(std::span<const double> q, std::span<double> weight, const Reducer& reducer) const {
     for (std::size_t i = 0; i < q.size(); ++i) weight[i] = mu_ / (q[i] - t_);
     return value(q, reducer);
+}
+
+void ObjectiveFunction::curvature_weights(std::span<const double>, std::span<double> curvature) const {
+    std::fill(curvature.begin(), curvature.end(), 0.0);
+}
+
+void LogBarrier::curvature_weights(std::span<const double> q, std::span<double> curvature) const {
+    for (std::size_t i = 0; i < q.size(); ++i) {
+        const double r = 1.0 / (q[i] - t_);
+        curvature[i] = mu_ * r * r;
+    }
 }
 
 PMean::PMean(double p) : p_(p) {

@@ -4,11 +4,13 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <omp.h>
 
 #include "core/blocked_sum.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "local_untangle.hpp"
 #include "workspace.hpp"
 
 namespace paloverde {
@@ -25,6 +27,7 @@ void GlobalSolverOptions::validate() const {
                           "inverse_condition or edge_ratio");
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (steps_per_mu < 1) throw OptionError("steps_per_mu must be >= 1");
+    if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
 }
 
@@ -62,7 +65,8 @@ private:
         long bad;  // non-positive qualities
     };
     Stats stats(std::span<const double> q) const;
-    bool line_search(double objective, double slope, double max_direction);
+    bool line_search(double objective, double max_direction);
+    void apply_preconditioner();
     bool untangled() const;
     void record(const Stats& s, double step, double gain);
     PhaseResult end(TerminationReason reason, std::string message);
@@ -78,6 +82,11 @@ private:
     Clock::time_point start_;
 
     std::vector<double> q_, trial_q_, weight_, trial_x_, gradient_, direction_, previous_gradient_, best_x_;
+    std::vector<double> curvature_weight_, curvature_, preconditioned_, previous_preconditioned_;
+    std::vector<double> damping_;                  // per vertex: fraction of the step it takes
+    std::vector<int> stamp_;                       // per vertex: damped in this round
+    std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
+    std::uint32_t element_stamp_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
     double step_ = 0.05;  // largest vertex displacement of the next trial step, in reference lengths
@@ -121,27 +130,57 @@ void Phase::record(const Stats& s, double step, double gain) {
     summary_.history.push_back(std::move(r));
 }
 
-bool Phase::line_search(double objective, double slope, double max_direction) {
-    const auto n = x_.size();
+bool Phase::line_search(double objective, double max_direction) {
+    const SimplexMesh& mesh = work_.mesh();
+    const VertexId n = mesh.num_vertices();
+    const ElementId movable = work_.movable_elements();
     const double length = work_.reference_length();
+    // An element blocks a step when it leaves the objective's domain or becomes non-positive
+    // although it was positive. Rather than shrinking the whole step for it, the step of its
+    // vertices is damped until it no longer blocks: one tangle does not freeze the mesh.
+    auto blocks = [&](ElementId e) {
+        return !objective_.admissible(trial_q_[e], static_cast<std::size_t>(e)) || (trial_q_[e] <= 0.0 && q_[e] > 0.0);
+    };
+    std::vector<VertexId> damped;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;
+        std::fill(damping_.begin(), damping_.end(), 1.0);
 #pragma omp parallel for schedule(static)
-        for (std::size_t i = 0; i < n; ++i) trial_x_[i] = x_[i] + s * direction_[i];
+        for (VertexId v = 0; v < n; ++v)
+            for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + s * direction_[3 * v + c];
         work_.evaluate(metric_, trial_x_, trial_q_);
         ++summary_.quality_passes;
-        double trial_worst = std::numeric_limits<double>::infinity();
-        long new_bad = 0, fixed_bad = 0;
-        for (std::size_t e = 0; e < trial_q_.size(); ++e) {
-            trial_worst = std::min(trial_worst, trial_q_[e]);
-            new_bad += trial_q_[e] <= 0.0 && q_[e] > 0.0;
-            fixed_bad += trial_q_[e] > 0.0 && q_[e] <= 0.0;
+        bool blocked = true;
+        for (int round = 0; round < 64 && blocked; ++round) {
+            damped.clear();
+            for (ElementId e = 0; e < movable; ++e)
+                if (blocks(e))
+                    for (VertexId v : mesh.element(e))
+                        if (!mesh.fixed()[v] && stamp_[v] != round + 1) {
+                            stamp_[v] = round + 1;
+                            damped.push_back(v);
+                        }
+            blocked = !damped.empty();
+            if (!blocked) break;
+            ++element_stamp_round_;
+            for (VertexId v : damped) {
+                damping_[v] *= 0.25;
+                for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + damping_[v] * s * direction_[3 * v + c];
+            }
+            for (VertexId v : damped)
+                for (ElementId e : mesh.elements_of(v)) {
+                    if (e >= movable || element_stamp_[e] == element_stamp_round_) continue;
+                    element_stamp_[e] = element_stamp_round_;
+                    metric_.evaluate(mesh, trial_x_, e, e + 1, &trial_q_[e]);
+                }
         }
-        // Untangling may flip a valid element only while it fixes at least as many inverted
-        // ones (demanding none would lock vertices between two tangled neighbours); once the
-        // mesh is valid, no element may become non-positive.
-        const bool more_bad = untangling_ ? new_bad > fixed_bad : new_bad > 0;
-        if (more_bad || !objective_.admissible(trial_worst)) continue;
+        std::fill(stamp_.begin(), stamp_.end(), 0);
+        if (blocked) continue;
+        // The Armijo test uses the slope of the damped step actually taken.
+        const double slope = detail::blocked_sums<1>(static_cast<std::size_t>(n), [&](std::size_t v, auto& acc) {
+            for (int c = 0; c < 3; ++c) acc[0] += gradient_[3 * v + c] * damping_[v] * direction_[3 * v + c];
+        })[0];
+        if (!(slope > 0.0)) continue;
         const double trial_objective = objective_.value(trial_q_, kSerial);
         if (trial_objective > objective + 1e-4 * s * slope) {
             gain_ = trial_objective - objective;
@@ -151,6 +190,44 @@ bool Phase::line_search(double objective, double slope, double max_direction) {
         }
     }
     return false;
+}
+
+// preconditioned = M^-1 gradient, M per vertex the 3x3 Gauss-Newton block of the objective
+// (curvature), regularized: a Newton step for each vertex as if its neighbours stood still. It
+// evens out the very different scales of elements and barrier weights.
+void Phase::apply_preconditioner() {
+    const std::size_t n = x_.size() / 3;
+    double trace_sum = 0.0;
+    std::size_t counted = 0;
+    for (std::size_t v = 0; v < n; ++v) {
+        const double* m = &curvature_[6 * v];
+        const double trace = m[0] + m[3] + m[5];
+        if (trace > 0.0) trace_sum += trace, ++counted;
+    }
+    if (counted == 0) {
+        preconditioned_ = gradient_;
+        return;
+    }
+    const double floor = 1e-8 * trace_sum / static_cast<double>(counted);
+#pragma omp parallel for schedule(static)
+    for (std::size_t v = 0; v < n; ++v) {
+        const double* m = &curvature_[6 * v];
+        const double lambda = 1e-3 * (m[0] + m[3] + m[5]) / 3.0 + floor;
+        const double a = m[0] + lambda, b = m[1], c = m[2], d = m[3] + lambda, e = m[4], f = m[5] + lambda;
+        // Symmetric [[a b c] [b d e] [c e f]]: inverse by cofactors (positive definite here).
+        const double A = d * f - e * e, B = c * e - b * f, C = b * e - c * d;
+        const double det = a * A + b * B + c * C;
+        const double* g = &gradient_[3 * v];
+        double* z = &preconditioned_[3 * v];
+        if (!(det > 0.0)) {
+            for (int k = 0; k < 3; ++k) z[k] = 0.0;
+            continue;
+        }
+        const double D = a * f - c * c, E = b * c - a * e, F = a * d - b * b;
+        z[0] = (A * g[0] + B * g[1] + C * g[2]) / det;
+        z[1] = (B * g[0] + D * g[1] + E * g[2]) / det;
+        z[2] = (C * g[0] + E * g[1] + F * g[2]) / det;
+    }
 }
 
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
@@ -169,6 +246,13 @@ PhaseResult Phase::run() {
     direction_.assign(n3, 0.0);
     previous_gradient_.assign(n3, 0.0);
     best_x_ = x_;
+    damping_.assign(n3 / 3, 1.0);
+    curvature_weight_.assign(m, 0.0);
+    curvature_.assign(2 * n3, 0.0);
+    preconditioned_.assign(n3, 0.0);
+    previous_preconditioned_.assign(n3, 0.0);
+    stamp_.assign(n3 / 3, 0);
+    element_stamp_.assign(m, 0);
 
     work_.evaluate(metric_, x_, q_);
     ++summary_.quality_passes;
@@ -178,9 +262,11 @@ PhaseResult Phase::run() {
     best_bad_ = s.bad;
     std::vector<double> best_history{best_worst_};
     std::vector<double> measure_history{objective_.progress_measure()};
+    std::vector<long> bad_history{s.bad};
     record(s, 0.0, 0.0);
     if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
 
+    const bool precondition = untangling_ && options_.precondition_untangling;
     double first_gradient_norm = -1.0;
     bool restart = true;  // next direction is steepest ascent
     int failures = 0;     // line searches in a row that found no step
@@ -192,36 +278,41 @@ PhaseResult Phase::run() {
             return end(TerminationReason::TimeLimit, "time limit reached");
 
         const double objective = objective_.value_and_weights(q_, weight_, kSerial);
-        work_.gradient(metric_, x_, weight_, gradient_);
+        if (precondition) {
+            objective_.curvature_weights(q_, curvature_weight_);
+            work_.gradient(metric_, x_, weight_, gradient_, curvature_weight_, curvature_);
+        } else {
+            work_.gradient(metric_, x_, weight_, gradient_);
+        }
         ++summary_.gradient_passes;
         const double g2 = detail::blocked_sums<1>(n3, [&](std::size_t i, auto& acc) { acc[0] += gradient_[i] * gradient_[i]; })[0];
         const double gradient_norm = std::sqrt(g2);
         if (first_gradient_norm < 0.0) first_gradient_norm = gradient_norm;
         if (!(gradient_norm > stop_.gradient_tolerance * first_gradient_norm))
             return end(TerminationReason::GradientVanished, "the objective's gradient vanished");
+        if (precondition) apply_preconditioner();
+        else preconditioned_ = gradient_;
 
-        // Polak-Ribiere+ conjugate gradient, restarted whenever the objective changes (mu) or
-        // the direction stops ascending.
+        // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
+        // changes (mu) or the direction stops ascending.
         double beta = 0.0;
         if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart) {
             const auto sums = detail::blocked_sums<2>(n3, [&](std::size_t i, auto& acc) {
-                acc[0] += gradient_[i] * (gradient_[i] - previous_gradient_[i]);
-                acc[1] += previous_gradient_[i] * previous_gradient_[i];
+                acc[0] += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
+                acc[1] += previous_preconditioned_[i] * previous_gradient_[i];
             });
             beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
         }
-        for (std::size_t i = 0; i < n3; ++i) direction_[i] = gradient_[i] + beta * direction_[i];
-        double slope = detail::blocked_sums<1>(n3, [&](std::size_t i, auto& acc) { acc[0] += gradient_[i] * direction_[i]; })[0];
-        if (!(slope > 0.0)) {
-            direction_ = gradient_;
-            slope = g2;
-        }
+        for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
+        const double slope = detail::blocked_sums<1>(n3, [&](std::size_t i, auto& acc) { acc[0] += gradient_[i] * direction_[i]; })[0];
+        if (!(slope > 0.0)) direction_ = preconditioned_;
         previous_gradient_ = gradient_;
+        previous_preconditioned_ = preconditioned_;
         double max_direction = 0.0;
         for (std::size_t v = 0; v < n3; v += 3)
             max_direction = std::max(max_direction, std::hypot(direction_[v], direction_[v + 1], direction_[v + 2]));
 
-        const bool accepted = line_search(objective, slope, max_direction);
+        const bool accepted = line_search(objective, max_direction);
         const double step = accepted ? step_ : 0.0;
         ++summary_.iterations;
         if (untangling_) ++summary_.untangle_iterations;
@@ -247,6 +338,7 @@ PhaseResult Phase::run() {
         record(s, step, accepted ? gain_ : 0.0);
         best_history.push_back(best_worst_);
         measure_history.push_back(objective_.progress_measure());
+        bad_history.push_back(s.bad);
 
         if (untangling_ && s.bad == 0 && untangled()) {
             best_x_ = x_;
@@ -254,16 +346,18 @@ PhaseResult Phase::run() {
         }
         if (!untangling_ && stop_.target_worst_quality && best_worst_ >= *stop_.target_worst_quality)
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
-        if (failures >= options_.max_failed_searches)
-            return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
+        bool stalled = failures >= options_.max_failed_searches;
         const auto window = static_cast<std::size_t>(stop_.progress_window);
-        if (best_history.size() > window) {
+        if (!stalled && best_history.size() > window) {
             const double tolerance = stop_.min_progress * std::max(std::abs(best_worst_), 1e-3);
             const std::size_t then = best_history.size() - 1 - window;
-            if (best_worst_ - best_history[then] <= tolerance &&
-                measure_history.back() - measure_history[then] <= tolerance)
-                return end(TerminationReason::Converged, "the worst quality stopped improving");
+            stalled = best_worst_ - best_history[then] <= tolerance &&
+                      measure_history.back() - measure_history[then] <= tolerance &&
+                      bad_history.back() >= bad_history[then];
         }
+        if (failures >= options_.max_failed_searches)
+            return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
+        if (stalled) return end(TerminationReason::Converged, "the worst quality stopped improving");
     }
 }
 
@@ -278,6 +372,43 @@ public:
 private:
     int saved_;
 };
+
+// Sweeps over the free vertices of non-positive elements, untangling each locally, until a sweep
+// moves none (or ten sweeps); records one history entry. Returns the vertices moved.
+int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& hybrid,
+                          Summary& summary, Clock::time_point start) {
+    const SimplexMesh& mesh = work.mesh();
+    const auto m = static_cast<std::size_t>(work.movable_elements());
+    std::vector<double> q(m);
+    int moved = 0;
+    for (int sweep = 0; sweep < 10; ++sweep) {
+        work.evaluate(hybrid, xyz, q);
+        std::vector<VertexId> candidates;
+        for (std::size_t e = 0; e < m; ++e)
+            if (q[e] <= 0.0)
+                for (VertexId v : mesh.element(static_cast<ElementId>(e)))
+                    if (!mesh.fixed()[v]) candidates.push_back(v);
+        std::sort(candidates.begin(), candidates.end());
+        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+        int moved_now = 0;
+        for (VertexId v : candidates) moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved;
+        moved += moved_now;
+        if (moved_now == 0) break;
+    }
+    work.evaluate(hybrid, xyz, q);
+    ++summary.quality_passes;
+    IterationRecord r;
+    r.iteration = summary.iterations;
+    r.phase = "untangle_local";
+    r.worst_quality = q.empty() ? 0.0 : *std::min_element(q.begin(), q.end());
+    r.best_worst_quality = r.worst_quality;
+    r.inverted = std::count_if(q.begin(), q.end(), [](double v) { return v <= 0.0; });
+    r.mean_quality = std::accumulate(q.begin(), q.end(), 0.0) / static_cast<double>(std::max<std::size_t>(1, m));
+    r.step = moved;
+    r.seconds = seconds_since(start);
+    summary.history.push_back(std::move(r));
+    return moved;
+}
 
 }  // namespace
 
@@ -333,16 +464,31 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
     const bool tangled = summary.before.inverted - summary.before.inverted_frozen > 0 ||
                          summary.before.degenerate > 0;
     if (tangled && options_.untangle) {
-        MetricOptions hybrid_options = options_.metric_options;
-        auto hybrid = make_metric("untangle_hybrid", hybrid_options);
-        hybrid->set_scale(work.scale());
-        // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
-        auto objective = make_objective("log_barrier", options_.objective_options);
-        result = Phase(work, xyz, *hybrid, *objective, options_.untangle_termination, options_, true, summary, start).run();
-        if (result.reason != TerminationReason::TargetReached) {
-            work.copy_back(xyz, mesh);
-            return finish(TerminationReason::CannotUntangle,
-                          "untangling stopped (" + result.message + ") with elements still inverted");
+        auto hybrid = make_metric("untangle_hybrid", options_.metric_options);
+        // Volumes measured against the size of each element's neighbourhood, so that a graded
+        // mesh's small inverted elements weigh as much as its large ones.
+        const std::vector<double> local_volumes = MetricScale::local_reference_volumes(work.mesh());
+        MetricScale hybrid_scale = work.scale();
+        hybrid_scale.element_reference_volume = local_volumes;
+        hybrid->set_scale(hybrid_scale);
+        // The global barrier ascent untangles most of a mesh; where it stalls on a few elements
+        // (a local maximum of the worst quality), local steps move single vertices to where
+        // their elements' smallest volume is largest, and the barrier ascent resumes.
+        for (int round = 0;; ++round) {
+            TerminationCriterion stop = options_.untangle_termination;
+            stop.max_iterations = std::max(0, stop.max_iterations - summary.untangle_iterations);
+            // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
+            auto objective = make_objective("log_barrier", options_.objective_options);
+            result = Phase(work, xyz, *hybrid, *objective, stop, options_, true, summary, start).run();
+            if (result.reason == TerminationReason::TargetReached) break;
+            const bool out_of_budget =
+                result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
+            if (out_of_budget || round == options_.local_untangle_rounds ||
+                local_untangle_sweeps(work, xyz, *hybrid, summary, start) == 0) {
+                work.copy_back(xyz, mesh);
+                return finish(TerminationReason::CannotUntangle,
+                              "untangling stopped (" + result.message + ") with elements still inverted");
+            }
         }
     }
     const bool still_tangled = !options_.untangle && tangled;

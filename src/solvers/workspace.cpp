@@ -59,11 +59,12 @@ void Workspace::build_lanes() {
                 low = std::min(low, v);
                 high = std::max(high, v);
             }
-            lanes_.push_back({first, last, low, high, 3 * total});
+            lanes_.push_back({first, last, low, high, total});
             total += static_cast<std::size_t>(high - low + 1);
         }
         if (count == 1 || total <= 2 * static_cast<std::size_t>(mesh_.num_vertices())) {
-            lane_buffer_.assign(3 * total, 0.0);
+            lane_vertices_ = total;
+            lane_gradient_.assign(3 * total, 0.0);
             return;
         }
     }
@@ -79,33 +80,49 @@ void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xy
 }
 
 void Workspace::gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
-                         std::span<double> gradient) {
+                         std::span<double> gradient, std::span<const double> curvature_weight,
+                         std::span<double> curvature) {
+    const bool with_curvature = !curvature.empty();
+    if (with_curvature && lane_curvature_.empty()) lane_curvature_.assign(6 * lane_vertices_, 0.0);
     const auto lanes = static_cast<std::ptrdiff_t>(lanes_.size());
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::ptrdiff_t l = 0; l < lanes; ++l) {
         const Lane& lane = lanes_[static_cast<std::size_t>(l)];
-        double* buffer = lane_buffer_.data() + lane.offset;
-        std::fill(buffer, buffer + 3 * static_cast<std::size_t>(lane.high - lane.low + 1), 0.0);
-        metric.accumulate_gradient(mesh_, xyz, lane.first, lane.last, weight.data() + lane.first, buffer, lane.low);
+        const auto count = static_cast<std::size_t>(lane.high - lane.low + 1);
+        QualityMetric::GradientTarget target;
+        target.weight = weight.data() + lane.first;
+        target.gradient = lane_gradient_.data() + 3 * lane.offset;
+        std::fill(target.gradient, target.gradient + 3 * count, 0.0);
+        if (with_curvature) {
+            target.curvature_weight = curvature_weight.data() + lane.first;
+            target.curvature = lane_curvature_.data() + 6 * lane.offset;
+            std::fill(target.curvature, target.curvature + 6 * count, 0.0);
+        }
+        target.base = lane.low;
+        metric.accumulate_gradient(mesh_, xyz, lane.first, lane.last, target);
     }
     // Each vertex sums the lanes that touch it in lane order; vertex blocks run in parallel.
     const VertexId n = mesh_.num_vertices();
     const VertexId block = 4096;
     const auto fixed = mesh_.fixed();
-#pragma omp parallel for schedule(static)
-    for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
-        const VertexId low = b * block, high = std::min(n, low + block) - 1;
-        std::fill(gradient.begin() + 3 * static_cast<std::size_t>(low),
-                  gradient.begin() + 3 * (static_cast<std::size_t>(high) + 1), 0.0);
+    auto gather = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low, VertexId high) {
+        std::fill(out.begin() + width * static_cast<std::size_t>(low), out.begin() + width * (static_cast<std::size_t>(high) + 1), 0.0);
         for (const Lane& lane : lanes_) {
             const VertexId from = std::max(low, lane.low), to = std::min(high, lane.high);
-            const double* buffer = lane_buffer_.data() + lane.offset;
+            const double* source = buffer.data() + width * lane.offset;
             for (VertexId v = from; v <= to; ++v)
-                for (int c = 0; c < 3; ++c) gradient[3 * static_cast<std::size_t>(v) + c] += buffer[3 * static_cast<std::size_t>(v - lane.low) + c];
+                for (int c = 0; c < width; ++c)
+                    out[width * static_cast<std::size_t>(v) + c] += source[width * static_cast<std::size_t>(v - lane.low) + c];
         }
         for (VertexId v = low; v <= high; ++v)
             if (fixed[v])
-                for (int c = 0; c < 3; ++c) gradient[3 * static_cast<std::size_t>(v) + c] = 0.0;
+                for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
+    };
+#pragma omp parallel for schedule(static)
+    for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
+        const VertexId low = b * block, high = std::min(n, low + block) - 1;
+        gather(gradient, lane_gradient_, 3, low, high);
+        if (with_curvature) gather(curvature, lane_curvature_, 6, low, high);
     }
 }
 

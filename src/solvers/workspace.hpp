@@ -25,10 +25,13 @@ public:
 
     // Qualities of the movable elements at positions xyz.
     void evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const;
-    // gradient = sum_e weight[e] * grad q_e over the movable elements, zero at fixed vertices.
-    // Elements are split into fixed lanes whose partial sums are added in lane order.
+    // gradient = sum_e weight[e] * grad q_e over the movable elements, zero at fixed vertices;
+    // with curvature weights also curvature = sum_e cw[e] * g g^T per vertex (6 doubles).
+    // Elements are split into fixed lanes whose partial sums are added in lane order, so the
+    // result does not depend on the number of threads.
     void gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
-                  std::span<double> gradient);
+                  std::span<double> gradient, std::span<const double> curvature_weight = {},
+                  std::span<double> curvature = {});
 
     // Coordinates in the caller's numbering.
     void copy_back(std::span<const double> xyz, SimplexMesh& original) const;
@@ -37,7 +40,7 @@ private:
     struct Lane {
         ElementId first, last;   // elements
         VertexId low, high;      // vertices they touch: [low, high]
-        std::size_t offset;      // into lane_buffer_, 3 doubles per vertex
+        std::size_t offset;      // first vertex of the lane in the lane buffers
     };
     void build_lanes();
 
@@ -47,7 +50,9 @@ private:
     MetricScale scale_;
     double reference_length_ = 1.0;
     std::vector<Lane> lanes_;
-    std::vector<double> lane_buffer_;
+    std::size_t lane_vertices_ = 0;       // total over the lanes
+    std::vector<double> lane_gradient_;   // 3 per lane vertex
+    std::vector<double> lane_curvature_;  // 6 per lane vertex, allocated on first use
 };
 
 }  // namespace paloverde::detail

@@ -52,6 +52,29 @@ BOOST_AUTO_TEST_CASE(untangles_the_mesquite_tangled_mesh) {
     check_never_worse(summary);
 }
 
+// Interior vertices moved by up to one local edge length: tangled, yet untangleable.
+BOOST_DATA_TEST_CASE(untangles_perturbed_shared_meshes,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
+                                  "mesquite/tris/tri_20258.vtk"}) *
+                         bdata::make({1, 2, 3}),
+                     name, seed) {
+    auto mesh = shared_mesh(name);
+    pv::PerturbOptions perturb;
+    perturb.amount = 1.0;
+    perturb.fraction = 0.3;
+    perturb.seed = static_cast<std::uint64_t>(seed);
+    pv::perturb(mesh, perturb);
+    const auto tangled = pv::count_orientations(mesh).inverted;
+    BOOST_TEST_REQUIRE(tangled > 0);
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 30;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE(name << " seed " << seed << ": " << summary.brief_report());
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+    check_never_worse(summary);
+}
+
 BOOST_DATA_TEST_CASE(improves_valid_shared_meshes_without_making_anything_worse,
                      bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/flat-tet-sphere.vtk", "stellar/house2.node",
                                   "mesquite/tris/tri_20258.vtk"}),

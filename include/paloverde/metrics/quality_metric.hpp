@@ -25,8 +25,15 @@ struct MetricScale {
     // Volume (area for triangles) that scale-free volumes are divided by: the mean absolute
     // element volume of the mesh.
     double reference_volume = 1.0;
+    // Optional: a reference volume per element (indexed like the mesh's elements), for meshes
+    // whose element sizes vary widely; used by scaled_volume and untangle_hybrid instead of
+    // reference_volume. Not owned: the array must outlive the metric's use of it.
+    std::span<const double> element_reference_volume;
 
     static MetricScale of(const SimplexMesh& mesh);
+    // Per vertex the mean absolute volume of its elements; per element the mean of that over its
+    // corners: a local, scale-free size.
+    static std::vector<double> local_reference_volumes(const SimplexMesh& mesh);
 };
 
 class QualityMetric {
@@ -51,11 +58,20 @@ public:
     // mesh's own or trial positions of the same layout): quality[e - first].
     virtual void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
                           ElementId last, double* quality) const = 0;
-    // gradient[3(v - base) + c] += weight[e - first] * d(quality of e)/d(x_v,c) for the elements
-    // [first, last) (a `base` lets a buffer cover only the vertices these elements touch).
+    // Where accumulate_gradient() adds its sums over elements [first, last):
+    //   gradient[3(v - base) + c]   += weight[e - first] * d q_e / d x_v,c
+    //   curvature[6(v - base) + ..] += curvature_weight[e - first] * g g^T,  g = d q_e / d x_v
+    // (the 3x3 block stored as xx, xy, xz, yy, yz, zz; only when both pointers are set). A base
+    // lets a buffer cover only the vertices these elements touch.
+    struct GradientTarget {
+        const double* weight = nullptr;
+        double* gradient = nullptr;
+        const double* curvature_weight = nullptr;
+        double* curvature = nullptr;
+        VertexId base = 0;
+    };
     virtual void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
-                                     ElementId last, const double* weight, double* gradient,
-                                     VertexId base = 0) const = 0;
+                                     ElementId last, const GradientTarget& target) const = 0;
 
 protected:
     MetricScale scale_;

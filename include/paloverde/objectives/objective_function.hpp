@@ -23,16 +23,23 @@ public:
     }
     // After each outer iteration: the log-barrier shrinks mu.
     virtual void advance() {}
+
     // A number that keeps rising while the method still makes progress, though the worst
     // quality may pause (the barrier's t, which climbs to the worst quality as mu shrinks).
     virtual double progress_measure() const { return 0.0; }
-    // Whether qualities whose (global) minimum is `min_quality` lie in the objective's domain.
-    virtual bool admissible(double min_quality) const { return min_quality > -1e308; }
+    // Whether element `element` with quality `quality` lies in the objective's domain.
+    virtual bool admissible(double quality, std::size_t element) const {
+        (void)element;
+        return quality > -1e308;
+    }
 
     virtual double value(std::span<const double> quality, const Reducer& reducer) const = 0;
     // Also writes d(value)/d(quality[i]) into weight[i].
     virtual double value_and_weights(std::span<const double> quality, std::span<double> weight,
                                      const Reducer& reducer) const = 0;
+    // -d2(value)/d(quality[i])2 of the part of the objective that is a sum over elements: how
+    // sharply each element's term bends. Solvers build a preconditioner from it; 0 means none.
+    virtual void curvature_weights(std::span<const double> quality, std::span<double> curvature) const;
 };
 
 // The log-barrier of Sastry & Shontz:  F(mu, t) = t + mu * sum_i log(q_i - t),  t < min q.
@@ -46,16 +53,19 @@ public:
     std::string_view name() const override { return "log_barrier"; }
     void update(std::span<const double> quality, const Reducer& reducer) override;
     void advance() override;
-    bool admissible(double min_quality) const override { return min_quality > t_; }
+    bool admissible(double quality, std::size_t) const override { return quality > t_; }
     double progress_measure() const override { return t_; }
     double value(std::span<const double> quality, const Reducer& reducer) const override;
     double value_and_weights(std::span<const double> quality, std::span<double> weight,
                              const Reducer& reducer) const override;
+    void curvature_weights(std::span<const double> quality, std::span<double> curvature) const override;
 
     double mu() const { return mu_; }
     double t() const { return t_; }
 
+
 private:
+
     double shrink_;
     double mu_;
     double t_ = 0.0;
@@ -67,7 +77,7 @@ class PMean final : public ObjectiveFunction {
 public:
     explicit PMean(double p = -2.0);
     std::string_view name() const override { return "p_mean"; }
-    bool admissible(double min_quality) const override { return min_quality > 0.0; }
+    bool admissible(double quality, std::size_t) const override { return quality > 0.0; }
     double value(std::span<const double> quality, const Reducer& reducer) const override;
     double value_and_weights(std::span<const double> quality, std::span<double> weight,
                              const Reducer& reducer) const override;

@@ -23,7 +23,14 @@ struct GlobalSolverOptions {
     bool improve_shape = true;        // run the shape phase
     TerminationCriterion termination; // shape phase
     TerminationCriterion untangle_termination = TerminationCriterion::for_untangling();
-    int steps_per_mu = 3;             // steps at one mu before it shrinks
+    // While untangling, scale each vertex's move by the inverse of its 3x3 block of the
+    // objective's curvature (block-Jacobi preconditioning): inverted elements of very different
+    // sizes and barrier weights then all make progress. (In the shape phase it measured worse.)
+    bool precondition_untangling = true;
+    // When the barrier ascent stalls with elements still inverted: rounds of local vertex
+    // untangling (then the ascent resumes). 0 keeps untangling purely global.
+    int local_untangle_rounds = 5;
+    int steps_per_mu = 5;             // steps at one mu before it shrinks
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it
