@@ -80,9 +80,6 @@ void WriteOptions::validate(const std::filesystem::path& path) const {
     if (f == MeshFormat::TetGen) throw OptionError("writing TetGen .node/.ele files is not supported; use .vtk, .vtu, .msh or .mesh");
     if (f == MeshFormat::Gmsh && gmsh_version != "2.2")
         throw OptionError("gmsh_version '" + gmsh_version + "' cannot be written; the Gmsh writer writes version 2.2");
-    if (f == MeshFormat::Medit && encoding == Encoding::Binary) {
-        // Medit's binary variant (.meshb) is a different extension; .mesh is always ASCII.
-    }
 }
 
 const Field* MeshFile::point_field(std::string_view name) const {

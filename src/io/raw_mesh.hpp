@@ -3,6 +3,7 @@
 // kinds, in file order), and the fields. finish_mesh() picks the highest-dimensional simplices,
 // validates, and sets the fixed flags and global ids.
 #include <cstddef>
+#include <iosfwd>
 #include <span>
 #include <string>
 #include <vector>

@@ -17,7 +17,9 @@ double local_min(std::span<const double> q) {
 }
 }  // namespace
 
-LogBarrier::LogBarrier(double shrink, double initial_mu) : shrink_(shrink), mu_(initial_mu) {
+LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
+    : shrink_(shrink), initial_active_(initial_active), mu_(initial_mu) {
+    if (!(initial_active >= 1.0)) throw OptionError("barrier_initial_active must be >= 1");
     if (!(shrink > 0.0 && shrink <= 1.0)) throw OptionError("barrier_shrink must lie in (0, 1]");
     if (!(initial_mu >= 0.0) || !std::isfinite(initial_mu)) throw OptionError("initial_mu must be >= 0 (0: automatic)");
 }
@@ -30,11 +32,27 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     const double n = local[0];
     if (n == 0.0) return;
     if (mu_ <= 0.0) {
-        // Start t half the spread below the worst quality, and take the mu for which that t is
-        // optimal.
+        // Start t half the spread below the worst quality, or closer where that would spread the
+        // weight over more than about `initial_active_` elements (a large mesh would otherwise
+        // spend its first hundreds of iterations on its average elements); take the mu for which
+        // that t is optimal.
         const double mean = local[1] / n;
         double gap = 0.5 * (mean - qmin);
         if (!(gap > 0.0)) gap = 0.1 * std::max(std::abs(qmin), 1e-12);
+        // sum_i gap / (q_i - qmin + gap): how many elements weigh about as much as the worst.
+        auto active = [&](double d) {
+            return reducer.sum(detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
+                acc[0] += d / (q[i] - qmin + d);
+            })[0]);
+        };
+        if (active(gap) > initial_active_) {
+            double lo = 0.0, hi = gap;
+            for (int it = 0; it < 60; ++it) {
+                const double mid = 0.5 * (lo + hi);
+                (active(mid) > initial_active_ ? hi : lo) = mid;
+            }
+            gap = hi;
+        }
         const double t0 = qmin - gap;
         const double s = reducer.sum(detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
             acc[0] += 1.0 / (q[i] - t0);
@@ -126,11 +144,13 @@ void ObjectiveOptions::validate() const {
     if (!(initial_mu >= 0.0) || !std::isfinite(initial_mu))
         throw OptionError("initial_mu must be >= 0, 0 meaning automatic (got " + std::to_string(initial_mu) + ")");
     if (!(p != 0.0) || !std::isfinite(p)) throw OptionError("p must be a nonzero number (got " + std::to_string(p) + ")");
+    if (!(barrier_initial_active >= 1.0)) throw OptionError("barrier_initial_active must be >= 1");
 }
 
 std::unique_ptr<ObjectiveFunction> make_objective(std::string_view name, const ObjectiveOptions& options) {
     options.validate();
-    if (name == "log_barrier") return std::make_unique<LogBarrier>(options.barrier_shrink, options.initial_mu);
+    if (name == "log_barrier")
+        return std::make_unique<LogBarrier>(options.barrier_shrink, options.initial_mu, options.barrier_initial_active);
     if (name == "p_mean") return std::make_unique<PMean>(options.p);
     if (name == "min_quality") return std::make_unique<MinQuality>();
     throw OptionError("unknown objective function '" + std::string(name) + "' (known: log_barrier, p_mean, min_quality)");

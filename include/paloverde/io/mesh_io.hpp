@@ -35,7 +35,7 @@ struct ReadOptions {
 
 struct WriteOptions {
     MeshFormat format = MeshFormat::FromExtension;
-    Encoding encoding = Encoding::Binary;
+    Encoding encoding = Encoding::Binary;  // .mesh (Medit) is always text: its binary form is .meshb
     // Gmsh only: the file version to write. 2.2 is the one supported.
     std::string gmsh_version = "2.2";
     // Writes a `fixed` point field (where the format can hold one) so a round trip keeps them.

@@ -48,8 +48,10 @@ public:
 // to the worst quality and the weight mu/(q_i - t) concentrates on the worst elements.
 class LogBarrier final : public ObjectiveFunction {
 public:
-    // mu <= 0 chooses the first mu from the qualities (t starts half the spread below the worst).
-    explicit LogBarrier(double shrink = 0.8, double initial_mu = 0.0);
+    // mu <= 0 chooses the first mu from the qualities: t starts half the spread below the worst
+    // quality, or closer when more than about `initial_active` elements would weigh as much as
+    // the worst.
+    explicit LogBarrier(double shrink = 0.8, double initial_mu = 0.0, double initial_active = 1e4);
     std::string_view name() const override { return "log_barrier"; }
     void update(std::span<const double> quality, const Reducer& reducer) override;
     void advance() override;
@@ -67,6 +69,7 @@ public:
 private:
 
     double shrink_;
+    double initial_active_;
     double mu_;
     double t_ = 0.0;
 };
@@ -99,6 +102,7 @@ public:
 struct ObjectiveOptions {
     double barrier_shrink = 0.8;  // mu <- shrink * mu after steps_per_mu steps, in (0, 1]
     double initial_mu = 0.0;      // 0: chosen from the qualities
+    double barrier_initial_active = 1e4;  // with automatic mu: elements the barrier first weighs
     double p = -2.0;              // p_mean exponent, nonzero
     void validate() const;        // throws OptionError
 };

@@ -1,0 +1,52 @@
+#include "paloverde/solvers/instruction_queue.hpp"
+
+#include <sstream>
+
+#include "paloverde/core/error.hpp"
+
+namespace paloverde {
+
+InstructionQueue& InstructionQueue::assess(std::string label, QualityAssessor assessor) {
+    steps_.push_back({std::move(label), std::make_shared<const QualityAssessor>(std::move(assessor)), nullptr});
+    return *this;
+}
+
+InstructionQueue& InstructionQueue::improve(std::unique_ptr<Solver> solver) {
+    if (!solver) throw OptionError("InstructionQueue::improve needs a solver, got none");
+    std::string label(solver->name());
+    steps_.push_back({std::move(label), nullptr, std::shared_ptr<Solver>(std::move(solver))});
+    return *this;
+}
+
+QueueResult InstructionQueue::run(SimplexMesh& mesh) const {
+    QueueResult result;
+    for (const Instruction& step : steps_) {
+        if (step.assessor) {
+            result.steps.push_back({step.label, step.assessor->assess(mesh)});
+            continue;
+        }
+        Summary summary = step.solver->improve(mesh);
+        const bool ok = summary.success();
+        const std::string why = summary.message;
+        result.steps.push_back({step.label, std::move(summary)});
+        if (!ok) {
+            result.success = false;
+            result.message = "'" + step.label + "' failed: " + why;
+            break;
+        }
+    }
+    return result;
+}
+
+std::string QueueResult::report() const {
+    std::ostringstream out;
+    for (const Step& step : steps) {
+        out << "== " << step.label << "\n";
+        if (const auto* report = std::get_if<QualityReport>(&step.outcome)) out << report->to_text();
+        else out << std::get<Summary>(step.outcome).brief_report() << "\n";
+    }
+    if (!success) out << "stopped: " << message << "\n";
+    return out.str();
+}
+
+}  // namespace paloverde

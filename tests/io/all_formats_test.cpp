@@ -1,0 +1,63 @@
+// Every shared mesh through every format that can hold it: what is read back is what was
+// written (coordinates bit for bit, connectivity, fixed flags where the format stores them).
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+
+namespace {
+const std::vector<std::string> kMeshes = {
+    "mesquite/tets/tet_1.vtk",          "mesquite/tets/two_tets.vtk",     "mesquite/tets/two_tets_shape.vtk",
+    "mesquite/tets/tet_2_with_bound.vtk", "mesquite/tets/tet_4_tangled.vtk", "mesquite/tets/tire.vtk",
+    "mesquite/tets/cube-clip-5.vtk",    "mesquite/tets/flat-tet-sphere.vtk", "mesquite/tets/cub_wedge_like.vtk",
+    "mesquite/tris/equil_tri.vtk",      "mesquite/tris/tri_5_xz.vtk",     "mesquite/tris/tangled_tri.vtk",
+    "mesquite/tris/bad_circle_tri.vtk", "mesquite/tris/shashkov.vtk",     "mesquite/tris/tri_20258.vtk",
+    "stellar/house2.node",              "tetwild/armadillo.mesh",         "tetwild/octopus-vol.mesh"};
+
+struct Target {
+    const char* name;
+    pv::Encoding encoding;
+    bool keeps_fixed;
+};
+const Target kTargets[] = {{"a.vtk", pv::Encoding::Ascii, true},  {"b.vtk", pv::Encoding::Binary, true},
+                           {"c.vtu", pv::Encoding::Ascii, true},  {"d.vtu", pv::Encoding::Binary, true},
+                           {"e.msh", pv::Encoding::Ascii, true},  {"f.msh", pv::Encoding::Binary, true},
+                           {"g.mesh", pv::Encoding::Ascii, false}};
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(all_formats)
+
+BOOST_DATA_TEST_CASE(shared_meshes_round_trip_through_every_format, bdata::make(kMeshes), name) {
+    const auto original = pv::read_mesh(pv::test::shared_data(name));
+    const auto& mesh = original.mesh;
+    const pv::test::ScratchDir dir("all_formats");
+    for (const Target& target : kTargets) {
+        BOOST_TEST_CONTEXT(name << " -> " << target.name) {
+            pv::WriteOptions options;
+            options.encoding = target.encoding;
+            pv::write_mesh(dir / target.name, mesh, options);
+            const auto copy = pv::read_mesh(dir / target.name);
+            BOOST_TEST((copy.mesh.kind() == mesh.kind()));
+            BOOST_TEST_REQUIRE(copy.mesh.num_vertices() == mesh.num_vertices());
+            BOOST_TEST_REQUIRE(copy.mesh.num_elements() == mesh.num_elements());
+            BOOST_TEST(std::equal(copy.mesh.coordinates().begin(), copy.mesh.coordinates().end(),
+                                  mesh.coordinates().begin()));
+            BOOST_TEST(std::equal(copy.mesh.connectivity().begin(), copy.mesh.connectivity().end(),
+                                  mesh.connectivity().begin()));
+            if (target.keeps_fixed || !original.fixed_from_file)
+                BOOST_TEST(std::equal(copy.mesh.fixed().begin(), copy.mesh.fixed().end(), mesh.fixed().begin()));
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(quadrilaterals_are_refused_by_name) {
+    BOOST_CHECK_EXCEPTION(pv::read_mesh(pv::test::shared_data("mesquite/tris/horseshoe.vtk")), pv::FileError,
+                          [](const pv::FileError& e) { return std::string(e.what()).find("quad") != std::string::npos; });
+}
+
+BOOST_AUTO_TEST_SUITE_END()
