@@ -4,19 +4,23 @@
 
 #include "commands.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/core/error.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/laplace_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 
 namespace paloverde::cli {
 
 void add_improve_command(CLI::App& app, int& exit_code) {
     // Options bind straight to the solver's options struct: one set of defaults.
     struct Options {
-        std::string input, output, history, json;
+        std::string input, output, history, json, method = "global";
         bool untangle_only = false, no_untangle = false, quiet = false, ascii = false, steepest = false;
         std::optional<double> target;
         GlobalSolverOptions solver;
+        LocalSolverOptions local;
     };
     auto o = std::make_shared<Options>();
     GlobalSolverOptions& s = o->solver;
@@ -24,6 +28,14 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         "improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's quality");
     cmd->add_option("input", o->input, "Mesh to improve")->required();
     cmd->add_option("-o,--output", o->output, "Where to write the improved mesh (.vtk .vtu .msh .mesh)")->required();
+    cmd->add_option("--method", o->method,
+                    "Solver: global (log-barrier over the whole mesh), local (Freitag-Plassmann max-min per vertex, "
+                    "by colors), smart-laplace, or laplace (may invert elements)")
+        ->check(CLI::IsMember({"global", "local", "laplace", "smart-laplace"}))
+        ->capture_default_str();
+    cmd->add_option("--improve-below", o->local.improve_below,
+                    "Local method: move only vertices whose worst element is in this lowest fraction of the range worst..ideal")
+        ->capture_default_str();
     cmd->add_option("--iterations", s.termination.max_iterations, "Most shape-improvement iterations")
         ->capture_default_str();
     cmd->add_flag("--untangle", o->untangle_only, "Only untangle: stop once no element is inverted");
@@ -49,10 +61,36 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         options.improve_shape = !o->untangle_only;
         options.untangle_termination.max_seconds = options.termination.max_seconds;
         options.termination.target_worst_quality = o->target;
-        GlobalSolver solver(options);  // validates before the mesh is read
+        // Each solver is built (and its options validated) before the mesh is read.
+        std::unique_ptr<Solver> solver;
+        if (o->method == "global") {
+            solver = std::make_unique<GlobalSolver>(options);
+        } else if (o->method == "local") {
+            if (o->untangle_only) throw OptionError("--untangle: only the global method stops after untangling");
+            LocalSolverOptions local = o->local;
+            local.metric = options.shape_metric;
+            local.untangle = options.untangle;
+            local.termination.max_iterations = options.termination.max_iterations;
+            local.termination.max_seconds = options.termination.max_seconds;
+            local.termination.target_worst_quality = o->target;
+            local.untangle_termination.max_seconds = options.termination.max_seconds;
+            local.threads = options.threads;
+            solver = std::make_unique<LocalSolver>(local);
+        } else {
+            if (o->untangle_only || o->no_untangle)
+                throw OptionError("--untangle/--no-untangle: the Laplace methods do not untangle");
+            LaplaceSolverOptions laplace;
+            laplace.smart = o->method == "smart-laplace";
+            laplace.metric = options.shape_metric;
+            laplace.termination.max_iterations = options.termination.max_iterations;
+            laplace.termination.max_seconds = options.termination.max_seconds;
+            laplace.termination.target_worst_quality = o->target;
+            laplace.threads = options.threads;
+            solver = std::make_unique<LaplaceSolver>(laplace);
+        }
 
         MeshFile file = read_mesh(o->input);
-        const Summary summary = solver.improve(file.mesh);
+        const Summary summary = solver->improve(file.mesh);
 
         WriteOptions write;
         write.encoding = o->ascii ? Encoding::Ascii : Encoding::Binary;

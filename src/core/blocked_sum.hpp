@@ -9,6 +9,9 @@
 namespace paloverde::detail {
 
 inline constexpr std::size_t kSumBlock = 4096;
+// Loops shorter than this many items run on one thread: starting threads costs more, and on a
+// loaded machine waiting threads spin and steal the worker's time.
+inline constexpr std::size_t kParallelThreshold = 32768;
 
 // Knuth's TwoSum accumulation: hi + lo carries the running sum exactly.
 struct CompensatedSum {
@@ -27,7 +30,7 @@ template <int K, class Term>
 std::array<double, K> blocked_sums(std::size_t n, Term term) {
     const std::size_t blocks = (n + kSumBlock - 1) / kSumBlock;
     std::vector<std::array<double, K>> partial(blocks);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > kParallelThreshold)
     for (std::ptrdiff_t b = 0; b < static_cast<std::ptrdiff_t>(blocks); ++b) {
         std::array<double, K> acc{};
         const std::size_t end = std::min(n, (static_cast<std::size_t>(b) + 1) * kSumBlock);

@@ -29,30 +29,14 @@ std::string lower(std::string_view s) {
 }
 
 // Medit allows '#' comments wherever whitespace may appear; a comment runs to the end of its
-// line. These wrap TextScanner so that every token read skips them.
+// line. The TextScanner underneath skips them; this adds Medit's number messages and counts.
 class MeditScanner {
 public:
-    explicit MeditScanner(const std::string& path) : s_(path) {}
+    explicit MeditScanner(const std::string& path) : s_(path, '#') {}
 
-    std::string_view token() {
-        for (;;) {
-            const std::string_view t = s_.token();
-            if (t.empty() || t.front() != '#') return t;
-            s_.skip_line();
-        }
-    }
-    std::string_view expect_token(std::string_view what) {
-        const std::string_view t = token();
-        if (t.empty()) s_.fail("unexpected end of file: expected " + std::string(what));
-        return t;
-    }
-    std::int64_t integer(std::string_view what) {
-        const std::string_view t = expect_token(what);
-        std::int64_t value = 0;
-        if (!parse_integer(t, value))
-            s_.fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'");
-        return value;
-    }
+    std::string_view token() { return s_.token(); }
+    std::string_view expect_token(std::string_view what) { return s_.expect_token(what); }
+    std::int64_t integer(std::string_view what) { return s_.integer(what); }
     double real(std::string_view what) {
         const std::string_view t = expect_token(what);
         double value = 0.0;

@@ -23,24 +23,14 @@ namespace paloverde::io {
 
 namespace {
 
-// TetGen allows '#' comments anywhere; a comment runs to the end of its line. These wrap
-// TextScanner so that every token read skips them.
+// TetGen allows '#' comments anywhere; a comment runs to the end of its line. The TextScanner
+// underneath skips them; this adds TetGen's number messages and header checks.
 class CommentedScanner {
 public:
-    explicit CommentedScanner(const std::string& path) : s_(path) {}
+    explicit CommentedScanner(const std::string& path) : s_(path, '#') {}
 
-    std::string_view token() {
-        for (;;) {
-            const std::string_view t = s_.token();
-            if (t.empty() || t.front() != '#') return t;
-            s_.skip_line();
-        }
-    }
-    std::string_view expect_token(std::string_view what) {
-        const std::string_view t = token();
-        if (t.empty()) s_.fail("unexpected end of file: expected " + std::string(what));
-        return t;
-    }
+    std::string_view token() { return s_.token(); }
+    std::string_view expect_token(std::string_view what) { return s_.expect_token(what); }
     std::int64_t integer(std::string_view what) { return to_integer(expect_token(what), what); }
     std::int64_t to_integer(std::string_view t, std::string_view what) {
         std::int64_t value = 0;

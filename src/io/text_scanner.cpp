@@ -13,7 +13,7 @@ namespace {
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
 }  // namespace
 
-TextScanner::TextScanner(std::string path) : path_(std::move(path)) {
+TextScanner::TextScanner(std::string path, char comment) : path_(std::move(path)), comment_(comment) {
     std::ifstream in(path_, std::ios::binary);
     if (!in) throw FileError(path_, 0, "cannot open the file (missing or unreadable)");
     in.seekg(0, std::ios::end);
@@ -26,9 +26,13 @@ TextScanner::TextScanner(std::string path) : path_(std::move(path)) {
 }
 
 void TextScanner::skip_space() {
-    while (pos_ < data_.size() && is_space(data_[pos_])) {
-        if (data_[pos_] == '\n') ++line_;
-        ++pos_;
+    for (;;) {
+        while (pos_ < data_.size() && is_space(data_[pos_])) {
+            if (data_[pos_] == '\n') ++line_;
+            ++pos_;
+        }
+        if (comment_ == '\0' || pos_ >= data_.size() || data_[pos_] != comment_) return;
+        skip_line();
     }
 }
 

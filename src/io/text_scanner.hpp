@@ -12,7 +12,10 @@ namespace paloverde::io {
 
 class TextScanner {
 public:
-    explicit TextScanner(std::string path);  // reads the file; throws FileError if it cannot
+    // Reads the file; throws FileError if it cannot. With a `comment` character other than '\0',
+    // a token that starts with it begins a comment running to the end of its line, which
+    // token() and at_end() skip like whitespace.
+    explicit TextScanner(std::string path, char comment = '\0');
 
     const std::string& path() const noexcept { return path_; }
     std::size_t line() const noexcept { return line_; }
@@ -54,6 +57,7 @@ private:
     std::size_t pos_ = 0;
     std::size_t line_ = 1;
     bool byte_offsets_ = false;
+    char comment_ = '\0';
 };
 
 // Parses a whole token as a number; false if it is not one.

@@ -1,16 +1,15 @@
 #include "paloverde/solvers/global_solver.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <omp.h>
 
 #include "core/blocked_sum.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "local_untangle.hpp"
+#include "run_support.hpp"
 #include "workspace.hpp"
 
 namespace paloverde {
@@ -33,12 +32,9 @@ void GlobalSolverOptions::validate() const {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+using detail::Clock;
+using detail::seconds_since;
 const Reducer kSerial;
-
-double seconds_since(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 struct PhaseResult {
     TerminationReason reason;
@@ -145,7 +141,7 @@ bool Phase::line_search(double objective, double max_direction) {
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;
         std::fill(damping_.begin(), damping_.end(), 1.0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > detail::kParallelThreshold)
         for (VertexId v = 0; v < n; ++v)
             for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + s * direction_[3 * v + c];
         work_.evaluate(metric_, trial_x_, trial_q_);
@@ -209,7 +205,7 @@ void Phase::apply_preconditioner() {
         return;
     }
     const double floor = 1e-8 * trace_sum / static_cast<double>(counted);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n > detail::kParallelThreshold)
     for (std::size_t v = 0; v < n; ++v) {
         const double* m = &curvature_[6 * v];
         const double lambda = 1e-3 * (m[0] + m[3] + m[5]) / 3.0 + floor;
@@ -361,18 +357,6 @@ PhaseResult Phase::run() {
     }
 }
 
-// Restores the caller's threads setting when done.
-class ThreadScope {
-public:
-    explicit ThreadScope(int threads) : saved_(omp_get_max_threads()) {
-        if (threads > 0) omp_set_num_threads(threads);
-    }
-    ~ThreadScope() { omp_set_num_threads(saved_); }
-
-private:
-    int saved_;
-};
-
 // Sweeps over the free vertices of non-positive elements, untangling each locally, until a sweep
 // moves none (or ten sweeps); records one history entry. Returns the vertices moved.
 int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& hybrid,
@@ -415,38 +399,11 @@ int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, con
 GlobalSolver::GlobalSolver(GlobalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
 Summary GlobalSolver::improve(SimplexMesh& mesh) {
-    const auto start = Clock::now();
-    ThreadScope threads(options_.threads);
-    Summary summary;
-    summary.solver = std::string(name());
-    summary.quality_metric = options_.shape_metric;
-    QualityAssessor assessor;
-    summary.before = assessor.assess(mesh);
-    const auto worst_movable = [&](const QualityReport& report) {
-        const MetricReport* r = report.metric(options_.shape_metric);
-        if (!r) r = &report.metrics.front();
-        return r->movable.count > 0 ? r->movable.min : r->all.min;
-    };
-    summary.worst_before = worst_movable(summary.before);
-    const std::vector<double> original(mesh.coordinates().begin(), mesh.coordinates().end());
-    auto finish = [&](TerminationReason reason, std::string message) {
-        summary.reason = reason;
-        summary.message = std::move(message);
-        summary.after = assessor.assess(mesh);
-        summary.worst_after = worst_movable(summary.after);
-        // The phases only accept steps that keep both from getting worse; this is the guarantee
-        // should floating point and the exact predicate ever disagree.
-        const bool worse = summary.after.inverted > summary.before.inverted ||
-                           (summary.after.inverted == summary.before.inverted && summary.worst_after < summary.worst_before);
-        if (worse) {
-            std::copy(original.begin(), original.end(), mesh.coordinates().begin());
-            summary.after = summary.before;
-            summary.worst_after = summary.worst_before;
-            summary.message += " (the result was worse than the input, which is handed back unchanged)";
-        }
-        summary.seconds = seconds_since(start);
-        return summary;
-    };
+    detail::ThreadScope threads(options_.threads);
+    detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
+    Summary& summary = run.summary;
+    const auto start = run.start();
+    auto finish = [&](TerminationReason reason, std::string message) { return run.finish(reason, std::move(message)); };
 
     if (mesh.num_elements() == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
     if (mesh.num_free_vertices() == 0)

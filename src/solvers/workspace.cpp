@@ -1,5 +1,7 @@
 #include "workspace.hpp"
 
+#include "core/blocked_sum.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -72,7 +74,7 @@ void Workspace::build_lanes() {
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {
     const ElementId chunks = (movable_ + kEvaluateChunk - 1) / kEvaluateChunk;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
     for (ElementId c = 0; c < chunks; ++c) {
         const ElementId first = c * kEvaluateChunk, last = std::min(movable_, first + kEvaluateChunk);
         metric.evaluate(mesh_, xyz, first, last, quality.data() + first);
@@ -85,7 +87,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     const bool with_curvature = !curvature.empty();
     if (with_curvature && lane_curvature_.empty()) lane_curvature_.assign(6 * lane_vertices_, 0.0);
     const auto lanes = static_cast<std::ptrdiff_t>(lanes_.size());
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
     for (std::ptrdiff_t l = 0; l < lanes; ++l) {
         const Lane& lane = lanes_[static_cast<std::size_t>(l)];
         const auto count = static_cast<std::size_t>(lane.high - lane.low + 1);
@@ -118,7 +120,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
             if (fixed[v])
                 for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
     };
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
     for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
         const VertexId low = b * block, high = std::min(n, low + block) - 1;
         gather(gradient, lane_gradient_, 3, low, high);

@@ -52,6 +52,27 @@ BOOST_AUTO_TEST_CASE(improve_untangles_writes_history_and_json_and_exits_zero) {
     BOOST_TEST(nlohmann::json::parse(after.output)["inverted"].get<int>() == 0);
 }
 
+BOOST_AUTO_TEST_CASE(improve_method_selects_the_solver) {
+    const pv::test::ScratchDir dir("cli_method");
+    const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
+    for (const std::string method : {"global", "local", "smart-laplace", "laplace"}) {
+        const auto result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --method " +
+                                    method + " --iterations 5 --json " + quoted(dir / "s.json"));
+        BOOST_TEST_INFO(method << ": " << result.output);
+        const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
+        std::string name = method == "smart-laplace" ? "smart_laplace" : method;
+        BOOST_TEST(summary["solver"].get<std::string>() == name);
+        // Only the untangling methods succeed on a tangled mesh.
+        if (method == "global" || method == "local") {
+            BOOST_TEST(result.exit_code == 0);
+            BOOST_TEST(summary["inverted_after"].get<int>() == 0);
+        } else {
+            BOOST_TEST(result.exit_code != 0);
+        }
+    }
+    BOOST_TEST(run_cli("improve " + quoted(input) + " -o " + quoted(dir / "x.vtk") + " --method simplex").exit_code == 2);
+}
+
 BOOST_AUTO_TEST_CASE(a_target_that_is_not_reached_exits_three) {
     const pv::test::ScratchDir dir("cli_target");
     const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");

@@ -5,9 +5,7 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
-#include <iterator>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,13 +13,12 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
+#include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace paloverde;
-using paloverde::test::ScratchDir;
-using paloverde::test::shared_data;
-using paloverde::test::write_file;
+using namespace paloverde::test;
 
 namespace {
 
@@ -45,99 +42,6 @@ struct Bytes {
     Bytes& u64(std::uint64_t v) { return put(v); }
     Bytes& f64(double v) { return put(v); }
 };
-
-// ":N:", how a FileError names line N. Built with += (GCC 12 warns, wrongly, on ":" + string).
-std::string line_tag(std::size_t line) {
-    std::string tag = ":";
-    tag += std::to_string(line);
-    tag += ':';
-    return tag;
-}
-
-// The line tag of the end of `text` (where reading a truncated file stops).
-std::string last_line(const std::string& text) {
-    return line_tag(1 + static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')));
-}
-
-// The line tag of the first occurrence of `needle` in `text`.
-std::string line_of(const std::string& text, std::string_view needle) {
-    const std::size_t at = text.find(needle);
-    BOOST_REQUIRE(at != std::string::npos);
-    return last_line(text.substr(0, at));
-}
-
-std::string replaced(std::string text, std::string_view from, std::string_view to) {
-    const std::size_t at = text.find(from);
-    BOOST_REQUIRE(at != std::string::npos);
-    return text.replace(at, from.size(), to);
-}
-
-// Reading `path` must throw a FileError whose message names the file and holds every fragment.
-void check_error(const fs::path& path, std::initializer_list<std::string_view> fragments) {
-    try {
-        read_mesh(path);
-        BOOST_ERROR("reading " << path.filename() << " did not throw");
-    } catch (const FileError& e) {
-        const std::string message = e.what();
-        BOOST_TEST_MESSAGE(message);
-        BOOST_TEST(message.find(path.filename().string()) != std::string::npos, "'" << message << "' lacks the file name");
-        for (std::string_view fragment : fragments)
-            BOOST_TEST(message.find(fragment) != std::string::npos, "'" << message << "' lacks '" << fragment << "'");
-    }
-}
-
-void check_error_text(const ScratchDir& dir, const std::string& name, const std::string& text,
-                      std::initializer_list<std::string_view> fragments) {
-    write_file(dir / name, text);
-    check_error(dir / name, fragments);
-}
-
-double signed_volume(const SimplexMesh& mesh, ElementId e) {
-    const auto t = mesh.element(e);
-    const Vec3 a = mesh.point(t[0]), b = mesh.point(t[1]), c = mesh.point(t[2]), d = mesh.point(t[3]);
-    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    const double w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-    return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
-}
-
-int positive_tets(const SimplexMesh& mesh) {
-    int positive = 0;
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) positive += signed_volume(mesh, e) > 0.0;
-    return positive;
-}
-
-// Same kind, connectivity, and coordinates bit for bit (so -0.0 and 0.0 differ).
-void check_same_mesh(const SimplexMesh& a, const SimplexMesh& b) {
-    BOOST_TEST(static_cast<int>(a.kind()) == static_cast<int>(b.kind()));
-    BOOST_REQUIRE_EQUAL(a.num_vertices(), b.num_vertices());
-    BOOST_REQUIRE_EQUAL(a.num_elements(), b.num_elements());
-    BOOST_TEST(std::memcmp(a.coordinates().data(), b.coordinates().data(), a.coordinates().size_bytes()) == 0);
-    BOOST_TEST(std::equal(a.connectivity().begin(), a.connectivity().end(), b.connectivity().begin()));
-}
-
-void check_same_values(const std::vector<double>& a, const std::vector<double>& b) {
-    BOOST_REQUIRE_EQUAL(a.size(), b.size());
-    BOOST_TEST(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
-}
-
-// A small triangle mesh with awkward coordinates: thirds, square roots, -0.0 and a denormal.
-SimplexMesh awkward_triangles() {
-    const int nx = 5, ny = 4;
-    std::vector<double> xyz;
-    for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i)
-            xyz.insert(xyz.end(), {i / 3.0, j * std::sqrt(2.0) / 7.0, 1e-3 * std::sin(i + 2.0 * j)});
-    xyz[0] = -0.0;
-    xyz[1] = 4.9e-320;
-    std::vector<VertexId> triangles;
-    for (int j = 0; j + 1 < ny; ++j)
-        for (int i = 0; i + 1 < nx; ++i) {
-            const VertexId v = j * nx + i;
-            triangles.insert(triangles.end(), {v, v + 1, v + nx + 1, v, v + nx + 1, v + nx});
-        }
-    return SimplexMesh(ElementKind::Triangle, std::move(xyz), std::move(triangles));
-}
 
 // Writes `mesh` with a fixed-flag pattern that boundary detection would not give, a 3-component
 // point field and a cell field, reads it back, and checks that everything survived exactly.
@@ -552,11 +456,7 @@ BOOST_AUTO_TEST_CASE(ascii_writer_output_is_plain_msh22) {
     write_mesh(dir / "one.msh", mesh, options);
     const MeshFile file = read_mesh(dir / "one.msh");
     BOOST_TEST(file.mesh.point(3)[2] == 0.1);
-    std::string text;
-    {
-        std::ifstream in(dir / "one.msh");
-        text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    }
+    const std::string text = read_text(dir / "one.msh");
     BOOST_TEST(text == "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 0 1 0\n4 0 0 0.1\n$EndNodes\n"
                        "$Elements\n1\n1 4 2 0 1 1 2 3 4\n$EndElements\n");
 }

@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
@@ -18,13 +17,12 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
+#include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace paloverde;
-using paloverde::test::ScratchDir;
-using paloverde::test::shared_data;
-using paloverde::test::write_file;
+using namespace paloverde::test;
 
 namespace {
 
@@ -74,32 +72,9 @@ struct BigEndian {
     BigEndian& f64(double v) { return put(v); }
 };
 
-std::string replaced(std::string text, std::string_view from, std::string_view to) {
-    const std::size_t at = text.find(from);
-    BOOST_REQUIRE(at != std::string::npos);
-    return text.replace(at, from.size(), to);
-}
-
-// Reading `path` must throw a FileError whose message names the file and holds every fragment.
-void check_error(const fs::path& path, std::initializer_list<std::string_view> fragments) {
-    try {
-        read_mesh(path);
-        BOOST_ERROR("reading " << path.filename() << " did not throw");
-    } catch (const FileError& e) {
-        const std::string message = e.what();
-        BOOST_TEST_MESSAGE(message);
-        BOOST_TEST(message.find(path.string()) != std::string::npos, "'" << message << "' lacks the file name");
-        for (std::string_view fragment : fragments)
-            BOOST_TEST(message.find(fragment) != std::string::npos, "'" << message << "' lacks '" << fragment << "'");
-    }
-}
-
-void check_error_text(const ScratchDir& dir, const std::string& text,
-                      std::initializer_list<std::string_view> fragments) {
-    static int counter = 0;
-    const fs::path path = dir / ("bad" + std::to_string(counter++) + ".vtk");
-    write_file(path, text);
-    check_error(path, fragments);
+// Writes `text` to a new .vtk file in `dir`; reading it must fail as check_error expects.
+void check_error_text(const ScratchDir& dir, const std::string& text, std::initializer_list<std::string_view> fragments) {
+    check_error_in_new_file(dir, ".vtk", text, fragments);
 }
 
 std::size_t count_nonzero(const Field& f) {
@@ -108,10 +83,6 @@ std::size_t count_nonzero(const Field& f) {
 
 std::size_t count_fixed(const SimplexMesh& mesh) {
     return static_cast<std::size_t>(std::count(mesh.fixed().begin(), mesh.fixed().end(), std::uint8_t{1}));
-}
-
-bool same_bits(std::span<const double> a, std::span<const double> b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
 }
 
 // A valid two-tetrahedron file; the bad-input tests each break one thing in it.
@@ -251,8 +222,7 @@ BOOST_AUTO_TEST_CASE(writes_a_classic_header_that_old_readers_accept) {
     WriteOptions options;
     options.encoding = Encoding::Ascii;
     write_mesh(dir / "out.vtk", file.mesh, options, point_fields, cell_fields);
-    std::ifstream in(dir / "out.vtk");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::string text = read_text(dir / "out.vtk");
     BOOST_TEST(text.starts_with("# vtk DataFile Version 3.0\n"));
     BOOST_TEST(text.find("\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 5 double\n") != std::string::npos);
     BOOST_TEST(text.find("\nCELLS 2 10\n4 ") != std::string::npos);
@@ -270,8 +240,7 @@ BOOST_AUTO_TEST_CASE(writes_a_classic_header_that_old_readers_accept) {
 
     options.encoding = Encoding::Binary;
     write_mesh(dir / "out.vtk", file.mesh, options, point_fields, cell_fields);
-    std::ifstream bin(dir / "out.vtk", std::ios::binary);
-    const std::string bytes((std::istreambuf_iterator<char>(bin)), std::istreambuf_iterator<char>());
+    const std::string bytes = read_text(dir / "out.vtk");
     BOOST_TEST(bytes.starts_with("# vtk DataFile Version 3.0\nWritten by Paloverde\nBINARY\n"));
     BOOST_TEST(bytes.find("\nCELLS 2 10\n") != std::string::npos);
 }
@@ -555,9 +524,7 @@ BOOST_AUTO_TEST_CASE(failed_writes_leave_no_partial_file) {
         WriteOptions options;
         options.encoding = encoding;
         BOOST_CHECK_THROW(write_mesh(dir / "keep.vtk", file.mesh, options, clash), Error);
-        std::ifstream in(dir / "keep.vtk");
-        const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-        BOOST_TEST(text == "precious");
+        BOOST_TEST(read_text(dir / "keep.vtk") == "precious");
     }
     BOOST_TEST(std::distance(fs::directory_iterator(dir.path()), fs::directory_iterator()) == 1);
 }
@@ -573,8 +540,7 @@ BOOST_AUTO_TEST_CASE(corrupted_files_fail_cleanly) {
         WriteOptions options;
         options.encoding = encoding;
         write_mesh(dir / "base.vtk", mesh.mesh, options, {}, cell_fields);
-        std::ifstream in(dir / "base.vtk", std::ios::binary);
-        originals.emplace_back(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        originals.push_back(read_text(dir / "base.vtk"));
     }
     std::mt19937 random(12345);
     int errors = 0;

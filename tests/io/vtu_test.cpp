@@ -6,7 +6,6 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <initializer_list>
 #include <iterator>
 #include <limits>
@@ -21,14 +20,13 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
+#include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace fs = std::filesystem;
 using namespace paloverde;
 using paloverde::io::base64_encode;
-using paloverde::test::ScratchDir;
-using paloverde::test::shared_data;
-using paloverde::test::write_file;
+using namespace paloverde::test;
 
 namespace {
 
@@ -39,41 +37,9 @@ const char* const kSharedMeshes[] = {
     "mesquite/tris/tri_5_xz.vtk",       "mesquite/tris/tangled_tri.vtk",
 };
 
-// Reading `path` must throw a FileError whose message names the file and holds every fragment.
-void check_error(const fs::path& path, std::initializer_list<std::string_view> fragments) {
-    try {
-        read_mesh(path);
-        BOOST_ERROR("reading " << path.filename() << " did not throw");
-    } catch (const FileError& e) {
-        const std::string message = e.what();
-        BOOST_TEST_MESSAGE(message);
-        BOOST_TEST(message.find(path.string()) != std::string::npos, "'" << message << "' lacks the file name");
-        for (std::string_view fragment : fragments)
-            BOOST_TEST(message.find(fragment) != std::string::npos, "'" << message << "' lacks '" << fragment << "'");
-    }
-}
-
-void check_error_text(const ScratchDir& dir, const std::string& text,
-                      std::initializer_list<std::string_view> fragments) {
-    static int counter = 0;
-    const fs::path path = dir / ("bad" + std::to_string(counter++) + ".vtu");
-    write_file(path, text);
-    check_error(path, fragments);
-}
-
-std::string replaced(std::string text, std::string_view from, std::string_view to) {
-    const std::size_t at = text.find(from);
-    BOOST_REQUIRE(at != std::string::npos);
-    return text.replace(at, from.size(), to);
-}
-
-bool same_bits(std::span<const double> a, std::span<const double> b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0;
-}
-
-std::string read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+// Writes `text` to a new .vtu file in `dir`; reading it must fail as check_error expects.
+void check_error_text(const ScratchDir& dir, const std::string& text, std::initializer_list<std::string_view> fragments) {
+    check_error_in_new_file(dir, ".vtu", text, fragments);
 }
 
 // --- Building .vtu files in every layout VTK writes ---------------------------------------

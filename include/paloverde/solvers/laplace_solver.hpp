@@ -1,0 +1,43 @@
+#pragma once
+// Laplacian smoothing: each free vertex moves to the mean of its neighbours. Smart Laplace (the
+// default) takes such a move only if the vertex's worst element does not get worse and no valid
+// element inverts, so it keeps the Solver guarantee. Plain Laplace moves every free vertex at
+// once (Jacobi) and may invert elements: it is the one solver that does not hand back the input
+// when the result is worse; its Summary::message says how many elements it inverted.
+#include <string>
+
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/solvers/solver.hpp"
+#include "paloverde/solvers/termination.hpp"
+#include "paloverde/solvers/vertex_coloring.hpp"
+
+namespace paloverde {
+
+struct LaplaceSolverOptions {
+    bool smart = true;
+    std::string metric = "aspect_ratio";  // what smart Laplace protects and the Summary reports
+    MetricOptions metric_options;
+    // An iteration is a sweep. Sweeps also stop once no vertex moves by more than
+    // min_progress times the mean edge length.
+    TerminationCriterion termination = [] {
+        TerminationCriterion c;
+        c.max_iterations = 100;
+        return c;
+    }();
+    ColoringOrder coloring = ColoringOrder::SmallestLast;  // smart Laplace moves one color at a time
+    int threads = 0;  // 0: OpenMP's default; results do not depend on it
+
+    void validate() const;  // throws OptionError naming the field
+};
+
+class LaplaceSolver final : public Solver {
+public:
+    explicit LaplaceSolver(LaplaceSolverOptions options = {});
+    std::string_view name() const override { return options_.smart ? "smart_laplace" : "laplace"; }
+    Summary improve(SimplexMesh& mesh) override;
+
+private:
+    LaplaceSolverOptions options_;
+};
+
+}  // namespace paloverde

@@ -1,0 +1,309 @@
+#include "paloverde/solvers/local_solver.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "local_untangle.hpp"
+#include "run_support.hpp"
+
+namespace paloverde {
+
+void LocalSolverOptions::validate() const {
+    metric_options.validate();
+    termination.validate();
+    untangle_termination.validate();
+    auto m = make_metric(metric, metric_options);
+    if (!m->has_gradient())
+        throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
+                          "inverse_condition or edge_ratio");
+    if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
+    if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
+    if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
+    if (!(improve_below > 0.0)) throw OptionError("improve_below must be > 0 (1 or more: every vertex moves)");
+}
+
+namespace {
+
+using detail::Clock;
+using detail::seconds_since;
+
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// The point of smallest norm in the convex hull of `points` (Gilbert's algorithm: Frank-Wolfe
+// with exact line search). It stops once every point p has <x, p> >= (1 - 1e-3) |x|^2, which is
+// all the ascent needs: then x raises every active quality at a rate of almost |x|^2.
+Vec3 min_norm_point(const std::vector<Vec3>& points) {
+    Vec3 x = points.front();
+    for (int iteration = 0; iteration < 200; ++iteration) {
+        const double xx = dot(x, x);
+        if (xx == 0.0) break;
+        std::size_t best = 0;
+        double lowest = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < points.size(); ++i)
+            if (const double d = dot(x, points[i]); d < lowest) lowest = d, best = i;
+        if (lowest >= (1.0 - 1e-3) * xx) break;
+        const Vec3 diff = {x[0] - points[best][0], x[1] - points[best][1], x[2] - points[best][2]};
+        const double dd = dot(diff, diff);
+        if (!(dd > 0.0)) break;
+        const double t = std::clamp((xx - lowest) / dd, 0.0, 1.0);
+        for (int c = 0; c < 3; ++c) x[c] -= t * diff[c];
+    }
+    return x;
+}
+
+// Raises the smallest quality of v's elements by active-set ascent (nonsmooth max-min). A step
+// is accepted only if it raises that minimum and leaves no element that was positively oriented
+// non-positive (decided exactly). Returns whether v moved. Only v's coordinates are written,
+// and only v's elements are read: vertices of one color can run this at the same time.
+class VertexAscent {
+public:
+    VertexAscent(const SimplexMesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options)
+        : mesh_(mesh), metric_(metric), options_(options) {}
+
+    bool improve(std::span<double> xyz, VertexId v) {
+        const auto elements = mesh_.elements_of(v);
+        const std::size_t k = elements.size();
+        if (k == 0) return false;
+        q_.resize(k);
+        trial_q_.resize(k);
+        gradient_.resize(k);
+        positive_.resize(k);
+        for (std::size_t i = 0; i < k; ++i) positive_[i] = element_orientation(mesh_, xyz, elements[i]) > 0;
+        double* p = &xyz[3 * static_cast<std::size_t>(v)];
+        const double length = detail::local_length(mesh_, xyz, v);
+        double worst = evaluate(xyz, v, true);
+        bool moved = false;
+        for (int step = 0; step < options_.ascent_steps; ++step) {
+            const double tolerance = options_.active_tolerance * std::max(std::abs(worst), 1e-3);
+            active_.clear();
+            for (std::size_t i = 0; i < k; ++i)
+                if (q_[i] <= worst + tolerance) active_.push_back(gradient_[i]);
+            Vec3 d = min_norm_point(active_);
+            if (mesh_.kind() == ElementKind::Triangle) {
+                // The gradients lie in the plane up to rounding; keep the vertex exactly in it.
+                const Vec3& n = mesh_.plane_normal();
+                const double along = dot(d, n);
+                for (int c = 0; c < 3; ++c) d[c] -= along * n[c];
+            }
+            const double dd = dot(d, d);
+            const double norm = std::sqrt(dd);
+            if (!(norm > 0.0) || !(length > 0.0)) break;
+            // Linearized, the minimum rises at rate |d|^2 until an inactive element, rising more
+            // slowly, meets it: the first such meeting is the natural step.
+            double alpha = 0.5 * length / norm;
+            for (std::size_t i = 0; i < k; ++i) {
+                const double rate = dot(gradient_[i], d);
+                if (q_[i] > worst + tolerance && rate < dd) alpha = std::min(alpha, (q_[i] - worst) / (dd - rate));
+            }
+            const Vec3 origin = {p[0], p[1], p[2]};
+            bool accepted = false;
+            double trial_worst = worst;
+            for (int attempt = 0; attempt < 30 && !accepted; ++attempt, alpha *= 0.5) {
+                for (int c = 0; c < 3; ++c) p[c] = origin[c] + alpha * d[c];
+                trial_worst = evaluate(xyz, v, false);
+                if (!(trial_worst > worst)) continue;
+                accepted = true;
+                for (std::size_t i = 0; i < k && accepted; ++i)
+                    if (positive_[i] && element_orientation(mesh_, xyz, elements[i]) <= 0) accepted = false;
+            }
+            if (!accepted) {
+                for (int c = 0; c < 3; ++c) p[c] = origin[c];
+                break;
+            }
+            moved = true;
+            const double gain = trial_worst - worst;
+            worst = evaluate(xyz, v, true);
+            if (gain <= 1e-12 * std::max(std::abs(worst), 1e-3)) break;
+        }
+        return moved;
+    }
+
+private:
+    // Qualities of v's elements into q_ (or trial_q_), and with `gradient` each one's gradient
+    // with respect to v. Returns their minimum.
+    double evaluate(std::span<const double> xyz, VertexId v, bool gradient) {
+        const auto elements = mesh_.elements_of(v);
+        const int corners = mesh_.corners();
+        double worst = std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < elements.size(); ++i) {
+            const auto element = mesh_.element(elements[i]);
+            int slot = 0;
+            for (int j = 0; j < corners; ++j) {
+                if (element[j] == v) slot = j;
+                for (int c = 0; c < 3; ++c) corners_[3 * j + c] = xyz[3 * static_cast<std::size_t>(element[j]) + c];
+            }
+            double q;
+            if (gradient) {
+                q = metric_.value_and_gradient(mesh_.kind(), corners_.data(), all_gradients_.data());
+                gradient_[i] = {all_gradients_[3 * slot], all_gradients_[3 * slot + 1], all_gradients_[3 * slot + 2]};
+                q_[i] = q;
+            } else {
+                q = metric_.value(mesh_.kind(), corners_.data());
+                trial_q_[i] = q;
+            }
+            worst = std::min(worst, q);
+        }
+        return worst;
+    }
+
+    const SimplexMesh& mesh_;
+    const QualityMetric& metric_;
+    const LocalSolverOptions& options_;
+    std::vector<double> q_, trial_q_;
+    std::vector<Vec3> gradient_, active_;
+    std::vector<std::uint8_t> positive_;
+    std::array<double, 12> corners_{}, all_gradients_{};
+};
+
+}  // namespace
+
+LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
+
+Summary LocalSolver::improve(SimplexMesh& mesh) {
+    detail::ThreadScope threads(options_.threads);
+    detail::SolverRun run(mesh, std::string(name()), options_.metric);
+    Summary& summary = run.summary;
+    const auto start = run.start();
+
+    if (mesh.num_elements() == 0) return run.finish(TerminationReason::NothingToMove, "the mesh has no elements");
+    if (mesh.num_free_vertices() == 0)
+        return run.finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
+    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
+        throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
+                        "tetrahedral meshes, not surfaces");
+    const std::vector<ElementId> movable = detail::movable_elements(mesh);
+    if (movable.empty())
+        return run.finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
+
+    const VertexColoring coloring = color_vertices(mesh, options_.coloring);
+    const auto classes = coloring.classes();
+    const std::string colors = " (" + std::to_string(coloring.count) + " colors)";
+    const MetricScale scale = MetricScale::of(mesh);
+    auto metric = make_metric(options_.metric, options_.metric_options);
+    metric->set_scale(scale);
+    // The untangling ascent maximizes the smallest signed volume, which is linear in the vertex.
+    auto volume = make_metric("scaled_volume", options_.metric_options);
+    volume->set_scale(scale);
+
+    std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
+    std::vector<double> scratch;
+    auto record = [&](const char* phase, const QualityMetric& m, long inverted, int moved, double best) {
+        const detail::SweepStats s = detail::sweep_stats(m, mesh, xyz, movable, scratch);
+        ++summary.quality_passes;
+        IterationRecord r;
+        r.iteration = summary.iterations;
+        r.phase = phase;
+        r.worst_quality = s.worst;
+        r.best_worst_quality = std::max(best, s.worst);
+        r.mean_quality = s.mean;
+        r.inverted = inverted;
+        r.step = moved;  // vertices moved in the sweep
+        r.seconds = seconds_since(start);
+        summary.history.push_back(std::move(r));
+        return s;
+    };
+    auto done = [&](TerminationReason reason, std::string message) {
+        std::copy(xyz.begin(), xyz.end(), mesh.coordinates().begin());
+        if (summary.before.inverted_frozen > 0 && reason != TerminationReason::CannotUntangle)
+            return run.finish(TerminationReason::CannotUntangle,
+                              std::to_string(summary.before.inverted_frozen) +
+                                  " inverted elements have all their vertices fixed; no smoother can move them" + colors);
+        return run.finish(reason, message + colors);
+    };
+    // One pass over the colors; within a color every vertex's update reads only vertices of
+    // other colors, so the parallel loop gives the same result for any thread count.
+    auto sweep = [&](auto&& visit) {
+        int moved = 0;
+        for (const auto& members : classes) {
+            const auto count = static_cast<std::ptrdiff_t>(members.size());
+#pragma omp parallel reduction(+ : moved) if (count >= 256)
+            {
+                VertexAscent shape(mesh, *metric, options_), untangle(mesh, *volume, options_);
+#pragma omp for schedule(dynamic, 64)
+                for (std::ptrdiff_t i = 0; i < count; ++i)
+                    moved += visit(members[static_cast<std::size_t>(i)], shape, untangle);
+            }
+        }
+        return moved;
+    };
+
+    long inverted = detail::count_not_positive(mesh, xyz, movable);
+    if (inverted > 0 && !options_.untangle)
+        return done(TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off");
+    if (inverted > 0) {
+        const TerminationCriterion& stop = options_.untangle_termination;
+        std::vector<long> inverted_history{inverted};
+        std::vector<double> worst_history{record("untangle", *volume, inverted, 0, -1e300).worst};
+        for (int s = 1; inverted > 0; ++s) {
+            if (s > stop.max_iterations)
+                return done(TerminationReason::CannotUntangle, "untangling stopped after " +
+                                                                   std::to_string(stop.max_iterations) +
+                                                                   " sweeps with elements still inverted");
+            if (stop.max_seconds > 0.0 && seconds_since(start) > stop.max_seconds)
+                return done(TerminationReason::TimeLimit, "time limit reached while untangling");
+            const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent) {
+                bool touches_inverted = false;
+                for (ElementId e : mesh.elements_of(v))
+                    if (element_orientation(mesh, xyz, e) <= 0) touches_inverted = true;
+                if (!touches_inverted) return 0;
+                // The linear program finds a position where every element is valid when there
+                // is one; otherwise the ascent at least raises the smallest volume.
+                if (detail::untangle_vertex(mesh, xyz, v, scale).moved) return 1;
+                return ascent.improve(xyz, v) ? 1 : 0;
+            });
+            ++summary.iterations;
+            ++summary.untangle_iterations;
+            inverted = detail::count_not_positive(mesh, xyz, movable);
+            const double worst = record("untangle", *volume, inverted, moved, worst_history.back()).worst;
+            inverted_history.push_back(inverted);
+            worst_history.push_back(std::max(worst, worst_history.back()));
+            if (inverted == 0) break;
+            const auto window = static_cast<std::size_t>(stop.progress_window);
+            bool stalled = moved == 0;
+            if (!stalled && inverted_history.size() > window) {
+                const std::size_t then = inverted_history.size() - 1 - window;
+                const double tolerance = stop.min_progress * std::max(std::abs(worst_history.back()), 1e-3);
+                stalled = inverted_history.back() >= inverted_history[then] &&
+                          worst_history.back() - worst_history[then] <= tolerance;
+            }
+            if (stalled)
+                return done(TerminationReason::CannotUntangle,
+                            std::to_string(inverted) + " elements are still inverted and local moves no longer help");
+        }
+    }
+
+    const TerminationCriterion& stop = options_.termination;
+    double best = record("shape", *metric, 0, 0, -1e300).worst;
+    std::vector<double> best_history{best};
+    for (int s = 1;; ++s) {
+        if (stop.target_worst_quality && best >= *stop.target_worst_quality)
+            return done(TerminationReason::TargetReached, "the worst quality reached the target");
+        if (s > stop.max_iterations)
+            return done(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop.max_iterations) + " sweeps");
+        if (stop.max_seconds > 0.0 && seconds_since(start) > stop.max_seconds)
+            return done(TerminationReason::TimeLimit, "time limit reached");
+        const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
+        const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&) {
+            if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;
+            return ascent.improve(xyz, v) ? 1 : 0;
+        });
+        ++summary.iterations;
+        const detail::SweepStats st = record("shape", *metric, detail::count_not_positive(mesh, xyz, movable), moved, best);
+        best = std::max(best, st.worst);
+        best_history.push_back(best);
+        if (moved == 0) return done(TerminationReason::Converged, "no vertex can raise its worst element any more");
+        const auto window = static_cast<std::size_t>(stop.progress_window);
+        if (best_history.size() > window) {
+            const double tolerance = stop.min_progress * std::max(std::abs(best), 1e-3);
+            if (best - best_history[best_history.size() - 1 - window] <= tolerance)
+                return done(TerminationReason::Converged, "the worst quality stopped improving");
+        }
+    }
+}
+
+}  // namespace paloverde

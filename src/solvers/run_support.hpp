@@ -1,0 +1,157 @@
+#pragma once
+// What every vertex-moving solver does around its iterations: the before/after reports, the
+// worst quality over the movable elements, the never-worse safety net, threads and timing; and
+// the small per-patch helpers the local solvers share.
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/solvers/summary.hpp"
+
+namespace paloverde::detail {
+
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Sets the OpenMP thread count for a solver's run (0: leave it) and restores it afterwards.
+class ThreadScope {
+public:
+    explicit ThreadScope(int threads) : saved_(omp_get_max_threads()) {
+        if (threads > 0) omp_set_num_threads(threads);
+    }
+    ~ThreadScope() { omp_set_num_threads(saved_); }
+    ThreadScope(const ThreadScope&) = delete;
+    ThreadScope& operator=(const ThreadScope&) = delete;
+
+private:
+    int saved_;
+};
+
+// The frame of one solver run: reports before and after, and the Summary.
+class SolverRun {
+public:
+    SolverRun(SimplexMesh& mesh, std::string solver, std::string metric) : mesh_(mesh), start_(Clock::now()) {
+        summary.solver = std::move(solver);
+        summary.quality_metric = std::move(metric);
+        summary.before = assessor_.assess(mesh);
+        summary.worst_before = worst_movable(summary.before);
+        original_.assign(mesh.coordinates().begin(), mesh.coordinates().end());
+    }
+
+    Clock::time_point start() const { return start_; }
+
+    // With `safety_net`, a result with more inverted elements or (as many and) a lower worst
+    // quality is replaced by the input: the sweeps never accept such moves, but floating point
+    // and the exact predicate may disagree.
+    Summary finish(TerminationReason reason, std::string message, bool safety_net = true) {
+        summary.reason = reason;
+        summary.message = std::move(message);
+        summary.after = assessor_.assess(mesh_);
+        summary.worst_after = worst_movable(summary.after);
+        const bool worse = summary.after.inverted > summary.before.inverted ||
+                           (summary.after.inverted == summary.before.inverted && summary.worst_after < summary.worst_before);
+        if (safety_net && worse) {
+            std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
+            summary.after = summary.before;
+            summary.worst_after = summary.worst_before;
+            summary.message += " (the result was worse than the input, which is handed back unchanged)";
+        }
+        summary.seconds = seconds_since(start_);
+        return summary;
+    }
+
+    Summary summary;
+
+private:
+    double worst_movable(const QualityReport& report) const {
+        const MetricReport* r = report.metric(summary.quality_metric);
+        if (!r) r = &report.metrics.front();
+        return r->movable.count > 0 ? r->movable.min : r->all.min;
+    }
+
+    SimplexMesh& mesh_;
+    Clock::time_point start_;
+    QualityAssessor assessor_;
+    std::vector<double> original_;
+};
+
+// Elements with at least one free vertex: the only ones a vertex mover changes.
+inline std::vector<ElementId> movable_elements(const SimplexMesh& mesh) {
+    std::vector<ElementId> out;
+    for (ElementId e = 0; e < mesh.num_elements(); ++e)
+        for (VertexId v : mesh.element(e))
+            if (!mesh.fixed()[v]) {
+                out.push_back(e);
+                break;
+            }
+    return out;
+}
+
+// Orientation <= 0, decided exactly, among `elements`.
+inline long count_not_positive(const SimplexMesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements) {
+    long count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : count) if (elements.size() >= 4096)
+    for (std::size_t i = 0; i < elements.size(); ++i) count += element_orientation(mesh, xyz, elements[i]) <= 0;
+    return count;
+}
+
+struct SweepStats {
+    double worst = 0.0, mean = 0.0;
+};
+// Worst and mean quality over `elements`; the sum runs in element order, so it does not depend
+// on the thread count.
+inline SweepStats sweep_stats(const QualityMetric& metric, const SimplexMesh& mesh, std::span<const double> xyz,
+                              std::span<const ElementId> elements, std::vector<double>& scratch) {
+    scratch.resize(elements.size());
+#pragma omp parallel for schedule(static) if (elements.size() >= 4096)
+    for (std::size_t i = 0; i < elements.size(); ++i)
+        metric.evaluate(mesh, xyz, elements[i], elements[i] + 1, &scratch[i]);
+    SweepStats s{std::numeric_limits<double>::infinity(), 0.0};
+    for (double q : scratch) {
+        s.worst = std::min(s.worst, q);
+        s.mean += q;
+    }
+    if (elements.empty()) s.worst = 0.0;
+    s.mean /= static_cast<double>(std::max<std::size_t>(1, elements.size()));
+    return s;
+}
+
+// Smallest quality among the elements of vertex v.
+inline double patch_minimum(const QualityMetric& metric, const SimplexMesh& mesh, std::span<const double> xyz, VertexId v) {
+    double worst = std::numeric_limits<double>::infinity();
+    for (ElementId e : mesh.elements_of(v)) {
+        double q;
+        metric.evaluate(mesh, xyz, e, e + 1, &q);
+        worst = std::min(worst, q);
+    }
+    return worst;
+}
+
+// The mean edge length at v: the natural unit for how far it may move.
+inline double local_length(const SimplexMesh& mesh, std::span<const double> xyz, VertexId v) {
+    double sum = 0.0;
+    int count = 0;
+    for (ElementId e : mesh.elements_of(v))
+        for (VertexId w : mesh.element(e))
+            if (w != v) {
+                sum += std::hypot(xyz[3 * static_cast<std::size_t>(w)] - xyz[3 * static_cast<std::size_t>(v)],
+                                  xyz[3 * static_cast<std::size_t>(w) + 1] - xyz[3 * static_cast<std::size_t>(v) + 1],
+                                  xyz[3 * static_cast<std::size_t>(w) + 2] - xyz[3 * static_cast<std::size_t>(v) + 2]);
+                ++count;
+            }
+    return count > 0 ? sum / count : 0.0;
+}
+
+}  // namespace paloverde::detail

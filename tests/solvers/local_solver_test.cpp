@@ -1,0 +1,279 @@
+// The local (Freitag-Plassmann) smoother, its vertex coloring, and Laplace / smart Laplace: the
+// same never-worse, never-inverts checks as the global solver, and thread-count independence.
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/perturb.hpp"
+#include "paloverde/solvers/laplace_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/solvers/vertex_coloring.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+
+namespace {
+
+pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
+
+void check_never_worse(const pv::Summary& summary) {
+    BOOST_TEST(summary.after.inverted <= summary.before.inverted);
+    if (summary.before.inverted == 0) BOOST_TEST(summary.worst_after >= summary.worst_before);
+    // Within a phase the best worst quality never falls.
+    const auto& h = summary.history;
+    for (std::size_t i = 1; i < h.size(); ++i)
+        if (h[i].phase == h[i - 1].phase) BOOST_TEST(h[i].best_worst_quality >= h[i - 1].best_worst_quality);
+}
+
+void check_fixed_unchanged(const pv::SimplexMesh& mesh, const std::vector<double>& before) {
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.fixed()[v])
+            for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);
+}
+
+pv::LocalSolverOptions quick_local(int sweeps) {
+    pv::LocalSolverOptions options;
+    options.termination.max_iterations = sweeps;
+    return options;
+}
+
+const char* const kValidMeshes[] = {"mesquite/tets/tire.vtk", "stellar/house2.node", "mesquite/tris/tri_20258.vtk"};
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(vertex_coloring)
+
+BOOST_DATA_TEST_CASE(colorings_are_proper, bdata::make({"mesquite/tets/tire.vtk", "mesquite/tris/tri_20258.vtk"}) *
+                                               bdata::make({0, 1}),
+                     name, order) {
+    const auto mesh = shared_mesh(name);
+    const auto kind = order == 0 ? pv::ColoringOrder::Greedy : pv::ColoringOrder::SmallestLast;
+    const auto coloring = pv::color_vertices(mesh, kind);
+    BOOST_TEST_MESSAGE(name << (order == 0 ? " greedy: " : " smallest-last: ") << coloring.count << " colors");
+    BOOST_TEST(pv::is_proper_coloring(mesh, coloring));
+    BOOST_TEST(coloring.count > 1);
+    std::size_t colored = 0;
+    for (const auto& members : coloring.classes()) colored += members.size();
+    BOOST_TEST(colored == static_cast<std::size_t>(mesh.num_free_vertices()));
+}
+
+BOOST_AUTO_TEST_CASE(an_improper_coloring_is_detected) {
+    const auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    auto coloring = pv::color_vertices(mesh);
+    pv::VertexId a = -1, b = -1;
+    for (pv::ElementId e = 0; e < mesh.num_elements() && b < 0; ++e) {
+        a = b = -1;
+        for (pv::VertexId v : mesh.element(e))
+            if (!mesh.fixed()[v]) (a < 0 ? a : b) = v;
+    }
+    BOOST_TEST_REQUIRE(b >= 0);
+    coloring.color[b] = coloring.color[a];
+    BOOST_TEST(!pv::is_proper_coloring(mesh, coloring));
+    coloring = pv::color_vertices(mesh);
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.fixed()[v]) {
+            coloring.color[v] = 0;
+            break;
+        }
+    BOOST_TEST(!pv::is_proper_coloring(mesh, coloring));
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(local_solver)
+
+BOOST_DATA_TEST_CASE(improves_valid_shared_meshes_without_making_anything_worse, bdata::make(kValidMeshes), name) {
+    auto mesh = shared_mesh(name);
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    const auto summary = pv::LocalSolver(quick_local(10)).improve(mesh);
+    BOOST_TEST_MESSAGE(name << ": " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted == 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    BOOST_TEST(summary.success());
+    BOOST_TEST(summary.message.find("colors") != std::string::npos);
+    check_never_worse(summary);
+    check_fixed_unchanged(mesh, before);
+    if (mesh.kind() == pv::ElementKind::Triangle) {
+        BOOST_TEST(mesh.is_planar());
+        const auto coordinates = mesh.coordinates();
+        double off_plane = 0.0;
+        for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+            off_plane = std::max(off_plane, std::abs(coordinates[3 * v + 2] - before[3 * v + 2]));
+        if (std::abs(mesh.plane_normal()[2]) == 1.0) BOOST_TEST(off_plane < 1e-12);
+    }
+}
+
+BOOST_AUTO_TEST_CASE(untangles_the_mesquite_tangled_mesh) {
+    auto mesh = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
+    const auto summary = pv::LocalSolver().improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.before.inverted == 9);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+    BOOST_TEST(summary.untangle_iterations > 0);
+    BOOST_TEST(summary.success());
+    check_never_worse(summary);
+}
+
+// Interior vertices moved by up to one local edge length. Local moves, one vertex at a time,
+// may not be able to untangle a cluster; what must hold is that nothing gets worse.
+BOOST_DATA_TEST_CASE(perturbed_shared_meshes,
+                     bdata::make({"mesquite/tets/tire.vtk", "stellar/house2.node", "mesquite/tris/tri_20258.vtk"}) *
+                         bdata::make({1, 2, 3}),
+                     name, seed) {
+    auto mesh = shared_mesh(name);
+    pv::PerturbOptions perturb;
+    perturb.amount = 1.0;
+    perturb.fraction = 0.1;
+    perturb.seed = static_cast<std::uint64_t>(seed);
+    pv::perturb(mesh, perturb);
+    const auto tangled = pv::count_orientations(mesh).inverted;
+    BOOST_TEST_REQUIRE(tangled > 0);
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    const auto summary = pv::LocalSolver(quick_local(5)).improve(mesh);
+    BOOST_TEST_MESSAGE(name << " seed " << seed << ": " << tangled << " inverted; " << summary.brief_report());
+    check_never_worse(summary);
+    check_fixed_unchanged(mesh, before);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == summary.after.inverted);
+    if (summary.after.inverted == 0) {
+        BOOST_TEST(summary.success());
+    } else {
+        BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
+        BOOST_TEST(!summary.success());
+    }
+}
+
+BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
+    auto one = shared_mesh("mesquite/tets/cube-clip-5.vtk");
+    pv::PerturbOptions perturb;
+    perturb.amount = 0.7;
+    perturb.fraction = 0.2;
+    pv::perturb(one, perturb);
+    auto two = one;
+    auto options = quick_local(4);
+    options.threads = 1;
+    const auto s1 = pv::LocalSolver(options).improve(one);
+    options.threads = 2;
+    const auto s2 = pv::LocalSolver(options).improve(two);
+    BOOST_TEST_MESSAGE(s1.brief_report());
+    BOOST_TEST(s1.iterations == s2.iterations);
+    BOOST_TEST(s1.untangle_iterations > 0);
+    BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
+}
+
+BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    mesh.set_fixed(std::vector<std::uint8_t>(mesh.num_vertices(), 1));
+    const auto summary = pv::LocalSolver().improve(mesh);
+    BOOST_TEST((summary.reason == pv::TerminationReason::NothingToMove));
+    BOOST_TEST(!summary.success());
+    pv::SimplexMesh empty;
+    BOOST_TEST((pv::LocalSolver().improve(empty).reason == pv::TerminationReason::NothingToMove));
+}
+
+BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled) {
+    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
+                         {0, 1, 2, 3, 0, 2, 1, 4});
+    mesh.set_fixed({1, 1, 1, 0, 1});
+    const auto summary = pv::LocalSolver().improve(mesh);
+    BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
+    BOOST_TEST(summary.after.inverted == 1);
+    BOOST_TEST(summary.worst_after >= summary.worst_before);
+}
+
+BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
+    auto expect = [](auto change, const std::string& word) {
+        pv::LocalSolverOptions options;
+        change(options);
+        BOOST_CHECK_EXCEPTION(pv::LocalSolver{options}, pv::OptionError, [&](const pv::OptionError& e) {
+            return std::string(e.what()).find(word) != std::string::npos;
+        });
+    };
+    expect([](auto& o) { o.metric = "min_dihedral_deg"; }, "gradient");
+    expect([](auto& o) { o.termination.max_iterations = -1; }, "max_iterations");
+    expect([](auto& o) { o.threads = -2; }, "threads");
+    expect([](auto& o) { o.ascent_steps = 0; }, "ascent_steps");
+    expect([](auto& o) { o.active_tolerance = -1.0; }, "active_tolerance");
+    expect([](auto& o) { o.improve_below = 0.0; }, "improve_below");
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(laplace_solver)
+
+BOOST_DATA_TEST_CASE(smart_laplace_never_makes_anything_worse, bdata::make(kValidMeshes), name) {
+    auto mesh = shared_mesh(name);
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    pv::LaplaceSolverOptions options;
+    options.termination.max_iterations = 10;
+    pv::LaplaceSolver solver(options);
+    BOOST_TEST(solver.name() == "smart_laplace");
+    const auto summary = solver.improve(mesh);
+    BOOST_TEST_MESSAGE(name << ": " << summary.brief_report());
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after >= summary.worst_before);
+    BOOST_TEST(summary.history.back().mean_quality >= 0.0);
+    check_never_worse(summary);
+    check_fixed_unchanged(mesh, before);
+}
+
+// A fan around one free vertex whose neighbours form a polygon with a deep notch from the top:
+// their mean lies above the notch's tip, outside the polygon's kernel, so moving there inverts.
+pv::SimplexMesh notched_fan() {
+    std::vector<double> xyz = {0.5, 0.1, 0,  // 0: free, below the notch's tip
+                               0, 0, 0,  1, 0, 0,  1, 1, 0,  0.6, 1, 0,  0.5, 0.2, 0,  0.4, 1, 0,  0, 1, 0};
+    std::vector<pv::VertexId> triangles = {0, 1, 2,  0, 2, 3,  0, 3, 4,  0, 4, 5,  0, 5, 6,  0, 6, 7,  0, 7, 1};
+    // Orient every triangle counter-clockwise.
+    for (std::size_t t = 0; t < triangles.size(); t += 3) {
+        const auto* a = &xyz[3 * triangles[t]];
+        const auto* b = &xyz[3 * triangles[t + 1]];
+        const auto* c = &xyz[3 * triangles[t + 2]];
+        if ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0) std::swap(triangles[t + 1], triangles[t + 2]);
+    }
+    pv::SimplexMesh mesh(pv::ElementKind::Triangle, xyz, triangles);
+    mesh.set_fixed({0, 1, 1, 1, 1, 1, 1, 1});
+    return mesh;
+}
+
+BOOST_AUTO_TEST_CASE(plain_laplace_says_when_it_inverts_and_smart_laplace_does_not_invert) {
+    auto mesh = notched_fan();
+    BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted == 0);
+    pv::LaplaceSolverOptions options;
+    options.smart = false;
+    pv::LaplaceSolver plain(options);
+    BOOST_TEST(plain.name() == "laplace");
+    auto plain_mesh = mesh;
+    const auto summary = plain.improve(plain_mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report() << " " << summary.message);
+    BOOST_TEST(summary.after.inverted > 0);
+    BOOST_TEST(summary.message.find("inverted") != std::string::npos);
+
+    options.smart = true;
+    auto smart_mesh = mesh;
+    const auto smart = pv::LaplaceSolver(options).improve(smart_mesh);
+    BOOST_TEST(smart.after.inverted == 0);
+    BOOST_TEST(smart.worst_after >= smart.worst_before);
+    BOOST_TEST(smart.message.find("inverted") == std::string::npos);
+}
+
+BOOST_AUTO_TEST_CASE(laplace_results_do_not_depend_on_the_thread_count) {
+    for (bool smart : {false, true}) {
+        auto one = shared_mesh("mesquite/tets/tire.vtk");
+        auto two = one;
+        pv::LaplaceSolverOptions options;
+        options.smart = smart;
+        options.termination.max_iterations = 5;
+        options.threads = 1;
+        pv::LaplaceSolver(options).improve(one);
+        options.threads = 2;
+        pv::LaplaceSolver(options).improve(two);
+        BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
