@@ -17,6 +17,8 @@ PACKAGES=(
   libboost-test-dev                   # tests
   libcli11-dev nlohmann-json3-dev     # command line, JSON
   zlib1g-dev                          # compressed .vtu
+  python3-matplotlib                  # plots of examples/compare_methods.py
+  tetgen                              # benchmark meshes (docs/global_solver.md)
 )
 
 install_packages() {

@@ -388,7 +388,7 @@ int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, con
     r.best_worst_quality = r.worst_quality;
     r.inverted = std::count_if(q.begin(), q.end(), [](double v) { return v <= 0.0; });
     r.mean_quality = std::accumulate(q.begin(), q.end(), 0.0) / static_cast<double>(std::max<std::size_t>(1, m));
-    r.step = moved;
+    r.moved = moved;
     r.seconds = seconds_since(start);
     summary.history.push_back(std::move(r));
     return moved;
@@ -405,16 +405,8 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
     const auto start = run.start();
     auto finish = [&](TerminationReason reason, std::string message) { return run.finish(reason, std::move(message)); };
 
-    if (mesh.num_elements() == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
-    if (mesh.num_free_vertices() == 0)
-        return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
-        throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
-                        "tetrahedral meshes, not surfaces");
-
+    if (auto nothing = run.nothing_to_move()) return *nothing;
     detail::Workspace work(mesh, options_.renumber);
-    if (work.movable_elements() == 0)
-        return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
     std::vector<double> xyz(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
 
     PhaseResult result{TerminationReason::TargetReached, ""};

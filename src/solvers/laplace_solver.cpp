@@ -27,15 +27,8 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
     const auto start = run.start();
     const bool smart = options_.smart;
 
-    if (mesh.num_elements() == 0) return run.finish(TerminationReason::NothingToMove, "the mesh has no elements");
-    if (mesh.num_free_vertices() == 0)
-        return run.finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
-        throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
-                        "tetrahedral meshes, not surfaces");
+    if (auto nothing = run.nothing_to_move()) return *nothing;
     const std::vector<ElementId> movable = detail::movable_elements(mesh);
-    if (movable.empty())
-        return run.finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
 
     auto metric = make_metric(options_.metric, options_.metric_options);
     metric->set_scale(MetricScale::of(mesh));
@@ -94,7 +87,7 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
         r.best_worst_quality = std::max(best, s.worst);
         r.mean_quality = s.mean;
         r.inverted = detail::count_not_positive(mesh, xyz, movable);
-        r.step = moved;
+        r.moved = moved;
         r.seconds = detail::seconds_since(start);
         summary.history.push_back(std::move(r));
         return s;

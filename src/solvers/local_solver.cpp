@@ -170,15 +170,8 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
     Summary& summary = run.summary;
     const auto start = run.start();
 
-    if (mesh.num_elements() == 0) return run.finish(TerminationReason::NothingToMove, "the mesh has no elements");
-    if (mesh.num_free_vertices() == 0)
-        return run.finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
-        throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
-                        "tetrahedral meshes, not surfaces");
+    if (auto nothing = run.nothing_to_move()) return *nothing;
     const std::vector<ElementId> movable = detail::movable_elements(mesh);
-    if (movable.empty())
-        return run.finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
 
     const VertexColoring coloring = color_vertices(mesh, options_.coloring);
     const auto classes = coloring.classes();
@@ -202,7 +195,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
         r.best_worst_quality = std::max(best, s.worst);
         r.mean_quality = s.mean;
         r.inverted = inverted;
-        r.step = moved;  // vertices moved in the sweep
+        r.moved = moved;
         r.seconds = seconds_since(start);
         summary.history.push_back(std::move(r));
         return s;

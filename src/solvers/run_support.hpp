@@ -8,11 +8,13 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/solvers/summary.hpp"
@@ -51,6 +53,21 @@ public:
     }
 
     Clock::time_point start() const { return start_; }
+
+    // The checks every solver makes before moving anything: a finished Summary when there is
+    // nothing to move (no elements, no free vertex, no element with one); a MeshError for a
+    // triangle mesh that is not planar (a surface, which vertex moves would leave).
+    std::optional<Summary> nothing_to_move() {
+        if (mesh_.num_elements() == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
+        if (mesh_.num_free_vertices() == 0)
+            return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
+        if (mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar())
+            throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
+                            "tetrahedral meshes, not surfaces");
+        if (summary.before.frozen_elements == summary.before.elements)
+            return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
+        return std::nullopt;
+    }
 
     // With `safety_net`, a result with more inverted elements or (as many and) a lower worst
     // quality is replaced by the input: the sweeps never accept such moves, but floating point

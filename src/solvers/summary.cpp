@@ -46,11 +46,11 @@ std::string Summary::full_report() const {
 
 std::string Summary::history_csv() const {
     std::ostringstream out;
-    out << "iteration,phase,worst_quality,best_worst_quality,mean_quality,inverted,mu,t,objective,step,gain,seconds\n";
+    out << "iteration,phase,worst_quality,best_worst_quality,mean_quality,inverted,mu,t,objective,step,gain,moved,seconds\n";
     out << std::setprecision(17);
     for (const auto& r : history)
         out << r.iteration << ',' << r.phase << ',' << r.worst_quality << ',' << r.best_worst_quality << ',' << r.mean_quality << ',' << r.inverted
-            << ',' << r.mu << ',' << r.t << ',' << r.objective << ',' << r.step << ',' << r.gain << ',' << r.seconds << '\n';
+            << ',' << r.mu << ',' << r.t << ',' << r.objective << ',' << r.step << ',' << r.gain << ',' << r.moved << ',' << r.seconds << '\n';
     return out.str();
 }
 
@@ -77,7 +77,7 @@ std::string Summary::to_json() const {
     for (const auto& r : history)
         h.push_back({{"iteration", r.iteration}, {"phase", r.phase}, {"worst_quality", r.worst_quality}, {"best_worst_quality", r.best_worst_quality},
                      {"mean_quality", r.mean_quality}, {"inverted", r.inverted}, {"mu", r.mu}, {"t", r.t},
-                     {"objective", r.objective}, {"step", r.step}, {"gain", r.gain}, {"seconds", r.seconds}});
+                     {"objective", r.objective}, {"step", r.step}, {"gain", r.gain}, {"moved", r.moved}, {"seconds", r.seconds}});
     j["history"] = std::move(h);
     return j.dump(2);
 }

@@ -9,32 +9,16 @@
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/perturb.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
+using paloverde::test::check_never_worse;
 
 namespace {
 
 pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
-
-// Checks that hold for every run: the history never lets the best worst quality fall or the
-// count of non-positive elements rise within a phase, and every accepted step raised F.
-void check_history(const pv::Summary& summary) {
-    const auto& h = summary.history;
-    for (std::size_t i = 1; i < h.size(); ++i) {
-        if (h[i].phase != h[i - 1].phase) continue;
-        BOOST_TEST(h[i].inverted <= h[i - 1].inverted);
-        if (h[i].inverted == h[i - 1].inverted) BOOST_TEST(h[i].best_worst_quality >= h[i - 1].best_worst_quality);
-        if (h[i].step > 0.0) BOOST_TEST(h[i].gain > 0.0);
-    }
-}
-
-void check_never_worse(const pv::Summary& summary) {
-    BOOST_TEST(summary.after.inverted <= summary.before.inverted);
-    if (summary.before.inverted == 0) BOOST_TEST(summary.worst_after >= summary.worst_before);
-    check_history(summary);
-}
 
 }  // namespace
 

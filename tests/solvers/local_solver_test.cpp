@@ -10,23 +10,16 @@
 #include "paloverde/solvers/laplace_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
+#include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
+using paloverde::test::check_never_worse;
 
 namespace {
 
 pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
-
-void check_never_worse(const pv::Summary& summary) {
-    BOOST_TEST(summary.after.inverted <= summary.before.inverted);
-    if (summary.before.inverted == 0) BOOST_TEST(summary.worst_after >= summary.worst_before);
-    // Within a phase the best worst quality never falls.
-    const auto& h = summary.history;
-    for (std::size_t i = 1; i < h.size(); ++i)
-        if (h[i].phase == h[i - 1].phase) BOOST_TEST(h[i].best_worst_quality >= h[i - 1].best_worst_quality);
-}
 
 void check_fixed_unchanged(const pv::SimplexMesh& mesh, const std::vector<double>& before) {
     for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
