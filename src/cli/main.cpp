@@ -11,6 +11,7 @@ int main(int argc, char** argv) {
     add_quality_command(app, exit_code);
     add_improve_command(app, exit_code);
     add_convert_command(app, exit_code);
+    add_perturb_command(app, exit_code);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

@@ -142,4 +142,21 @@ BOOST_AUTO_TEST_CASE(convert_round_trips_through_every_writable_format) {
     }
 }
 
+BOOST_AUTO_TEST_CASE(perturb_makes_a_reproducible_tangle_that_improve_undoes) {
+    const pv::test::ScratchDir dir("cli_perturb");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    for (const char* name : {"a.vtk", "b.vtk"})
+        BOOST_TEST_REQUIRE(run_cli("perturb -q " + quoted(input) + " -o " + quoted(dir / name) +
+                                   " --fraction 0.2 --amount 1 --seed 7").exit_code == 0);
+    const auto a = pv::read_mesh(dir / "a.vtk"), b = pv::read_mesh(dir / "b.vtk");
+    BOOST_TEST(std::equal(a.mesh.coordinates().begin(), a.mesh.coordinates().end(), b.mesh.coordinates().begin()));
+    const auto tangled = nlohmann::json::parse(run_cli("quality --json " + quoted(dir / "a.vtk")).output);
+    BOOST_TEST(tangled["inverted"].get<int>() > 0);
+    BOOST_TEST(run_cli("improve -q " + quoted(dir / "a.vtk") + " -o " + quoted(dir / "c.vtk")).exit_code == 0);
+    BOOST_TEST(nlohmann::json::parse(run_cli("quality --json " + quoted(dir / "c.vtk")).output)["inverted"].get<int>() == 0);
+    const auto bad = run_cli("perturb " + quoted(input) + " -o " + quoted(dir / "d.vtk") + " --fraction 2");
+    BOOST_TEST(bad.exit_code == 2);
+    BOOST_TEST(has(bad.output, "fraction"));
+}
+
 BOOST_AUTO_TEST_SUITE_END()

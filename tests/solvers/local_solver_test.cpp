@@ -7,6 +7,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/perturb.hpp"
+#include "paloverde/mesh/renumber.hpp"
 #include "paloverde/solvers/laplace_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
@@ -157,6 +158,41 @@ BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
     BOOST_TEST(s1.iterations == s2.iterations);
     BOOST_TEST(s1.untangle_iterations > 0);
     BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
+}
+
+// Vertices of one color share no element, so the order they are visited in cannot matter.
+// Renumbering the vertices by (color, reversed id) keeps the greedy coloring's classes (each
+// vertex still meets its lower-colored neighbours first) but reverses the order within every
+// class; the result must be the same mesh, bit for bit, up to the renumbering.
+BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_order_within_a_color) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    pv::PerturbOptions perturb;
+    perturb.amount = 0.5;
+    perturb.fraction = 0.2;
+    pv::perturb(mesh, perturb);
+    const auto coloring = pv::color_vertices(mesh, pv::ColoringOrder::Greedy);
+    pv::Renumbering order;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) order.old_vertex.push_back(v);
+    std::stable_sort(order.old_vertex.begin(), order.old_vertex.end(), [&](pv::VertexId a, pv::VertexId b) {
+        return coloring.color[a] != coloring.color[b] ? coloring.color[a] < coloring.color[b] : a > b;
+    });
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) order.old_element.push_back(e);
+    auto reordered = pv::renumbered(mesh, order);
+    const auto recolored = pv::color_vertices(reordered, pv::ColoringOrder::Greedy);
+    for (pv::VertexId v = 0; v < reordered.num_vertices(); ++v)
+        BOOST_TEST_REQUIRE(recolored.color[v] == coloring.color[order.old_vertex[v]]);
+
+    auto options = quick_local(4);
+    options.coloring = pv::ColoringOrder::Greedy;
+    options.threads = 1;
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    const auto s1 = pv::LocalSolver(options).improve(mesh);
+    const auto s2 = pv::LocalSolver(options).improve(reordered);
+    BOOST_TEST(s1.iterations == s2.iterations);
+    BOOST_TEST(!std::equal(before.begin(), before.end(), mesh.coordinates().begin()));  // vertices did move
+    for (pv::VertexId v = 0; v < reordered.num_vertices(); ++v)
+        for (int c = 0; c < 3; ++c)
+            BOOST_TEST_REQUIRE(reordered.coordinates()[3 * v + c] == mesh.coordinates()[3 * order.old_vertex[v] + c]);
 }
 
 BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {

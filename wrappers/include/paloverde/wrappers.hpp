@@ -1,0 +1,23 @@
+#pragma once
+// Ready-made instruction queues for the everyday jobs (Mesquite's wrappers): each assesses the
+// mesh, runs its improver(s) and assesses again. Tune the parts through the options structs; run
+// with `queue.run(mesh)`.
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/instruction_queue.hpp"
+#include "paloverde/solvers/laplace_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+
+namespace paloverde::wrappers {
+
+// Untangle only (global log-barrier on the hybrid metric): stops once no element is inverted.
+InstructionQueue untangle(GlobalSolverOptions options = {});
+// Raise the worst element of a valid mesh with the global log-barrier solver.
+InstructionQueue shape_improvement(GlobalSolverOptions options = {});
+// The same job with the local Freitag-Plassmann smoother.
+InstructionQueue local_shape_improvement(LocalSolverOptions options = {});
+// Smart Laplace by default; plain Laplace (options.smart = false) may invert elements.
+InstructionQueue laplace(LaplaceSolverOptions options = {});
+// Untangle, then improve the shape, each with the global solver: the default job.
+InstructionQueue untangle_then_improve(GlobalSolverOptions options = {});
+
+}  // namespace paloverde::wrappers

@@ -1,0 +1,47 @@
+#include "paloverde/wrappers.hpp"
+
+#include <memory>
+
+namespace paloverde::wrappers {
+
+namespace {
+InstructionQueue around(std::unique_ptr<Solver> solver) {
+    InstructionQueue queue;
+    queue.assess("before").improve(std::move(solver)).assess("after");
+    return queue;
+}
+}  // namespace
+
+InstructionQueue untangle(GlobalSolverOptions options) {
+    options.untangle = true;
+    options.improve_shape = false;
+    return around(std::make_unique<GlobalSolver>(options));
+}
+
+InstructionQueue shape_improvement(GlobalSolverOptions options) {
+    options.untangle = false;
+    options.improve_shape = true;
+    return around(std::make_unique<GlobalSolver>(options));
+}
+
+InstructionQueue local_shape_improvement(LocalSolverOptions options) {
+    return around(std::make_unique<LocalSolver>(options));
+}
+
+InstructionQueue laplace(LaplaceSolverOptions options) { return around(std::make_unique<LaplaceSolver>(options)); }
+
+InstructionQueue untangle_then_improve(GlobalSolverOptions options) {
+    GlobalSolverOptions untangling = options;
+    untangling.untangle = true;
+    untangling.improve_shape = false;
+    options.untangle = false;
+    options.improve_shape = true;
+    InstructionQueue queue;
+    queue.assess("before")
+        .improve(std::make_unique<GlobalSolver>(untangling))
+        .improve(std::make_unique<GlobalSolver>(options))
+        .assess("after");
+    return queue;
+}
+
+}  // namespace paloverde::wrappers
