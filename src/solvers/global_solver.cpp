@@ -316,7 +316,9 @@ PhaseResult Phase::run() {
         // once they are taken or when no step was found (weighting the worst elements more).
         failures = accepted ? 0 : failures + 1;
         restart = !accepted;
-        if (accepted) step_ = std::min(2.0 * step_, 1.0);
+        // Steps may grow far beyond the mesh's size: an untangled vertex can have been thrown far
+        // out (two_tets.vtk) and must be able to come back.
+        if (accepted) step_ = std::min(2.0 * step_, 1e6);
         else step_ = 0.05;
         if (!accepted || ++steps_at_mu >= options_.steps_per_mu) {
             objective_.advance();

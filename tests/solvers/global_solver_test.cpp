@@ -36,6 +36,18 @@ BOOST_AUTO_TEST_CASE(untangles_the_mesquite_tangled_mesh) {
     check_never_worse(summary);
 }
 
+// Two regular tets, mirrored so both are inverted, sharing a free base: untangling has to flip the
+// base, and the shape phase then has to bring its vertices back from wherever that left them.
+BOOST_AUTO_TEST_CASE(untangles_two_mirrored_tets_back_to_regular_ones) {
+    auto mesh = shared_mesh("mesquite/tets/two_tets.vtk");
+    const auto summary = pv::GlobalSolver().improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.before.inverted == 2);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after > 0.99);
+    check_never_worse(summary);
+}
+
 // Interior vertices moved by up to one local edge length: tangled, yet untangleable.
 BOOST_DATA_TEST_CASE(untangles_perturbed_shared_meshes,
                      bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
