@@ -3,6 +3,9 @@
 #   bash scripts/setup.sh run     install packages, build, untangle + improve the bundled example
 #   bash scripts/setup.sh test    install packages, build, run every test
 #   bash scripts/setup.sh build   install packages and build only
+#   bash scripts/setup.sh sanitize   build with AddressSanitizer + UBSan (build-sanitize/) and run
+#                                    the tests there (all but the install check, which links a
+#                                    downstream program without the sanitizers)
 # Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -56,8 +59,14 @@ case "${1:-}" in
     install_packages
     build
     ;;
+  sanitize)
+    install_packages
+    cmake --preset sanitize
+    cmake --build --preset sanitize -j "$(nproc)"
+    ctest --preset sanitize
+    ;;
   *)
-    echo "usage: bash scripts/setup.sh run|test|build" >&2
+    echo "usage: bash scripts/setup.sh run|test|build|sanitize" >&2
     exit 2
     ;;
 esac
