@@ -64,6 +64,13 @@ QualityAssessor::QualityAssessor(const std::vector<std::string>& metric_names, i
 }
 
 QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const double> xyz) const {
+    // Far from unit scale, volumes overflow or underflow: assess an exactly rescaled copy (every
+    // metric is scale-free and orientation survives a power-of-two scaling).
+    if (const int exponent = unit_scale_exponent(xyz); std::abs(exponent) > 64) {
+        std::vector<double> scaled(xyz.begin(), xyz.end());
+        scale_coordinates(scaled, exponent);
+        return assess(mesh, scaled);
+    }
     QualityReport report;
     report.vertices = mesh.num_vertices();
     report.free_vertices = mesh.num_free_vertices();
@@ -85,7 +92,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         report.degenerate += o == 0;
     }
 
-    const MetricScale scale = MetricScale::of(mesh);
+    const MetricScale scale = MetricScale::of(mesh, xyz);
     std::vector<double> q(m);
     for (const auto& name : names_) {
         auto metric = make_metric(name);

@@ -158,6 +158,17 @@ void SimplexMesh::get_fixed(std::span<const VertexId> vertices, std::span<std::u
     for (std::size_t i = 0; i < vertices.size(); ++i) out[i] = fixed_[static_cast<std::size_t>(vertices[i])];
 }
 
+int unit_scale_exponent(std::span<const double> xyz) {
+    double largest = 0.0;
+    for (double x : xyz) largest = std::max(largest, std::abs(x));
+    return largest > 0.0 && std::isfinite(largest) ? -std::ilogb(largest) : 0;
+}
+
+void scale_coordinates(std::span<double> xyz, int exponent) {
+    if (exponent == 0) return;
+    for (double& x : xyz) x = std::ldexp(x, exponent);
+}
+
 void check_no_duplicate_elements(const SimplexMesh& mesh) {
     const int k = mesh.corners();
     struct Key {

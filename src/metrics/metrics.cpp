@@ -137,7 +137,9 @@ private:
 }  // namespace
 }  // namespace metrics
 
-MetricScale MetricScale::of(const SimplexMesh& mesh) {
+MetricScale MetricScale::of(const SimplexMesh& mesh) { return of(mesh, mesh.coordinates()); }
+
+MetricScale MetricScale::of(const SimplexMesh& mesh, std::span<const double> coordinates) {
     MetricScale scale;
     scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
     scale.plane_normal = mesh.plane_normal();
@@ -147,7 +149,7 @@ MetricScale MetricScale::of(const SimplexMesh& mesh) {
     scale.reference_volume = 1.0;
     auto unit = make_metric("scaled_volume");
     unit->set_scale(scale);
-    unit->evaluate(mesh, mesh.coordinates(), 0, m, volume.data());
+    unit->evaluate(mesh, coordinates, 0, m, volume.data());
     double sum = 0.0;
     for (double v : volume) sum += std::abs(v);
     // A mesh of only degenerate elements keeps 1: there is no size to measure against.

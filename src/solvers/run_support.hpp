@@ -44,13 +44,23 @@ private:
 // The frame of one solver run: reports before and after, and the Summary.
 class SolverRun {
 public:
-    SolverRun(SimplexMesh& mesh, std::string solver, std::string metric) : mesh_(mesh), start_(Clock::now()) {
+    // Solvers run at unit scale (an exact power-of-two rescaling, undone by finish() or, if the
+    // run throws, by the destructor): every metric is scale-free, and volumes of coordinates near
+    // 1e300 or 1e-300 would overflow or underflow.
+    SolverRun(SimplexMesh& mesh, std::string solver, std::string metric)
+        : mesh_(mesh), start_(Clock::now()), original_(mesh.coordinates().begin(), mesh.coordinates().end()),
+          exponent_(unit_scale_exponent(mesh.coordinates())) {
+        scale_coordinates(mesh_.coordinates(), exponent_);
         summary.solver = std::move(solver);
         summary.quality_metric = std::move(metric);
         summary.before = assessor_.assess(mesh);
         summary.worst_before = worst_movable(summary.before);
-        original_.assign(mesh.coordinates().begin(), mesh.coordinates().end());
     }
+    ~SolverRun() {
+        if (!finished_) std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
+    }
+    SolverRun(const SolverRun&) = delete;
+    SolverRun& operator=(const SolverRun&) = delete;
 
     Clock::time_point start() const { return start_; }
 
@@ -84,7 +94,10 @@ public:
             summary.after = summary.before;
             summary.worst_after = summary.worst_before;
             summary.message += " (the result was worse than the input, which is handed back unchanged)";
+        } else {
+            scale_coordinates(mesh_.coordinates(), -exponent_);
         }
+        finished_ = true;
         summary.seconds = seconds_since(start_);
         return summary;
     }
@@ -101,7 +114,9 @@ private:
     SimplexMesh& mesh_;
     Clock::time_point start_;
     QualityAssessor assessor_;
-    std::vector<double> original_;
+    std::vector<double> original_;  // the input, at its own scale
+    int exponent_;
+    bool finished_ = false;
 };
 
 // Elements with at least one free vertex: the only ones a vertex mover changes.

@@ -8,7 +8,9 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/perturb.hpp"
+#include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 #include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
@@ -91,13 +93,14 @@ BOOST_DATA_TEST_CASE(improves_valid_shared_meshes_without_making_anything_worse,
 
 BOOST_AUTO_TEST_CASE(scaled_meshes_give_the_same_result) {
     // Every tolerance is relative, so a mesh scaled by 1e-4 or 1e4 follows the same path; only
-    // rounding (cube roots, hypot) differs.
+    // rounding (cube roots, hypot) differs. Near 1e300 or 1e-300, where volumes would overflow or
+    // underflow, the solvers work at unit scale (an exact power-of-two rescaling).
     const auto reference = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 40;
     auto baseline = reference;
     const auto base_summary = pv::GlobalSolver(options).improve(baseline);
-    for (double scale : {1e-4, 1e4, std::ldexp(1.0, -20)}) {
+    for (double scale : {1e-4, 1e4, std::ldexp(1.0, -20), 1e300, 1e-300}) {
         auto mesh = reference;
         for (double& x : mesh.coordinates()) x *= scale;
         const auto summary = pv::GlobalSolver(options).improve(mesh);
@@ -109,6 +112,28 @@ BOOST_AUTO_TEST_CASE(scaled_meshes_give_the_same_result) {
             for (std::size_t i = 0; i < mesh.coordinates().size(); ++i)
                 largest = std::max(largest, std::abs(mesh.coordinates()[i] / scale - baseline.coordinates()[i]));
             BOOST_TEST(largest < 1e-6);  // the mesh spans 10 units
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(coordinates_near_1e300_or_1e_minus_300_are_assessed_and_smoothed_locally) {
+    const auto reference = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
+    const auto unit = pv::QualityAssessor().assess(reference);
+    for (double scale : {1e300, 1e-300}) {
+        auto mesh = reference;
+        for (double& x : mesh.coordinates()) x *= scale;
+        const std::vector<double> input(mesh.coordinates().begin(), mesh.coordinates().end());
+        const auto report = pv::QualityAssessor().assess(mesh);
+        BOOST_TEST_CONTEXT("scale " << scale) {
+            BOOST_TEST(report.inverted == 9);
+            BOOST_TEST(report.metric("aspect_ratio")->all.min == unit.metric("aspect_ratio")->all.min,
+                       boost::test_tools::tolerance(1e-9));
+            const auto summary = pv::LocalSolver().improve(mesh);
+            BOOST_TEST(summary.after.inverted == 0);
+            BOOST_TEST(summary.worst_after > 0.3);
+            for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)  // the rescaling is exact
+                if (mesh.fixed()[v])
+                    for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == input[3 * v + c]);
         }
     }
 }

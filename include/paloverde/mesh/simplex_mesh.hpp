@@ -88,6 +88,13 @@ private:
     Vec3 plane_normal_{0.0, 0.0, 1.0};
 };
 
+// Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which
+// 2^e times the largest coordinate magnitude lies in [1, 2) (0 for all-zero coordinates), and
+// multiplying every coordinate by 2^e. Volumes of coordinates near 1e300 or 1e-300 overflow or
+// underflow; solvers and the assessor work at unit scale instead.
+int unit_scale_exponent(std::span<const double> xyz);
+void scale_coordinates(std::span<double> xyz, int exponent);
+
 // Throws MeshError naming two elements with the same set of vertices, if there are any.
 void check_no_duplicate_elements(const SimplexMesh& mesh);
 

@@ -31,6 +31,7 @@ struct MetricScale {
     std::span<const double> element_reference_volume;
 
     static MetricScale of(const SimplexMesh& mesh);
+    static MetricScale of(const SimplexMesh& mesh, std::span<const double> coordinates);
     // Per vertex the mean absolute volume of its elements; per element the mean of that over its
     // corners: a local, scale-free size.
     static std::vector<double> local_reference_volumes(const SimplexMesh& mesh);
