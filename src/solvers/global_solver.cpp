@@ -64,7 +64,7 @@ private:
     bool line_search(double objective, double max_direction);
     void apply_preconditioner();
     bool untangled() const;
-    void record(const Stats& s, double step, double gain);
+    void record(const Stats& s, double objective, double step, double gain);
     PhaseResult end(TerminationReason reason, std::string message);
 
     detail::Workspace& work_;
@@ -107,7 +107,7 @@ bool Phase::untangled() const {
     return true;
 }
 
-void Phase::record(const Stats& s, double step, double gain) {
+void Phase::record(const Stats& s, double objective, double step, double gain) {
     IterationRecord r;
     r.iteration = summary_.iterations;
     r.phase = untangling_ ? "untangle" : "shape";
@@ -119,7 +119,7 @@ void Phase::record(const Stats& s, double step, double gain) {
         r.mu = barrier->mu();
         r.t = barrier->t();
     }
-    r.objective = objective_.value(q_, kSerial);
+    r.objective = objective;
     r.step = step;
     r.gain = gain;
     r.seconds = seconds_since(start_);
@@ -259,7 +259,9 @@ PhaseResult Phase::run() {
     std::vector<double> best_history{best_worst_};
     std::vector<double> measure_history{objective_.progress_measure()};
     std::vector<long> bad_history{s.bad};
-    record(s, 0.0, 0.0);
+    // The objective and its weights at the current iterate, for the history and the next step.
+    double objective = objective_.value_and_weights(q_, weight_, kSerial);
+    record(s, objective, 0.0, 0.0);
     if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
 
     const bool precondition = untangling_ && options_.precondition_untangling;
@@ -273,7 +275,6 @@ PhaseResult Phase::run() {
         if (stop_.max_seconds > 0.0 && seconds_since(start_) > stop_.max_seconds)
             return end(TerminationReason::TimeLimit, "time limit reached");
 
-        const double objective = objective_.value_and_weights(q_, weight_, kSerial);
         if (precondition) {
             objective_.curvature_weights(q_, curvature_weight_);
             work_.gradient(metric_, x_, weight_, gradient_, curvature_weight_, curvature_);
@@ -333,7 +334,8 @@ PhaseResult Phase::run() {
             best_worst_ = s.worst;
             best_x_ = x_;
         }
-        record(s, step, accepted ? gain_ : 0.0);
+        objective = objective_.value_and_weights(q_, weight_, kSerial);
+        record(s, objective, step, accepted ? gain_ : 0.0);
         best_history.push_back(best_worst_);
         measure_history.push_back(objective_.progress_measure());
         bad_history.push_back(s.bad);

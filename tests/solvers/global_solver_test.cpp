@@ -16,11 +16,12 @@
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
+using paloverde::test::check_fixed_unchanged;
 using paloverde::test::check_never_worse;
+using paloverde::test::shared_mesh;
 
 namespace {
 
-pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
 
 }  // namespace
 
@@ -56,14 +57,7 @@ BOOST_DATA_TEST_CASE(untangles_perturbed_shared_meshes,
                                   "mesquite/tris/tri_20258.vtk"}) *
                          bdata::make({1, 2, 3}),
                      name, seed) {
-    auto mesh = shared_mesh(name);
-    pv::PerturbOptions perturb;
-    perturb.amount = 1.0;
-    perturb.fraction = 0.3;
-    perturb.seed = static_cast<std::uint64_t>(seed);
-    pv::perturb(mesh, perturb);
-    const auto tangled = pv::count_orientations(mesh).inverted;
-    BOOST_TEST_REQUIRE(tangled > 0);
+    auto mesh = pv::test::perturbed_shared_mesh(name, 0.3, seed);
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 30;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
@@ -85,10 +79,7 @@ BOOST_DATA_TEST_CASE(improves_valid_shared_meshes_without_making_anything_worse,
     BOOST_TEST(summary.after.inverted == 0);
     BOOST_TEST(summary.worst_after > summary.worst_before);
     check_never_worse(summary);
-    // Fixed vertices did not move.
-    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (mesh.fixed()[v])
-            for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);
+    check_fixed_unchanged(mesh, before);
 }
 
 BOOST_AUTO_TEST_CASE(scaled_meshes_give_the_same_result) {
@@ -131,9 +122,7 @@ BOOST_AUTO_TEST_CASE(coordinates_near_1e300_or_1e_minus_300_are_assessed_and_smo
             const auto summary = pv::LocalSolver().improve(mesh);
             BOOST_TEST(summary.after.inverted == 0);
             BOOST_TEST(summary.worst_after > 0.3);
-            for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)  // the rescaling is exact
-                if (mesh.fixed()[v])
-                    for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == input[3 * v + c]);
+            check_fixed_unchanged(mesh, input);  // the rescaling is exact
         }
     }
 }
@@ -181,12 +170,7 @@ BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
 }
 
 BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled) {
-    // Two tets; the second is inverted and all its vertices are fixed. The first has a free,
-    // badly placed vertex that can still be improved.
-    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron,
-                         {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
-                         {0, 1, 2, 3, 0, 2, 1, 4});
-    mesh.set_fixed({1, 1, 1, 0, 1});
+    auto mesh = pv::test::frozen_inverted_tet();
     const auto summary = pv::GlobalSolver().improve(mesh);
     BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
     BOOST_TEST(summary.after.inverted == 1);
@@ -197,11 +181,7 @@ BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled
 
 BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
     auto expect = [](auto change, const std::string& word) {
-        pv::GlobalSolverOptions options;
-        change(options);
-        BOOST_CHECK_EXCEPTION(pv::GlobalSolver{options}, pv::OptionError, [&](const pv::OptionError& e) {
-            return std::string(e.what()).find(word) != std::string::npos;
-        });
+        pv::test::check_option_rejected<pv::GlobalSolver, pv::GlobalSolverOptions>(change, word);
     };
     expect([](auto& o) { o.objective = "lp"; }, "log_barrier");
     expect([](auto& o) { o.shape_metric = "min_dihedral_deg"; }, "gradient");

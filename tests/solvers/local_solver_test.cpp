@@ -16,17 +16,12 @@
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
+using paloverde::test::check_fixed_unchanged;
 using paloverde::test::check_never_worse;
+using paloverde::test::shared_mesh;
 
 namespace {
 
-pv::SimplexMesh shared_mesh(const std::string& name) { return pv::read_mesh(pv::test::shared_data(name)).mesh; }
-
-void check_fixed_unchanged(const pv::SimplexMesh& mesh, const std::vector<double>& before) {
-    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (mesh.fixed()[v])
-            for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);
-}
 
 pv::LocalSolverOptions quick_local(int sweeps) {
     pv::LocalSolverOptions options;
@@ -120,14 +115,8 @@ BOOST_DATA_TEST_CASE(perturbed_shared_meshes,
                      bdata::make({"mesquite/tets/tire.vtk", "stellar/house2.node", "mesquite/tris/tri_20258.vtk"}) *
                          bdata::make({1, 2, 3}),
                      name, seed) {
-    auto mesh = shared_mesh(name);
-    pv::PerturbOptions perturb;
-    perturb.amount = 1.0;
-    perturb.fraction = 0.1;
-    perturb.seed = static_cast<std::uint64_t>(seed);
-    pv::perturb(mesh, perturb);
+    auto mesh = pv::test::perturbed_shared_mesh(name, 0.1, seed);
     const auto tangled = pv::count_orientations(mesh).inverted;
-    BOOST_TEST_REQUIRE(tangled > 0);
     const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
     const auto summary = pv::LocalSolver(quick_local(5)).improve(mesh);
     BOOST_TEST_MESSAGE(name << " seed " << seed << ": " << tangled << " inverted; " << summary.brief_report());
@@ -206,9 +195,7 @@ BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
 }
 
 BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled) {
-    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
-                         {0, 1, 2, 3, 0, 2, 1, 4});
-    mesh.set_fixed({1, 1, 1, 0, 1});
+    auto mesh = pv::test::frozen_inverted_tet();
     const auto summary = pv::LocalSolver().improve(mesh);
     BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
     BOOST_TEST(summary.after.inverted == 1);
@@ -217,11 +204,7 @@ BOOST_AUTO_TEST_CASE(an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled
 
 BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
     auto expect = [](auto change, const std::string& word) {
-        pv::LocalSolverOptions options;
-        change(options);
-        BOOST_CHECK_EXCEPTION(pv::LocalSolver{options}, pv::OptionError, [&](const pv::OptionError& e) {
-            return std::string(e.what()).find(word) != std::string::npos;
-        });
+        pv::test::check_option_rejected<pv::LocalSolver, pv::LocalSolverOptions>(change, word);
     };
     expect([](auto& o) { o.metric = "min_dihedral_deg"; }, "gradient");
     expect([](auto& o) { o.termination.max_iterations = -1; }, "max_iterations");

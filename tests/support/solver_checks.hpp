@@ -1,10 +1,42 @@
 #pragma once
-// The checks every solver passes: never worse than its input, and a history that shows it.
+// What the solver tests share: the meshes they start from and the checks every solver passes.
 #include <boost/test/unit_test.hpp>
+#include <cstdint>
+#include <string>
+#include <vector>
 
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/perturb.hpp"
 #include "paloverde/solvers/summary.hpp"
+#include "support/test_support.hpp"
 
 namespace paloverde::test {
+
+inline SimplexMesh shared_mesh(const std::string& name) { return read_mesh(shared_data(name)).mesh; }
+
+// A shared mesh with `fraction` of its interior vertices moved by up to one local edge length;
+// requires that it came out tangled.
+inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed) {
+    auto mesh = shared_mesh(name);
+    PerturbOptions perturb;
+    perturb.amount = 1.0;
+    perturb.fraction = fraction;
+    perturb.seed = static_cast<std::uint64_t>(seed);
+    paloverde::perturb(mesh, perturb);
+    BOOST_TEST_REQUIRE(count_orientations(mesh).inverted > 0);
+    return mesh;
+}
+
+// Two tets: the second inverted with every vertex fixed, the first with a free, badly placed
+// vertex that can still be improved.
+inline SimplexMesh frozen_inverted_tet() {
+    SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
+                     {0, 1, 2, 3, 0, 2, 1, 4});
+    mesh.set_fixed({1, 1, 1, 0, 1});
+    return mesh;
+}
 
 // Within a phase: the count of non-positive elements never rises; at an equal count the best
 // worst quality never falls; every accepted global step raised its objective. Overall: no more
@@ -19,6 +51,23 @@ inline void check_never_worse(const Summary& summary) {
         if (h[i].inverted == h[i - 1].inverted) BOOST_TEST(h[i].best_worst_quality >= h[i - 1].best_worst_quality);
         if (h[i].step > 0.0) BOOST_TEST(h[i].gain > 0.0);
     }
+}
+
+// Fixed vertices are exactly where they were.
+inline void check_fixed_unchanged(const SimplexMesh& mesh, const std::vector<double>& before) {
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.fixed()[v])
+            for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);
+}
+
+// Constructing a solver from options changed by `change` throws an OptionError naming `word`.
+template <class Solver, class Options, class Change>
+void check_option_rejected(Change change, const std::string& word) {
+    Options options;
+    change(options);
+    BOOST_CHECK_EXCEPTION(Solver{options}, OptionError, [&](const OptionError& e) {
+        return std::string(e.what()).find(word) != std::string::npos;
+    });
 }
 
 }  // namespace paloverde::test
