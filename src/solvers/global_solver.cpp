@@ -49,9 +49,9 @@ class Phase {
 public:
     Phase(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& metric, ObjectiveFunction& objective,
           const TerminationCriterion& stop, const GlobalSolverOptions& options, bool untangling, Summary& summary,
-          Clock::time_point start)
+          const IterationObserver& observer, Clock::time_point start)
         : work_(work), x_(xyz), metric_(metric), objective_(objective), stop_(stop), options_(options),
-          untangling_(untangling), summary_(summary), start_(start) {}
+          untangling_(untangling), summary_(summary), observer_(observer), start_(start) {}
 
     PhaseResult run();
 
@@ -75,6 +75,7 @@ private:
     const GlobalSolverOptions& options_;
     bool untangling_;
     Summary& summary_;
+    const IterationObserver& observer_;
     Clock::time_point start_;
 
     std::vector<double> q_, trial_q_, weight_, trial_x_, gradient_, direction_, previous_gradient_, best_x_;
@@ -124,6 +125,7 @@ void Phase::record(const Stats& s, double objective, double step, double gain) {
     r.gain = gain;
     r.seconds = seconds_since(start_);
     summary_.history.push_back(std::move(r));
+    if (observer_) observer_(summary_.history.back());
 }
 
 bool Phase::line_search(double objective, double max_direction) {
@@ -364,7 +366,7 @@ PhaseResult Phase::run() {
 // Sweeps over the free vertices of non-positive elements, untangling each locally, until a sweep
 // moves none (or ten sweeps); records one history entry. Returns the vertices moved.
 int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& hybrid,
-                          Summary& summary, Clock::time_point start) {
+                          Summary& summary, const IterationObserver& observer, Clock::time_point start) {
     const SimplexMesh& mesh = work.mesh();
     const auto m = static_cast<std::size_t>(work.movable_elements());
     std::vector<double> q(m);
@@ -395,6 +397,7 @@ int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, con
     r.moved = moved;
     r.seconds = seconds_since(start);
     summary.history.push_back(std::move(r));
+    if (observer) observer(summary.history.back());
     return moved;
 }
 
@@ -432,12 +435,12 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
             stop.max_iterations = std::max(0, stop.max_iterations - summary.untangle_iterations);
             // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
             auto objective = make_objective("log_barrier", options_.objective_options);
-            result = Phase(work, xyz, *hybrid, *objective, stop, options_, true, summary, start).run();
+            result = Phase(work, xyz, *hybrid, *objective, stop, options_, true, summary, observer(), start).run();
             if (result.reason == TerminationReason::TargetReached) break;
             const bool out_of_budget =
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
             if (out_of_budget || round == options_.local_untangle_rounds ||
-                local_untangle_sweeps(work, xyz, *hybrid, summary, start) == 0) {
+                local_untangle_sweeps(work, xyz, *hybrid, summary, observer(), start) == 0) {
                 work.copy_back(xyz, mesh);
                 return finish(TerminationReason::CannotUntangle,
                               "untangling stopped (" + result.message + ") with elements still inverted");
@@ -449,7 +452,7 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
         auto metric = make_metric(options_.shape_metric, options_.metric_options);
         metric->set_scale(work.scale());
         auto objective = make_objective(options_.objective, options_.objective_options);
-        result = Phase(work, xyz, *metric, *objective, options_.termination, options_, false, summary, start).run();
+        result = Phase(work, xyz, *metric, *objective, options_.termination, options_, false, summary, observer(), start).run();
     }
     work.copy_back(xyz, mesh);
     if (summary.before.inverted_frozen > 0)

@@ -89,7 +89,7 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
         r.inverted = detail::count_not_positive(mesh, xyz, movable);
         r.moved = moved;
         r.seconds = detail::seconds_since(start);
-        summary.history.push_back(std::move(r));
+        add_record(summary, std::move(r));
         return s;
     };
 

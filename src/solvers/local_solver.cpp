@@ -197,7 +197,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
         r.inverted = inverted;
         r.moved = moved;
         r.seconds = seconds_since(start);
-        summary.history.push_back(std::move(r));
+        add_record(summary, std::move(r));
         return s;
     };
     auto done = [&](TerminationReason reason, std::string message) {
