@@ -9,46 +9,44 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
 
 namespace {
 
-// Two passes (range, then sums and histogram) over the selected elements, in element order, so
-// the result does not depend on anything but the mesh.
-QualityStatistics statistics(std::span<const double> q, std::span<const std::uint8_t> selected, std::uint8_t want,
-                             int bins) {
+// Two passes (range, then sums and histogram) over the selected elements that this process
+// counts. Sums are exact, so the result depends on nothing but the mesh, however it is split.
+QualityStatistics statistics(std::span<const double> q, std::span<const std::uint8_t> selected, int bins,
+                             const Reducer& reducer, bool distributed) {
     QualityStatistics s;
-    s.min = std::numeric_limits<double>::infinity();
-    s.max = -s.min;
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    long count = 0;
     for (std::size_t e = 0; e < q.size(); ++e) {
-        if (selected[e] != want) continue;
-        ++s.count;
-        if (q[e] < s.min) s.min = q[e], s.worst_element = static_cast<ElementId>(e);
-        s.max = std::max(s.max, q[e]);
+        if (!selected[e]) continue;
+        ++count;
+        if (q[e] < low) low = q[e], s.worst_element = static_cast<ElementId>(e);
+        high = std::max(high, q[e]);
     }
-    if (s.count == 0) {
-        s.min = s.max = 0.0;
-        return s;
-    }
-    s.histogram.assign(static_cast<std::size_t>(bins), 0);
-    long double sum = 0.0L, squares = 0.0L;
+    s.count = static_cast<ElementId>(reducer.total(static_cast<double>(count)));
+    if (distributed) s.worst_element = -1;  // a local index means nothing to the caller
+    if (s.count == 0) return s;
+    s.min = reducer.min(low);
+    s.max = reducer.max(high);
+    std::vector<ExactSum> sums(2 + static_cast<std::size_t>(bins));  // sum, squares, histogram
     const double width = (s.max - s.min) / bins;
     for (std::size_t e = 0; e < q.size(); ++e) {
-        if (selected[e] != want) continue;
-        sum += q[e];
-        squares += static_cast<long double>(q[e]) * q[e];
-        int bin = width > 0.0 ? static_cast<int>((q[e] - s.min) / width) : 0;
-        s.histogram[static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))]++;
+        if (!selected[e]) continue;
+        sums[0].add(q[e]);
+        sums[1].add(q[e] * q[e]);
+        const int bin = width > 0.0 ? static_cast<int>((q[e] - s.min) / width) : 0;
+        sums[2 + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))].add(1.0);
     }
-    s.mean = static_cast<double>(sum / s.count);
-    s.rms = static_cast<double>(std::sqrt(squares / s.count));
+    reducer.sum(sums);
+    s.mean = sums[0].value() / s.count;
+    s.rms = std::sqrt(sums[1].value() / s.count);
+    for (int b = 0; b < bins; ++b) s.histogram.push_back(static_cast<ElementId>(sums[2 + static_cast<std::size_t>(b)].value()));
     return s;
-}
-
-QualityStatistics merge_all(std::span<const double> q, int bins) {
-    const std::vector<std::uint8_t> everything(q.size(), 1);
-    return statistics(q, everything, 1, bins);
 }
 
 }  // namespace
@@ -64,36 +62,87 @@ QualityAssessor::QualityAssessor(const std::vector<std::string>& metric_names, i
 }
 
 QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const double> xyz) const {
+    const Reducer serial;
+    return assess(mesh, xyz, {}, {}, serial, mesh.plane_normal());
+}
+
+QualityReport QualityAssessor::assess(const DistributedMesh& part) const {
+    std::vector<std::uint8_t> owned(part.vertex_owner.size());
+    for (std::size_t v = 0; v < owned.size(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
+    return assess(part.mesh, part.mesh.coordinates(), part.counted, owned, part.reducer(), part.plane_normal);
+}
+
+QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const double> xyz,
+                                      std::span<const std::uint8_t> counted, std::span<const std::uint8_t> owned,
+                                      const Reducer& reducer, const Vec3& plane_normal) const {
+    const bool distributed = !counted.empty();
     // Far from unit scale, volumes overflow or underflow: assess an exactly rescaled copy (every
     // metric is scale-free and orientation survives a power-of-two scaling).
-    if (const int exponent = unit_scale_exponent(xyz); std::abs(exponent) > 64) {
+    double largest = 0.0;
+    for (double c : xyz) largest = std::max(largest, std::abs(c));
+    largest = reducer.max(largest);
+    if (const int exponent = unit_scale_exponent(std::span<const double>(&largest, 1)); std::abs(exponent) > 64) {
         std::vector<double> scaled(xyz.begin(), xyz.end());
         scale_coordinates(scaled, exponent);
-        return assess(mesh, scaled);
+        return assess(mesh, scaled, counted, owned, reducer, plane_normal);
     }
-    QualityReport report;
-    report.vertices = mesh.num_vertices();
-    report.free_vertices = mesh.num_free_vertices();
-    report.elements = mesh.num_elements();
     const auto m = static_cast<std::size_t>(mesh.num_elements());
-
-    // 1 = the element has a free vertex.
-    std::vector<std::uint8_t> movable(m, 0);
+    auto is_counted = [&](std::size_t e) { return counted.empty() || counted[e]; };
+    auto is_owned = [&](VertexId v) { return owned.empty() || owned[v]; };
+    QualityReport report;
     const auto fixed = mesh.fixed();
-    for (ElementId e = 0; e < mesh.num_elements(); ++e)
-        for (VertexId v : mesh.element(e))
-            if (!fixed[v]) movable[e] = 1;
-    report.frozen_elements = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 0));
+    long vertices = 0, free_vertices = 0;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (is_owned(v)) ++vertices, free_vertices += !fixed[v];
 
+    // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen.
+    std::vector<std::uint8_t> group(m, 0);
+    long counts[5] = {0, 0, 0, 0, 0};  // elements, frozen, inverted, inverted frozen, degenerate
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        if (!is_counted(static_cast<std::size_t>(e))) continue;
+        group[e] = 2;
+        for (VertexId v : mesh.element(e))
+            if (!fixed[v]) group[e] = 1;
         const int o = element_orientation(mesh, xyz, e);
-        report.inverted += o < 0;
-        report.inverted_frozen += o < 0 && !movable[e];
-        report.degenerate += o == 0;
+        counts[0] += 1;
+        counts[1] += group[e] == 2;
+        counts[2] += o < 0;
+        counts[3] += o < 0 && group[e] == 2;
+        counts[4] += o == 0;
     }
+    std::vector<ExactSum> totals(7);
+    for (int i = 0; i < 5; ++i) totals[i].add(static_cast<double>(counts[i]));
+    totals[5].add(static_cast<double>(vertices));
+    totals[6].add(static_cast<double>(free_vertices));
 
-    const MetricScale scale = MetricScale::of(mesh, xyz);
+    // The metric scale: the mean absolute element volume, summed exactly.
+    MetricScale scale;
+    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    scale.plane_normal = plane_normal;
     std::vector<double> q(m);
+    {
+        auto unit = make_metric("scaled_volume");
+        unit->set_scale(scale);
+        unit->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
+        ExactSum volume;
+        for (std::size_t e = 0; e < m; ++e)
+            if (group[e]) volume.add(std::abs(q[e]));
+        totals.push_back(volume);
+    }
+    reducer.sum(totals);
+    report.elements = static_cast<ElementId>(totals[0].value());
+    report.frozen_elements = static_cast<ElementId>(totals[1].value());
+    report.inverted = static_cast<ElementId>(totals[2].value());
+    report.inverted_frozen = static_cast<ElementId>(totals[3].value());
+    report.degenerate = static_cast<ElementId>(totals[4].value());
+    report.vertices = static_cast<VertexId>(totals[5].value());
+    report.free_vertices = static_cast<VertexId>(totals[6].value());
+    // A mesh of only degenerate elements keeps 1: there is no size to measure against.
+    const double volume = totals[7].value();
+    if (volume > 0.0 && std::isfinite(volume) && report.elements > 0) scale.reference_volume = volume / report.elements;
+
+    std::vector<std::uint8_t> all(m), movable(m), frozen(m);
+    for (std::size_t e = 0; e < m; ++e) all[e] = group[e] != 0, movable[e] = group[e] == 1, frozen[e] = group[e] == 2;
     for (const auto& name : names_) {
         auto metric = make_metric(name);
         if (!metric->supports(mesh.kind())) continue;
@@ -101,9 +150,9 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         metric->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
         MetricReport r;
         r.name = name;
-        r.all = merge_all(q, bins_);
-        r.movable = statistics(q, movable, 1, bins_);
-        r.frozen = statistics(q, movable, 0, bins_);
+        r.all = statistics(q, all, bins_, reducer, distributed);
+        r.movable = statistics(q, movable, bins_, reducer, distributed);
+        r.frozen = statistics(q, frozen, bins_, reducer, distributed);
         report.metrics.push_back(std::move(r));
     }
     return report;

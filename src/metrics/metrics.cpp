@@ -157,32 +157,6 @@ MetricScale MetricScale::of(const SimplexMesh& mesh, std::span<const double> coo
     return scale;
 }
 
-std::vector<double> MetricScale::local_reference_volumes(const SimplexMesh& mesh) {
-    const MetricScale global = of(mesh);
-    const ElementId m = mesh.num_elements();
-    std::vector<double> volume(static_cast<std::size_t>(m));
-    MetricScale unit = global;
-    unit.reference_volume = 1.0;
-    auto measure = make_metric("scaled_volume");
-    measure->set_scale(unit);
-    measure->evaluate(mesh, mesh.coordinates(), 0, m, volume.data());
-    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh.num_vertices()), 0.0);
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
-        const auto elements = mesh.elements_of(v);
-        for (ElementId e : elements) vertex_mean[v] += std::abs(volume[e]);
-        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
-    }
-    std::vector<double> out(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
-        double sum = 0.0;
-        for (VertexId v : mesh.element(e)) sum += vertex_mean[v];
-        const double local = sum / mesh.corners();
-        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
-        out[e] = local > 1e-12 * global.reference_volume ? local : global.reference_volume;
-    }
-    return out;
-}
-
 void MetricOptions::validate() const {
     if (!(hybrid_sharpness > 0.0) || !std::isfinite(hybrid_sharpness))
         throw OptionError("hybrid_sharpness must be a positive number (got " + std::to_string(hybrid_sharpness) + ")");

@@ -1,9 +1,10 @@
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <string>
 
-#include "core/blocked_sum.hpp"
+#include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 
@@ -25,26 +26,26 @@ LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
 }
 
 void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
-    double local[2] = {static_cast<double>(q.size()), 0.0};  // count, sum
-    for (double v : q) local[1] += v;
     const double qmin = reducer.min(local_min(q));
-    reducer.sum(local);
-    const double n = local[0];
+    std::array<ExactSum, 2> count_and_sum{};  // count, sum
+    count_and_sum[0].add(static_cast<double>(q.size()));
+    for (double v : q) count_and_sum[1].add(v);
+    reducer.sum(count_and_sum);
+    const double n = count_and_sum[0].value();
     if (n == 0.0) return;
+    auto total = [&](auto term) {
+        return reducer.total(detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(term(q[i])); })[0]);
+    };
     if (mu_ <= 0.0) {
         // Start t half the spread below the worst quality, or closer where that would spread the
         // weight over more than about `initial_active_` elements (a large mesh would otherwise
         // spend its first hundreds of iterations on its average elements); take the mu for which
         // that t is optimal.
-        const double mean = local[1] / n;
+        const double mean = count_and_sum[1].value() / n;
         double gap = 0.5 * (mean - qmin);
         if (!(gap > 0.0)) gap = 0.1 * std::max(std::abs(qmin), 1e-12);
         // sum_i gap / (q_i - qmin + gap): how many elements weigh about as much as the worst.
-        auto active = [&](double d) {
-            return reducer.sum(detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
-                acc[0] += d / (q[i] - qmin + d);
-            })[0]);
-        };
+        auto active = [&](double d) { return total([&](double v) { return d / (v - qmin + d); }); };
         if (active(gap) > initial_active_) {
             double lo = 0.0, hi = gap;
             for (int it = 0; it < 60; ++it) {
@@ -54,10 +55,7 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
             gap = hi;
         }
         const double t0 = qmin - gap;
-        const double s = reducer.sum(detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
-            acc[0] += 1.0 / (q[i] - t0);
-        })[0]);
-        mu_ = 1.0 / s;
+        mu_ = 1.0 / total([&](double v) { return 1.0 / (v - t0); });
         t_ = t0;
     }
     // dF/dt = 1 - mu * sum 1/(q_i - t) rises from 1 - 0 at t = -inf to -inf at t = qmin, so the
@@ -65,19 +63,18 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     double lo = qmin - n * mu_, hi = qmin;
     double t = (t_ > lo && t_ < hi) ? t_ : 0.5 * (lo + hi);
     for (int iteration = 0; iteration < 200; ++iteration) {
-        const auto partial = detail::blocked_sums<2>(q.size(), [&](std::size_t i, auto& acc) {
+        auto s = detail::exact_sums<2>(q.size(), [&](std::size_t i, auto& acc) {
             const double r = 1.0 / (q[i] - t);
-            acc[0] += r;
-            acc[1] += r * r;
+            acc[0].add(r);
+            acc[1].add(r * r);
         });
-        double s[2] = {partial[0], partial[1]};
         reducer.sum(s);
-        const double h = mu_ * s[0] - 1.0;  // = -dF/dt
+        const double h = mu_ * s[0].value() - 1.0;  // = -dF/dt
         if (h > 0.0) hi = t;
         else lo = t;
         if (std::abs(h) < 1e-13 || hi - lo <= 4.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t)))
             break;
-        double next = t - h / (mu_ * s[1]);
+        double next = t - h / (mu_ * s[1].value());
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
         t = next;
     }
@@ -87,16 +84,14 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
 void LogBarrier::advance() { mu_ *= shrink_; }
 
 double LogBarrier::value(std::span<const double> q, const Reducer& reducer) const {
-    const double local = detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
-        acc[0] += std::log(q[i] - t_);
-    })[0];
-    const double sum = reducer.sum(local);
+    const double sum = reducer.total(detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
+        acc[0].add(std::log(q[i] - t_));
+    })[0]);
     return std::isnan(sum) ? -std::numeric_limits<double>::infinity() : t_ + mu_ * sum;
 }
 
-double LogBarrier::value_and_weights(std::span<const double> q, std::span<double> weight, const Reducer& reducer) const {
+void LogBarrier::weights(std::span<const double> q, std::span<double> weight) const {
     for (std::size_t i = 0; i < q.size(); ++i) weight[i] = mu_ / (q[i] - t_);
-    return value(q, reducer);
 }
 
 void ObjectiveFunction::curvature_weights(std::span<const double>, std::span<double> curvature) const {
@@ -115,27 +110,29 @@ PMean::PMean(double p) : p_(p) {
 }
 
 double PMean::value(std::span<const double> q, const Reducer& reducer) const {
-    double s[2] = {static_cast<double>(q.size()), detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
-                                                       acc[0] += std::pow(q[i], p_);
-                                                   })[0]};
+    auto s = detail::exact_sums<2>(q.size(), [&](std::size_t i, auto& acc) { acc[1].add(std::pow(q[i], p_)); });
+    s[0].add(static_cast<double>(q.size()));
     reducer.sum(s);
-    return s[0] > 0.0 ? std::pow(s[1] / s[0], 1.0 / p_) : 0.0;
+    const double n = s[0].value();
+    return n > 0.0 ? std::pow(s[1].value() / n, 1.0 / p_) : 0.0;
 }
 
-double PMean::value_and_weights(std::span<const double> q, std::span<double> weight, const Reducer& reducer) const {
-    const double mean = value(q, reducer);
-    const double n = reducer.sum(static_cast<double>(q.size()));
-    const double scale = std::pow(mean, 1.0 - p_) / n;
+void PMean::update(std::span<const double> q, const Reducer& reducer) {
+    mean_ = value(q, reducer);
+    count_ = reducer.total(static_cast<double>(q.size()));
+}
+
+void PMean::weights(std::span<const double> q, std::span<double> weight) const {
+    const double scale = count_ > 0.0 ? std::pow(mean_, 1.0 - p_) / count_ : 0.0;
     for (std::size_t i = 0; i < q.size(); ++i) weight[i] = scale * std::pow(q[i], p_ - 1.0);
-    return mean;
 }
 
 double MinQuality::value(std::span<const double> q, const Reducer& reducer) const { return reducer.min(local_min(q)); }
 
-double MinQuality::value_and_weights(std::span<const double> q, std::span<double> weight, const Reducer& reducer) const {
-    const double worst = value(q, reducer);
-    for (std::size_t i = 0; i < q.size(); ++i) weight[i] = q[i] == worst ? 1.0 : 0.0;
-    return worst;
+void MinQuality::update(std::span<const double> q, const Reducer& reducer) { worst_ = value(q, reducer); }
+
+void MinQuality::weights(std::span<const double> q, std::span<double> weight) const {
+    for (std::size_t i = 0; i < q.size(); ++i) weight[i] = q[i] == worst_ ? 1.0 : 0.0;
 }
 
 void ObjectiveOptions::validate() const {

@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <functional>
 #include <numeric>
 
 #include "core/blocked_sum.hpp"
+#include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "local_untangle.hpp"
@@ -34,7 +36,6 @@ namespace {
 
 using detail::Clock;
 using detail::seconds_since;
-const Reducer kSerial;
 
 struct PhaseResult {
     TerminationReason reason;
@@ -60,7 +61,12 @@ private:
         double worst, mean;
         long bad;  // non-positive qualities
     };
-    Stats stats(std::span<const double> q) const;
+    Stats stats(std::span<const double> q);
+    // Exact sums of term(v, acc) over the owned vertices of all processes.
+    template <int K, class Term>
+    std::array<double, K> vertex_sums(Term term) const;
+    double objective_value(std::span<const double> q) { return objective_.value(work_.counted(q, counted_), reducer_); }
+    void damp_like_owners(std::vector<VertexId>& damped);
     bool line_search(double objective, double max_direction);
     void apply_preconditioner();
     bool untangled() const;
@@ -77,11 +83,14 @@ private:
     Summary& summary_;
     const IterationObserver& observer_;
     Clock::time_point start_;
+    const Reducer& reducer_ = work_.reducer();
 
     std::vector<double> q_, trial_q_, weight_, trial_x_, gradient_, direction_, previous_gradient_, best_x_;
     std::vector<double> curvature_weight_, curvature_, preconditioned_, previous_preconditioned_;
     std::vector<double> damping_;                  // per vertex: fraction of the step it takes
     std::vector<int> stamp_;                       // per vertex: damped in this round
+    std::vector<double> mark_;                     // per vertex: damped by its owner (distributed runs)
+    std::vector<double> counted_;                  // scratch: the qualities this process counts
     std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
     std::uint32_t element_stamp_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
@@ -90,22 +99,53 @@ private:
     double gain_ = 0.0;   // objective increase of the last accepted step (at its mu and t)
 };
 
-Phase::Stats Phase::stats(std::span<const double> q) const {
+Phase::Stats Phase::stats(std::span<const double> all) {
+    const auto q = work_.counted(all, counted_);
     Stats s{std::numeric_limits<double>::infinity(), 0.0, 0};
     for (double v : q) {
         s.worst = std::min(s.worst, v);
         s.bad += v <= 0.0;
     }
-    s.mean = detail::blocked_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0] += q[i]; })[0] /
-             static_cast<double>(std::max<std::size_t>(1, q.size()));
+    auto sums = detail::exact_sums<2>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(q[i]); });
+    sums[1].add(static_cast<double>(s.bad));
+    reducer_.sum(sums);
+    s.worst = reducer_.min(s.worst);
+    s.bad = static_cast<long>(sums[1].value());
+    s.mean = sums[0].value() / std::max(1.0, work_.global_movable());
     return s;
+}
+
+template <int K, class Term>
+std::array<double, K> Phase::vertex_sums(Term term) const {
+    const auto owned = work_.owned();
+    auto sums = detail::exact_sums<K>(owned.size(), [&](std::size_t v, auto& acc) {
+        if (owned[v]) term(v, acc);
+    });
+    reducer_.sum(sums);
+    std::array<double, K> out{};
+    for (int k = 0; k < K; ++k) out[k] = sums[k].value();
+    return out;
 }
 
 bool Phase::untangled() const {
     const SimplexMesh& mesh = work_.mesh();
-    for (ElementId e = 0; e < work_.movable_elements(); ++e)
-        if (element_orientation(mesh, x_, e) <= 0) return false;
-    return true;
+    double tangled = 0.0;
+    for (ElementId e = 0; e < work_.movable_elements() && tangled == 0.0; ++e)
+        if (element_orientation(mesh, x_, e) <= 0) tangled = 1.0;
+    return reducer_.max(tangled) == 0.0;
+}
+
+// A distributed run: the owner of a vertex holds all its elements, so its decision to damp the
+// vertex is complete; ghosts take their owners' decisions.
+void Phase::damp_like_owners(std::vector<VertexId>& damped) {
+    if (!work_.distributed()) return;
+    const auto owned = work_.owned();
+    for (VertexId v : damped) mark_[v] = 1.0;
+    work_.halo().update(mark_, 1);
+    std::erase_if(damped, [&](VertexId v) { return !owned[v]; });
+    for (VertexId v : work_.ghosts())
+        if (mark_[v] != 0.0 && !work_.fixed()[v]) damped.push_back(v);
+    std::fill(mark_.begin(), mark_.end(), 0.0);
 }
 
 void Phase::record(const Stats& s, double objective, double step, double gain) {
@@ -137,7 +177,7 @@ bool Phase::line_search(double objective, double max_direction) {
     // although it was positive. Rather than shrinking the whole step for it, the step of its
     // vertices is damped until it no longer blocks: one tangle does not freeze the mesh.
     auto blocks = [&](ElementId e) {
-        return !objective_.admissible(trial_q_[e], static_cast<std::size_t>(e)) || (trial_q_[e] <= 0.0 && q_[e] > 0.0);
+        return !objective_.admissible(trial_q_[e]) || (trial_q_[e] <= 0.0 && q_[e] > 0.0);
     };
     std::vector<VertexId> damped;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
@@ -158,7 +198,8 @@ bool Phase::line_search(double objective, double max_direction) {
                             stamp_[v] = round + 1;
                             damped.push_back(v);
                         }
-            blocked = !damped.empty();
+            damp_like_owners(damped);
+            blocked = reducer_.max(damped.empty() ? 0.0 : 1.0) > 0.0;
             if (!blocked) break;
             ++element_stamp_round_;
             for (VertexId v : damped) {
@@ -175,11 +216,13 @@ bool Phase::line_search(double objective, double max_direction) {
         std::fill(stamp_.begin(), stamp_.end(), 0);
         if (blocked) continue;
         // The Armijo test uses the slope of the damped step actually taken.
-        const double slope = detail::blocked_sums<1>(static_cast<std::size_t>(n), [&](std::size_t v, auto& acc) {
-            for (int c = 0; c < 3; ++c) acc[0] += gradient_[3 * v + c] * damping_[v] * direction_[3 * v + c];
+        const double slope = vertex_sums<1>([&](std::size_t v, auto& acc) {
+            double d = 0.0;
+            for (int c = 0; c < 3; ++c) d += gradient_[3 * v + c] * damping_[v] * direction_[3 * v + c];
+            acc[0].add(d);
         })[0];
         if (!(slope > 0.0)) continue;
-        const double trial_objective = objective_.value(trial_q_, kSerial);
+        const double trial_objective = objective_value(trial_q_);
         if (trial_objective > objective + 1e-4 * s * slope) {
             gain_ = trial_objective - objective;
             x_.swap(trial_x_);
@@ -195,18 +238,16 @@ bool Phase::line_search(double objective, double max_direction) {
 // evens out the very different scales of elements and barrier weights.
 void Phase::apply_preconditioner() {
     const std::size_t n = x_.size() / 3;
-    double trace_sum = 0.0;
-    std::size_t counted = 0;
-    for (std::size_t v = 0; v < n; ++v) {
+    const auto [trace_sum, counted] = vertex_sums<2>([&](std::size_t v, auto& acc) {
         const double* m = &curvature_[6 * v];
         const double trace = m[0] + m[3] + m[5];
-        if (trace > 0.0) trace_sum += trace, ++counted;
-    }
-    if (counted == 0) {
+        if (trace > 0.0) acc[0].add(trace), acc[1].add(1.0);
+    });
+    if (counted == 0.0) {
         preconditioned_ = gradient_;
         return;
     }
-    const double floor = 1e-8 * trace_sum / static_cast<double>(counted);
+    const double floor = 1e-8 * trace_sum / counted;
 #pragma omp parallel for schedule(static) if (n > detail::kParallelThreshold)
     for (std::size_t v = 0; v < n; ++v) {
         const double* m = &curvature_[6 * v];
@@ -250,11 +291,12 @@ PhaseResult Phase::run() {
     preconditioned_.assign(n3, 0.0);
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
+    mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
     element_stamp_.assign(m, 0);
 
     work_.evaluate(metric_, x_, q_);
     ++summary_.quality_passes;
-    objective_.update(q_, kSerial);
+    objective_.update(work_.counted(q_, counted_), reducer_);
     Stats s = stats(q_);
     best_worst_ = s.worst;
     best_bad_ = s.bad;
@@ -262,7 +304,8 @@ PhaseResult Phase::run() {
     std::vector<double> measure_history{objective_.progress_measure()};
     std::vector<long> bad_history{s.bad};
     // The objective and its weights at the current iterate, for the history and the next step.
-    double objective = objective_.value_and_weights(q_, weight_, kSerial);
+    double objective = objective_value(q_);
+    objective_.weights(q_, weight_);
     record(s, objective, 0.0, 0.0);
     if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
 
@@ -274,7 +317,8 @@ PhaseResult Phase::run() {
     for (int iteration = 1;; ++iteration) {
         if (iteration > stop_.max_iterations)
             return end(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop_.max_iterations) + " iterations");
-        if (stop_.max_seconds > 0.0 && seconds_since(start_) > stop_.max_seconds)
+        // Every process must stop at the same iteration: the slowest clock decides.
+        if (stop_.max_seconds > 0.0 && reducer_.max(seconds_since(start_)) > stop_.max_seconds)
             return end(TerminationReason::TimeLimit, "time limit reached");
 
         if (precondition) {
@@ -284,7 +328,10 @@ PhaseResult Phase::run() {
             work_.gradient(metric_, x_, weight_, gradient_);
         }
         ++summary_.gradient_passes;
-        const double g2 = detail::blocked_sums<1>(n3, [&](std::size_t i, auto& acc) { acc[0] += gradient_[i] * gradient_[i]; })[0];
+        const double g2 = vertex_sums<1>([&](std::size_t v, auto& acc) {
+            acc[0].add(gradient_[3 * v] * gradient_[3 * v] + gradient_[3 * v + 1] * gradient_[3 * v + 1] +
+                       gradient_[3 * v + 2] * gradient_[3 * v + 2]);
+        })[0];
         const double gradient_norm = std::sqrt(g2);
         if (first_gradient_norm < 0.0) first_gradient_norm = gradient_norm;
         if (!(gradient_norm > stop_.gradient_tolerance * first_gradient_norm))
@@ -296,20 +343,33 @@ PhaseResult Phase::run() {
         // changes (mu) or the direction stops ascending.
         double beta = 0.0;
         if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart) {
-            const auto sums = detail::blocked_sums<2>(n3, [&](std::size_t i, auto& acc) {
-                acc[0] += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
-                acc[1] += previous_preconditioned_[i] * previous_gradient_[i];
+            const auto sums = vertex_sums<2>([&](std::size_t v, auto& acc) {
+                double a = 0.0, b = 0.0;
+                for (std::size_t i = 3 * v; i < 3 * v + 3; ++i) {
+                    a += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
+                    b += previous_preconditioned_[i] * previous_gradient_[i];
+                }
+                acc[0].add(a);
+                acc[1].add(b);
             });
             beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
         }
         for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
-        const double slope = detail::blocked_sums<1>(n3, [&](std::size_t i, auto& acc) { acc[0] += gradient_[i] * direction_[i]; })[0];
+        const double slope = vertex_sums<1>([&](std::size_t v, auto& acc) {
+            acc[0].add(gradient_[3 * v] * direction_[3 * v] + gradient_[3 * v + 1] * direction_[3 * v + 1] +
+                       gradient_[3 * v + 2] * direction_[3 * v + 2]);
+        })[0];
         if (!(slope > 0.0)) direction_ = preconditioned_;
+        // Ghosts move as their owners say: the exchange of the boundary vertices' directions.
+        work_.halo().update(direction_, 3);
         previous_gradient_ = gradient_;
         previous_preconditioned_ = preconditioned_;
         double max_direction = 0.0;
-        for (std::size_t v = 0; v < n3; v += 3)
-            max_direction = std::max(max_direction, std::hypot(direction_[v], direction_[v + 1], direction_[v + 2]));
+        const auto owned = work_.owned();
+        for (std::size_t v = 0; v < n3 / 3; ++v)
+            if (owned[v])
+                max_direction = std::max(max_direction, std::hypot(direction_[3 * v], direction_[3 * v + 1], direction_[3 * v + 2]));
+        max_direction = reducer_.max(max_direction);
 
         const bool accepted = line_search(objective, max_direction);
         const double step = accepted ? step_ : 0.0;
@@ -328,7 +388,7 @@ PhaseResult Phase::run() {
             steps_at_mu = 0;
             restart = true;
         }
-        objective_.update(q_, kSerial);
+        objective_.update(work_.counted(q_, counted_), reducer_);
         s = stats(q_);
         // Better: fewer non-positive elements, then a higher worst quality.
         if (s.bad < best_bad_ || (s.bad == best_bad_ && s.worst > best_worst_)) {
@@ -336,7 +396,8 @@ PhaseResult Phase::run() {
             best_worst_ = s.worst;
             best_x_ = x_;
         }
-        objective = objective_.value_and_weights(q_, weight_, kSerial);
+        objective = objective_value(q_);
+        objective_.weights(q_, weight_);
         record(s, objective, step, accepted ? gain_ : 0.0);
         best_history.push_back(best_worst_);
         measure_history.push_back(objective_.progress_measure());
@@ -405,56 +466,56 @@ int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, con
 
 GlobalSolver::GlobalSolver(GlobalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
-Summary GlobalSolver::improve(SimplexMesh& mesh) {
-    detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
+namespace {
+
+// Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
+Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
+              detail::Workspace& work, const std::function<void(std::span<const double>)>& copy_back) {
     Summary& summary = run.summary;
     const auto start = run.start();
     auto finish = [&](TerminationReason reason, std::string message) { return run.finish(reason, std::move(message)); };
-
-    if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Workspace work(mesh, options_.renumber);
     std::vector<double> xyz(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
 
     PhaseResult result{TerminationReason::TargetReached, ""};
     const bool tangled = summary.before.inverted - summary.before.inverted_frozen > 0 ||
                          summary.before.degenerate > 0;
-    if (tangled && options_.untangle) {
-        auto hybrid = make_metric("untangle_hybrid", options_.metric_options);
+    if (tangled && options.untangle) {
+        auto hybrid = make_metric("untangle_hybrid", options.metric_options);
         // Volumes measured against the size of each element's neighbourhood, so that a graded
         // mesh's small inverted elements weigh as much as its large ones.
-        const std::vector<double> local_volumes = MetricScale::local_reference_volumes(work.mesh());
+        const std::vector<double> local_volumes = work.local_reference_volumes();
         MetricScale hybrid_scale = work.scale();
         hybrid_scale.element_reference_volume = local_volumes;
         hybrid->set_scale(hybrid_scale);
         // The global barrier ascent untangles most of a mesh; where it stalls on a few elements
         // (a local maximum of the worst quality), local steps move single vertices to where
-        // their elements' smallest volume is largest, and the barrier ascent resumes.
+        // their elements' smallest volume is largest, and the barrier ascent resumes. (Serial
+        // runs only: the local steps go vertex by vertex.)
         for (int round = 0;; ++round) {
-            TerminationCriterion stop = options_.untangle_termination;
+            TerminationCriterion stop = options.untangle_termination;
             stop.max_iterations = std::max(0, stop.max_iterations - summary.untangle_iterations);
             // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
-            auto objective = make_objective("log_barrier", options_.objective_options);
-            result = Phase(work, xyz, *hybrid, *objective, stop, options_, true, summary, observer(), start).run();
+            auto objective = make_objective("log_barrier", options.objective_options);
+            result = Phase(work, xyz, *hybrid, *objective, stop, options, true, summary, observer, start).run();
             if (result.reason == TerminationReason::TargetReached) break;
             const bool out_of_budget =
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
-            if (out_of_budget || round == options_.local_untangle_rounds ||
-                local_untangle_sweeps(work, xyz, *hybrid, summary, observer(), start) == 0) {
-                work.copy_back(xyz, mesh);
+            if (out_of_budget || round == options.local_untangle_rounds || work.distributed() ||
+                local_untangle_sweeps(work, xyz, *hybrid, summary, observer, start) == 0) {
+                copy_back(xyz);
                 return finish(TerminationReason::CannotUntangle,
                               "untangling stopped (" + result.message + ") with elements still inverted");
             }
         }
     }
-    const bool still_tangled = !options_.untangle && tangled;
-    if (options_.improve_shape && !still_tangled) {
-        auto metric = make_metric(options_.shape_metric, options_.metric_options);
+    const bool still_tangled = !options.untangle && tangled;
+    if (options.improve_shape && !still_tangled) {
+        auto metric = make_metric(options.shape_metric, options.metric_options);
         metric->set_scale(work.scale());
-        auto objective = make_objective(options_.objective, options_.objective_options);
-        result = Phase(work, xyz, *metric, *objective, options_.termination, options_, false, summary, observer(), start).run();
+        auto objective = make_objective(options.objective, options.objective_options);
+        result = Phase(work, xyz, *metric, *objective, options.termination, options, false, summary, observer, start).run();
     }
-    work.copy_back(xyz, mesh);
+    copy_back(xyz);
     if (summary.before.inverted_frozen > 0)
         return finish(TerminationReason::CannotUntangle,
                       std::to_string(summary.before.inverted_frozen) +
@@ -462,6 +523,24 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
     if (still_tangled)
         return finish(TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off");
     return finish(result.reason, result.message);
+}
+
+}  // namespace
+
+Summary GlobalSolver::improve(SimplexMesh& mesh) {
+    detail::ThreadScope threads(options_.threads);
+    detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
+    if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Workspace work(mesh, options_.renumber);
+    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, mesh); });
+}
+
+Summary GlobalSolver::improve(DistributedMesh& part) {
+    detail::ThreadScope threads(options_.threads);
+    detail::SolverRun run(part, std::string(name()), options_.shape_metric);
+    if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Workspace work(part);
+    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, part); });
 }
 
 }  // namespace paloverde

@@ -17,6 +17,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/summary.hpp"
 
 namespace paloverde::detail {
@@ -50,11 +51,17 @@ public:
     SolverRun(SimplexMesh& mesh, std::string solver, std::string metric)
         : mesh_(mesh), start_(Clock::now()), original_(mesh.coordinates().begin(), mesh.coordinates().end()),
           exponent_(unit_scale_exponent(mesh.coordinates())) {
-        scale_coordinates(mesh_.coordinates(), exponent_);
-        summary.solver = std::move(solver);
-        summary.quality_metric = std::move(metric);
-        summary.before = assessor_.assess(mesh);
-        summary.worst_before = worst_movable(summary.before);
+        begin(std::move(solver), std::move(metric));
+    }
+    // A distributed run (collective): reports and decisions are the whole mesh's, on every rank.
+    SolverRun(DistributedMesh& part, std::string solver, std::string metric)
+        : mesh_(part.mesh), part_(&part), start_(Clock::now()),
+          original_(part.mesh.coordinates().begin(), part.mesh.coordinates().end()) {
+        double largest = 0.0;
+        for (double c : part.mesh.coordinates()) largest = std::max(largest, std::abs(c));
+        largest = part.reducer().max(largest);
+        exponent_ = unit_scale_exponent(std::span<const double>(&largest, 1));
+        begin(std::move(solver), std::move(metric));
     }
     ~SolverRun() {
         if (!finished_) std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
@@ -68,10 +75,11 @@ public:
     // nothing to move (no elements, no free vertex, no element with one); a MeshError for a
     // triangle mesh that is not planar (a surface, which vertex moves would leave).
     std::optional<Summary> nothing_to_move() {
-        if (mesh_.num_elements() == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
-        if (mesh_.num_free_vertices() == 0)
+        if (summary.before.elements == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
+        if (summary.before.free_vertices == 0)
             return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
-        if (mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar())
+        const double planar = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() ? 0.0 : 1.0;
+        if ((part_ ? part_->reducer().min(planar) : planar) == 0.0)
             throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
                             "tetrahedral meshes, not surfaces");
         if (summary.before.frozen_elements == summary.before.elements)
@@ -85,7 +93,7 @@ public:
     Summary finish(TerminationReason reason, std::string message, bool safety_net = true) {
         summary.reason = reason;
         summary.message = std::move(message);
-        summary.after = assessor_.assess(mesh_);
+        summary.after = assess();
         summary.worst_after = worst_movable(summary.after);
         const bool worse = summary.after.inverted > summary.before.inverted ||
                            (summary.after.inverted == summary.before.inverted && summary.worst_after < summary.worst_before);
@@ -105,6 +113,14 @@ public:
     Summary summary;
 
 private:
+    void begin(std::string solver, std::string metric) {
+        scale_coordinates(mesh_.coordinates(), exponent_);
+        summary.solver = std::move(solver);
+        summary.quality_metric = std::move(metric);
+        summary.before = assess();
+        summary.worst_before = worst_movable(summary.before);
+    }
+    QualityReport assess() const { return part_ ? assessor_.assess(*part_) : assessor_.assess(mesh_); }
     double worst_movable(const QualityReport& report) const {
         const MetricReport* r = report.metric(summary.quality_metric);
         if (!r) r = &report.metrics.front();
@@ -112,10 +128,11 @@ private:
     }
 
     SimplexMesh& mesh_;
+    DistributedMesh* part_ = nullptr;
     Clock::time_point start_;
     QualityAssessor assessor_;
     std::vector<double> original_;  // the input, at its own scale
-    int exponent_;
+    int exponent_ = 0;
     bool finished_ = false;
 };
 

@@ -1,75 +1,189 @@
 #include "workspace.hpp"
 
-#include "core/blocked_sum.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
+
+#include "core/blocked_sum.hpp"
+#include "core/exact_sums.hpp"
+#include "paloverde/mesh/renumber.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde::detail {
 
 namespace {
 constexpr ElementId kEvaluateChunk = 2048;
+// The canonical element order is cut into this many blocks; each vertex sums its elements'
+// contributions block by block. The blocks depend only on the whole mesh.
+constexpr GlobalId kGradientBlocks = 64;
 
-std::vector<std::uint8_t> frozen_elements(const SimplexMesh& mesh) {
-    std::vector<std::uint8_t> frozen(static_cast<std::size_t>(mesh.num_elements()), 1);
-    for (ElementId e = 0; e < mesh.num_elements(); ++e)
-        for (VertexId v : mesh.element(e))
-            if (!mesh.fixed()[v]) frozen[e] = 0;
-    return frozen;
+bool has_free_vertex(const SimplexMesh& mesh, ElementId e) {
+    for (VertexId v : mesh.element(e))
+        if (!mesh.fixed()[v]) return true;
+    return false;
 }
 }  // namespace
 
+std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key) {
+    const ElementId m = mesh.num_elements();
+    const int k = mesh.corners();
+    std::vector<std::array<GlobalId, 4>> keys(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        auto& key = keys[e];
+        key.fill(-1);
+        for (int i = 0; i < k; ++i) key[i] = vertex_key[mesh.element(e)[i]];
+        std::sort(key.begin(), key.begin() + k);
+    }
+    std::vector<ElementId> sorted(static_cast<std::size_t>(m));
+    std::iota(sorted.begin(), sorted.end(), ElementId{0});
+    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) { return keys[a] < keys[b]; });
+    std::vector<GlobalId> position(static_cast<std::size_t>(m));
+    for (ElementId i = 0; i < m; ++i) position[sorted[i]] = i;
+    return position;
+}
+
 Workspace::Workspace(const SimplexMesh& mesh, bool renumber) {
-    const std::vector<std::uint8_t> frozen = frozen_elements(mesh);
+    SimplexMesh ordered;
     if (renumber) {
-        Renumbering order = locality_order(mesh, frozen);
-        mesh_ = renumbered(mesh, order);
+        Renumbering order = locality_order(mesh);
+        ordered = renumbered(mesh, order);
         old_vertex_ = std::move(order.old_vertex);
     } else {
-        // Still put the frozen elements last, keeping the vertex numbering.
-        Renumbering order;
-        order.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
-        for (VertexId v = 0; v < mesh.num_vertices(); ++v) order.old_vertex[v] = v;
-        for (int group = 0; group < 2; ++group)
-            for (ElementId e = 0; e < mesh.num_elements(); ++e)
-                if (frozen[e] == group) order.old_element.push_back(e);
-        mesh_ = renumbered(mesh, order);
+        ordered = mesh;
     }
-    movable_ = static_cast<ElementId>(std::count(frozen.begin(), frozen.end(), 0));
+    const VertexId n = ordered.num_vertices();
+    std::vector<GlobalId> ids(static_cast<std::size_t>(n));
+    std::iota(ids.begin(), ids.end(), GlobalId{0});
+    auto positions = canonical_element_positions(ordered, ids);
+    owned_.assign(static_cast<std::size_t>(n), 1);
+    finish(ordered, std::move(positions), {}, ordered.num_elements());
+}
+
+Workspace::Workspace(const DistributedMesh& part) {
+    distributed_ = true;
+    reducer_ = &part.reducer();
+    halo_ = &part.halo();
+    const VertexId n = part.mesh.num_vertices();
+    owned_.resize(static_cast<std::size_t>(n));
+    for (VertexId v = 0; v < n; ++v) {
+        owned_[v] = part.vertex_owner[v] == part.rank;
+        if (!owned_[v]) ghosts_.push_back(v);
+    }
+    finish(part.mesh, part.element_order, part.counted, part.global_elements);
+    if (part.mesh.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal;
+}
+
+void Workspace::finish(const SimplexMesh& mesh, std::vector<GlobalId> element_order, std::vector<std::uint8_t> counted,
+                       GlobalId global_elements) {
+    // Movable elements first, each group in canonical order.
+    const ElementId m = mesh.num_elements();
+    std::vector<ElementId> order(static_cast<std::size_t>(m));
+    std::iota(order.begin(), order.end(), ElementId{0});
+    std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) movable[e] = has_free_vertex(mesh, e);
+    std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
+        if (movable[a] != movable[b]) return movable[a] > movable[b];
+        return element_order[a] < element_order[b];
+    });
+    movable_ = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 1));
+    Renumbering identity_vertices;
+    identity_vertices.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+    std::iota(identity_vertices.old_vertex.begin(), identity_vertices.old_vertex.end(), VertexId{0});
+    identity_vertices.old_element = order;
+    mesh_ = renumbered(mesh, identity_vertices);
+    std::vector<GlobalId> sorted_order(static_cast<std::size_t>(m));
+    std::vector<std::uint8_t> sorted_counted(static_cast<std::size_t>(m), 1);
+    for (ElementId i = 0; i < m; ++i) {
+        sorted_order[i] = element_order[order[i]];
+        if (!counted.empty()) sorted_counted[i] = counted[order[i]];
+    }
+    if (!counted.empty())
+        for (ElementId e = 0; e < movable_; ++e)
+            if (sorted_counted[e]) counted_.push_back(e);
+    global_movable_ = reducer_->total(static_cast<double>(counted.empty() ? movable_ : counted_.size()));
+
+    // The metric scale: the mean absolute element volume over the whole mesh, summed exactly.
     scale_ = MetricScale::of(mesh_);
+    {
+        const std::vector<double> volume = absolute_volumes();
+        ExactSum sum;
+        for (ElementId e = 0; e < m; ++e)
+            if (sorted_counted[e]) sum.add(volume[e]);
+        const double total = reducer_->total(sum);
+        const double count = reducer_->total(static_cast<double>(std::count(sorted_counted.begin(), sorted_counted.end(), 1)));
+        scale_.reference_volume = total > 0.0 && std::isfinite(total) && count > 0.0 ? total / count : 1.0;
+    }
     // The edge of the regular simplex of the reference volume.
     reference_length_ = mesh_.kind() == ElementKind::Tetrahedron
                             ? std::cbrt(6.0 * std::numbers::sqrt2 * scale_.reference_volume)
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
-    build_lanes();
+    build_lanes(sorted_order, global_elements);
 }
 
-void Workspace::build_lanes() {
-    // Fixed lanes (not one per thread) keep the gradient's summation order independent of the
-    // thread count. In locality order a lane touches a narrow band of vertices, so the lane
-    // buffers together are not much larger than one gradient; halve the lane count until so.
-    for (ElementId count = 64;; count /= 2) {
-        lanes_.clear();
-        std::size_t total = 0;
-        const ElementId per_lane = std::max<ElementId>(1, (movable_ + count - 1) / count);
-        for (ElementId first = 0; first < movable_; first += per_lane) {
-            const ElementId last = std::min(movable_, first + per_lane);
-            VertexId low = mesh_.num_vertices(), high = 0;
-            for (VertexId v : mesh_.connectivity().subspan(static_cast<std::size_t>(first) * mesh_.corners(),
-                                                           static_cast<std::size_t>(last - first) * mesh_.corners())) {
-                low = std::min(low, v);
-                high = std::max(high, v);
-            }
-            lanes_.push_back({first, last, low, high, total});
-            total += static_cast<std::size_t>(high - low + 1);
+void Workspace::build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements) {
+    // A lane is a run of movable elements in one block of the canonical order. Lane partials are
+    // added in lane order, elements within a lane in order: for an owned vertex, the same sums in
+    // the same order as in the serial run.
+    const GlobalId block = std::max<GlobalId>(1, (global_elements + kGradientBlocks - 1) / kGradientBlocks);
+    lanes_.clear();
+    std::size_t total = 0;
+    for (ElementId first = 0; first < movable_;) {
+        ElementId last = first + 1;
+        while (last < movable_ && element_order[last] / block == element_order[first] / block) ++last;
+        VertexId low = mesh_.num_vertices(), high = 0;
+        for (VertexId v : mesh_.connectivity().subspan(static_cast<std::size_t>(first) * mesh_.corners(),
+                                                       static_cast<std::size_t>(last - first) * mesh_.corners())) {
+            low = std::min(low, v);
+            high = std::max(high, v);
         }
-        if (count == 1 || total <= 2 * static_cast<std::size_t>(mesh_.num_vertices())) {
-            lane_vertices_ = total;
-            lane_gradient_.assign(3 * total, 0.0);
-            return;
-        }
+        lanes_.push_back({first, last, low, high, total});
+        total += static_cast<std::size_t>(high - low + 1);
+        first = last;
     }
+    lane_vertices_ = total;
+    lane_gradient_.assign(3 * total, 0.0);
+}
+
+std::span<const double> Workspace::counted(std::span<const double> quality, std::vector<double>& buffer) const {
+    if (!distributed_) return quality;
+    buffer.resize(counted_.size());
+    for (std::size_t i = 0; i < counted_.size(); ++i) buffer[i] = quality[counted_[i]];
+    return buffer;
+}
+
+std::vector<double> Workspace::absolute_volumes() const {
+    std::vector<double> volume(static_cast<std::size_t>(mesh_.num_elements()));
+    MetricScale unit = scale_;
+    unit.reference_volume = 1.0;
+    auto measure = make_metric("scaled_volume");
+    measure->set_scale(unit);
+    measure->evaluate(mesh_, mesh_.coordinates(), 0, mesh_.num_elements(), volume.data());
+    for (double& v : volume) v = std::abs(v);
+    return volume;
+}
+
+// Per vertex the mean absolute volume of its elements; per element the mean of that over its
+// corners: a local, scale-free size.
+std::vector<double> Workspace::local_reference_volumes() const {
+    const std::vector<double> volume = absolute_volumes();
+    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh_.num_vertices()), 0.0);
+    for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
+        if (!owned_[v]) continue;
+        const auto elements = mesh_.elements_of(v);
+        for (ElementId e : elements) vertex_mean[v] += volume[e];
+        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
+    }
+    halo_->update(vertex_mean, 1);
+    std::vector<double> out(static_cast<std::size_t>(movable_));
+    for (ElementId e = 0; e < movable_; ++e) {
+        double sum = 0.0;
+        for (VertexId v : mesh_.element(e)) sum += vertex_mean[v];
+        const double local = sum / mesh_.corners();
+        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
+        out[e] = local > 1e-12 * scale_.reference_volume ? local : scale_.reference_volume;
+    }
+    return out;
 }
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {
@@ -104,6 +218,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
         metric.accumulate_gradient(mesh_, xyz, lane.first, lane.last, target);
     }
     // Each vertex sums the lanes that touch it in lane order; vertex blocks run in parallel.
+    // Fixed vertices get zero; ghosts too, until the halo brings their owners' values.
     const VertexId n = mesh_.num_vertices();
     const VertexId block = 4096;
     const auto fixed = mesh_.fixed();
@@ -117,7 +232,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
                     out[width * static_cast<std::size_t>(v) + c] += source[width * static_cast<std::size_t>(v - lane.low) + c];
         }
         for (VertexId v = low; v <= high; ++v)
-            if (fixed[v])
+            if (fixed[v] || !owned_[v])
                 for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
     };
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
@@ -134,6 +249,10 @@ void Workspace::copy_back(std::span<const double> xyz, SimplexMesh& original) co
         const VertexId old = old_vertex_.empty() ? v : old_vertex_[v];
         for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(old) + c] = xyz[3 * static_cast<std::size_t>(v) + c];
     }
+}
+
+void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) const {
+    std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
 }
 
 }  // namespace paloverde::detail

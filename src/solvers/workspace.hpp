@@ -1,40 +1,68 @@
 #pragma once
-// The arrays a solver works on: the mesh renumbered for locality with the movable elements
-// (those with a free vertex) first, and the machinery for passes over them that give the same
-// result for any number of threads.
+// The arrays a solver works on, in canonical order, and the machinery for passes over them whose
+// results do not depend on the number of threads or of processes.
+//
+// Canonical order: vertices by canonical id (reverse Cuthill-McKee order of the whole mesh, for
+// locality), elements by their sorted canonical vertex ids. Elements with a free vertex (movable)
+// come first. A process of a distributed run holds a part of the mesh in the same order; every
+// vertex sum runs over the vertex's elements in canonical order, grouped in blocks of the
+// canonical element order that are the same for every split of the mesh, so the owner of a
+// vertex computes bit for bit the gradient the serial run computes.
 #include <cstdint>
 #include <span>
 #include <vector>
 
-#include "paloverde/mesh/renumber.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
+
+namespace paloverde {
+struct DistributedMesh;
+}
 
 namespace paloverde::detail {
 
 class Workspace {
 public:
+    // The whole mesh, serially; `renumber` false keeps the vertex numbering.
     Workspace(const SimplexMesh& mesh, bool renumber);
+    // This process's part of a distributed mesh.
+    explicit Workspace(const DistributedMesh& part);
 
     const SimplexMesh& mesh() const { return mesh_; }
     ElementId movable_elements() const { return movable_; }
     std::span<const std::uint8_t> fixed() const { return mesh_.fixed(); }
+    // Per vertex: this process owns it (computes its gradient and moves it).
+    std::span<const std::uint8_t> owned() const { return owned_; }
+    // Vertices owned by other processes.
+    std::span<const VertexId> ghosts() const { return ghosts_; }
     double reference_length() const { return reference_length_; }
     const MetricScale& scale() const { return scale_; }
+    const Reducer& reducer() const { return *reducer_; }
+    const Halo& halo() const { return *halo_; }
+    bool distributed() const { return distributed_; }
+    // Per movable element, as metric scale: the mean size of its corners' neighbourhoods.
+    std::vector<double> local_reference_volumes() const;
+
+    // The movable elements' qualities this process counts in global sums (all, serially).
+    std::span<const double> counted(std::span<const double> quality, std::vector<double>& buffer) const;
+    // Number of movable elements over all processes.
+    double global_movable() const { return global_movable_; }
 
     // Qualities of the movable elements at positions xyz.
     void evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const;
     // gradient = sum_e weight[e] * grad q_e over the movable elements, zero at fixed vertices;
     // with curvature weights also curvature = sum_e cw[e] * g g^T per vertex (6 doubles).
-    // Elements are split into fixed lanes whose partial sums are added in lane order, so the
-    // result does not depend on the number of threads.
+    // Complete at owned vertices only; ghosts get their owner's values from the halo.
     void gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
                   std::span<double> gradient, std::span<const double> curvature_weight = {},
                   std::span<double> curvature = {});
 
-    // Coordinates in the caller's numbering.
+    // Serial runs: coordinates in the caller's numbering.
     void copy_back(std::span<const double> xyz, SimplexMesh& original) const;
+    // Distributed runs: the part's own vertex order is kept, only elements were reordered.
+    void copy_back(std::span<const double> xyz, DistributedMesh& part) const;
 
 private:
     struct Lane {
@@ -42,11 +70,24 @@ private:
         VertexId low, high;      // vertices they touch: [low, high]
         std::size_t offset;      // first vertex of the lane in the lane buffers
     };
-    void build_lanes();
+    // Orders the elements (movable first, then canonical) and sets up scale and lanes.
+    void finish(const SimplexMesh& mesh, std::vector<GlobalId> element_order, std::vector<std::uint8_t> counted,
+                GlobalId global_elements);
+    void build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements);
+    std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
 
     SimplexMesh mesh_;
-    std::vector<VertexId> old_vertex_;  // empty when not renumbered
+    std::vector<VertexId> old_vertex_;  // serial, renumbered: caller's id of each vertex
     ElementId movable_ = 0;
+    std::vector<std::uint8_t> owned_;
+    std::vector<VertexId> ghosts_;
+    std::vector<ElementId> counted_;   // movable elements counted here; empty when all are
+    double global_movable_ = 0.0;
+    bool distributed_ = false;
+    Reducer serial_reducer_;
+    Halo serial_halo_;
+    const Reducer* reducer_ = &serial_reducer_;
+    const Halo* halo_ = &serial_halo_;
     MetricScale scale_;
     double reference_length_ = 1.0;
     std::vector<Lane> lanes_;
@@ -54,5 +95,9 @@ private:
     std::vector<double> lane_gradient_;   // 3 per lane vertex
     std::vector<double> lane_curvature_;  // 6 per lane vertex, allocated on first use
 };
+
+// Canonical element order: for each element its position when all are sorted by their sorted
+// vertex ids (`vertex_key` per vertex, e.g. canonical or global ids).
+std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key);
 
 }  // namespace paloverde::detail

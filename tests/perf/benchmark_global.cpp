@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
             sink = sink + barrier.value(q, serial);
         });
         const double gradient = best_of(5, [&] {
-            barrier.value_and_weights(q, w, serial);
+            barrier.weights(q, w);
             work.gradient(*metric, x, w, g);
         });
         std::cout << std::fixed << std::setprecision(2) << "per element (ns):  streaming read " << stream * per_million * 1e3

@@ -9,8 +9,11 @@
 
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/parallel/reducer.hpp"
 
 namespace paloverde {
+
+class DistributedMesh;
 
 struct QualityStatistics {
     ElementId count = 0;
@@ -53,8 +56,17 @@ public:
     // Metrics that do not support the mesh's element kind are left out of the report.
     QualityReport assess(const SimplexMesh& mesh) const { return assess(mesh, mesh.coordinates()); }
     QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates) const;
+    // Collective: the report of the whole distributed mesh, on every rank. Equal to the serial
+    // report of the whole mesh, except that worst_element is -1.
+    QualityReport assess(const DistributedMesh& part) const;
 
 private:
+    // Elements with counted[e] (all when empty) and vertices with owned[v] enter the report;
+    // sums go through the reducer.
+    QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates,
+                         std::span<const std::uint8_t> counted, std::span<const std::uint8_t> owned,
+                         const Reducer& reducer, const Vec3& plane_normal) const;
+
     std::vector<std::string> names_;
     int bins_ = 10;
 };

@@ -32,9 +32,6 @@ struct MetricScale {
 
     static MetricScale of(const SimplexMesh& mesh);
     static MetricScale of(const SimplexMesh& mesh, std::span<const double> coordinates);
-    // Per vertex the mean absolute volume of its elements; per element the mean of that over its
-    // corners: a local, scale-free size.
-    static std::vector<double> local_reference_volumes(const SimplexMesh& mesh);
 };
 
 class QualityMetric {

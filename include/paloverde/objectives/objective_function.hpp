@@ -16,27 +16,25 @@ public:
     virtual ~ObjectiveFunction() = default;
     virtual std::string_view name() const = 0;
 
-    // Once per outer iteration, at the accepted qualities: the log-barrier solves for t here.
-    virtual void update(std::span<const double> quality, const Reducer& reducer) {
-        (void)quality;
-        (void)reducer;
-    }
+    // Calls that take `counted` get the qualities this process counts in global sums (in a
+    // distributed run each element is counted by exactly one process); the others take any
+    // qualities, also of copies of other processes' elements.
+
+    // At each accepted iterate: the log-barrier solves for t here, and every objective keeps
+    // what weights() needs.
+    virtual void update(std::span<const double> counted, const Reducer& reducer) = 0;
     // After each outer iteration: the log-barrier shrinks mu.
     virtual void advance() {}
 
     // A number that keeps rising while the method still makes progress, though the worst
     // quality may pause (the barrier's t, which climbs to the worst quality as mu shrinks).
     virtual double progress_measure() const { return 0.0; }
-    // Whether element `element` with quality `quality` lies in the objective's domain.
-    virtual bool admissible(double quality, std::size_t element) const {
-        (void)element;
-        return quality > -1e308;
-    }
+    // Whether an element of this quality lies in the objective's domain.
+    virtual bool admissible(double quality) const { return quality > -1e308; }
 
-    virtual double value(std::span<const double> quality, const Reducer& reducer) const = 0;
-    // Also writes d(value)/d(quality[i]) into weight[i].
-    virtual double value_and_weights(std::span<const double> quality, std::span<double> weight,
-                                     const Reducer& reducer) const = 0;
+    virtual double value(std::span<const double> counted, const Reducer& reducer) const = 0;
+    // d(value)/d(quality[i]) into weight[i], at the state of the last update().
+    virtual void weights(std::span<const double> quality, std::span<double> weight) const = 0;
     // -d2(value)/d(quality[i])2 of the part of the objective that is a sum over elements: how
     // sharply each element's term bends. Solvers build a preconditioner from it; 0 means none.
     virtual void curvature_weights(std::span<const double> quality, std::span<double> curvature) const;
@@ -53,21 +51,18 @@ public:
     // the worst.
     explicit LogBarrier(double shrink = 0.8, double initial_mu = 0.0, double initial_active = 1e4);
     std::string_view name() const override { return "log_barrier"; }
-    void update(std::span<const double> quality, const Reducer& reducer) override;
+    void update(std::span<const double> counted, const Reducer& reducer) override;
     void advance() override;
-    bool admissible(double quality, std::size_t) const override { return quality > t_; }
+    bool admissible(double quality) const override { return quality > t_; }
     double progress_measure() const override { return t_; }
-    double value(std::span<const double> quality, const Reducer& reducer) const override;
-    double value_and_weights(std::span<const double> quality, std::span<double> weight,
-                             const Reducer& reducer) const override;
+    double value(std::span<const double> counted, const Reducer& reducer) const override;
+    void weights(std::span<const double> quality, std::span<double> weight) const override;
     void curvature_weights(std::span<const double> quality, std::span<double> curvature) const override;
 
     double mu() const { return mu_; }
     double t() const { return t_; }
 
-
 private:
-
     double shrink_;
     double initial_active_;
     double mu_;
@@ -80,13 +75,14 @@ class PMean final : public ObjectiveFunction {
 public:
     explicit PMean(double p = -2.0);
     std::string_view name() const override { return "p_mean"; }
-    bool admissible(double quality, std::size_t) const override { return quality > 0.0; }
-    double value(std::span<const double> quality, const Reducer& reducer) const override;
-    double value_and_weights(std::span<const double> quality, std::span<double> weight,
-                             const Reducer& reducer) const override;
+    bool admissible(double quality) const override { return quality > 0.0; }
+    void update(std::span<const double> counted, const Reducer& reducer) override;
+    double value(std::span<const double> counted, const Reducer& reducer) const override;
+    void weights(std::span<const double> quality, std::span<double> weight) const override;
 
 private:
     double p_;
+    double mean_ = 0.0, count_ = 0.0;  // at the last update()
 };
 
 // The worst quality (Mesquite's LInf on the minimum). Its gradient is that of the worst
@@ -94,9 +90,12 @@ private:
 class MinQuality final : public ObjectiveFunction {
 public:
     std::string_view name() const override { return "min_quality"; }
-    double value(std::span<const double> quality, const Reducer& reducer) const override;
-    double value_and_weights(std::span<const double> quality, std::span<double> weight,
-                             const Reducer& reducer) const override;
+    void update(std::span<const double> counted, const Reducer& reducer) override;
+    double value(std::span<const double> counted, const Reducer& reducer) const override;
+    void weights(std::span<const double> quality, std::span<double> weight) const override;
+
+private:
+    double worst_ = 0.0;  // at the last update()
 };
 
 struct ObjectiveOptions {

@@ -1,21 +1,31 @@
 #pragma once
 // Global reductions behind one interface: a serial run uses this class as it is (every value is
 // already global); a distributed run passes an MPI implementation. Solvers and objective
-// functions never know which.
+// functions never know which. Sums are exact (ExactSum), so a result never depends on how the
+// mesh was split among processes.
 #include <span>
+
+#include "paloverde/core/exact_sum.hpp"
 
 namespace paloverde {
 
 class Reducer {
 public:
     virtual ~Reducer() = default;
-    // In place: each entry becomes the sum of that entry over all processes.
-    virtual void sum(std::span<double> values) const { (void)values; }
+    // In place: each sum becomes the sum of that entry over all processes.
+    virtual void sum(std::span<ExactSum> sums) const { (void)sums; }
     virtual double min(double value) const { return value; }
     virtual double max(double value) const { return value; }
-    double sum(double value) const {
-        sum(std::span<double>(&value, 1));
-        return value;
+    // The total over all processes, rounded.
+    double total(ExactSum local) const {
+        sum(std::span<ExactSum>(&local, 1));
+        return local.value();
+    }
+    // A count or other small integer-valued number, summed over all processes.
+    double total(double local) const {
+        ExactSum s;
+        s.add(local);
+        return total(s);
     }
 };
 

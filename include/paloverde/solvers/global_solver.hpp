@@ -7,6 +7,7 @@
 
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/objectives/objective_function.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
 
@@ -43,6 +44,10 @@ public:
     explicit GlobalSolver(GlobalSolverOptions options = {});
     std::string_view name() const override { return "global"; }
     Summary improve(SimplexMesh& mesh) override;
+    // Collective over the mesh's communicator: every rank moves the vertices it owns, and all
+    // end with the same Summary. The result equals the serial run's on the whole mesh (with the
+    // default renumbering), except that local untangling steps are serial-only.
+    Summary improve(DistributedMesh& part);
 
 private:
     GlobalSolverOptions options_;

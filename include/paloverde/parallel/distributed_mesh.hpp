@@ -1,0 +1,99 @@
+#pragma once
+// A mesh distributed over the ranks of an MPI communicator.
+//
+// Every vertex has one owner rank (METIS k-way partition of the vertex graph). A rank holds every
+// element that touches a vertex it owns, and the other vertices of those elements as ghosts:
+// copies refreshed from their owners through the exchange schedule. Each element is counted in
+// global sums by exactly one rank, the owner of its vertex with the smallest canonical id.
+//
+// Canonical ids: the vertices of the whole mesh in reverse Cuthill-McKee order (for locality).
+// A rank's vertices are in increasing canonical id, which `mesh.global_ids()` holds.
+#include <mpi.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/parallel/halo.hpp"
+#include "paloverde/parallel/reducer.hpp"
+
+namespace paloverde {
+
+// How ghost values travel. Colored: the process graph's edges are colored so that no two edges
+// at a rank share a color, and the exchange runs color by color, each rank trading with at most
+// one partner per color (the paper's schedule). RootRelayed: every rank sends to rank 0, which
+// forwards (the paper's baseline).
+enum class ExchangeMode { Colored, RootRelayed };
+
+struct ExchangePartner {
+    int rank = 0;
+    int color = 0;                 // of the process-graph edge to this partner
+    std::vector<VertexId> send;    // owned vertices the partner holds as ghosts
+    std::vector<VertexId> receive; // ghosts the partner owns
+};
+
+struct ExchangeSchedule {
+    ExchangeMode mode = ExchangeMode::Colored;
+    std::vector<ExchangePartner> partners;  // ordered by color
+    int colors = 0;                         // colors used over the whole process graph
+};
+
+struct DistributeOptions {
+    ExchangeMode exchange = ExchangeMode::Colored;
+    void validate() const {}
+};
+
+// Timings of getting the mesh onto the ranks (seconds, on rank 0), as in the paper's Table 1.
+struct DistributeTimings {
+    double partition = 0.0;   // canonical order and METIS
+    double distribute = 0.0;  // sending each rank its part, building it there
+    double schedule = 0.0;    // process graph, edge coloring, send/receive lists
+};
+
+class DistributedMesh {
+public:
+    // Collective over `comm`. Rank 0 passes the whole mesh (fixed flags set), the other ranks
+    // nullptr. Throws (on every rank) when the mesh has fewer vertices than there are ranks.
+    static DistributedMesh scatter(MPI_Comm comm, const SimplexMesh* whole, const DistributeOptions& options = {});
+
+    // Collective: rank 0 passes the mesh it gave to scatter(), whose coordinates become the
+    // owners' current ones; the other ranks pass nullptr.
+    void gather_coordinates(SimplexMesh* whole) const;
+
+    // Collective: refreshes ghost coordinates from their owners.
+    void update_ghost_coordinates();
+
+    const Reducer& reducer() const { return *reducer_; }
+    const Halo& halo() const { return *halo_; }
+
+    MPI_Comm comm = MPI_COMM_NULL;
+    int rank = 0, ranks = 1;
+    SimplexMesh mesh;                     // this rank's elements and the vertices they touch
+    std::vector<int> vertex_owner;        // per local vertex
+    std::vector<GlobalId> element_order;  // per local element: its canonical position
+    std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank
+    GlobalId global_vertices = 0, global_elements = 0;
+    Vec3 plane_normal{0.0, 0.0, 1.0};     // triangle meshes: the whole mesh's plane
+    ExchangeSchedule schedule;
+    DistributeTimings timings;
+
+    // Communication counts (this rank): ghost values it receives per exchange, messages per exchange.
+    std::int64_t received_vertices() const;
+    std::int64_t sent_vertices() const;
+
+    DistributedMesh();
+    ~DistributedMesh();
+    DistributedMesh(DistributedMesh&&) noexcept;
+    DistributedMesh& operator=(DistributedMesh&&) noexcept;
+
+private:
+    void build_schedule(ExchangeMode mode);
+    std::unique_ptr<Reducer> reducer_;
+    std::unique_ptr<Halo> halo_;
+    // Rank 0 only: for each canonical vertex id, its index in the mesh given to scatter().
+    std::vector<VertexId> original_vertex_;
+};
+
+}  // namespace paloverde

@@ -1,0 +1,449 @@
+#include "paloverde/parallel/distributed_mesh.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <numeric>
+#include <set>
+#include <string>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/renumber.hpp"
+#include "paloverde/parallel/partition.hpp"
+#include "solvers/workspace.hpp"
+
+namespace paloverde {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+template <class T>
+MPI_Datatype mpi_type();
+template <> MPI_Datatype mpi_type<double>() { return MPI_DOUBLE; }
+template <> MPI_Datatype mpi_type<std::int32_t>() { return MPI_INT32_T; }
+template <> MPI_Datatype mpi_type<std::int64_t>() { return MPI_INT64_T; }
+template <> MPI_Datatype mpi_type<std::uint8_t>() { return MPI_UINT8_T; }
+
+template <class T>
+void send_vector(const std::vector<T>& data, int to, int tag, MPI_Comm comm) {
+    const std::int64_t size = static_cast<std::int64_t>(data.size());
+    MPI_Send(&size, 1, MPI_INT64_T, to, tag, comm);
+    if (size > 0) MPI_Send(data.data(), static_cast<int>(size), mpi_type<T>(), to, tag, comm);
+}
+
+template <class T>
+std::vector<T> receive_vector(int from, int tag, MPI_Comm comm) {
+    std::int64_t size = 0;
+    MPI_Recv(&size, 1, MPI_INT64_T, from, tag, comm, MPI_STATUS_IGNORE);
+    std::vector<T> data(static_cast<std::size_t>(size));
+    if (size > 0) MPI_Recv(data.data(), static_cast<int>(size), mpi_type<T>(), from, tag, comm, MPI_STATUS_IGNORE);
+    return data;
+}
+
+// Runs `work` on rank 0; if it throws, every rank throws the same message (no rank is left
+// waiting for a message that will never come).
+template <class Work>
+void on_root_or_fail_everywhere(MPI_Comm comm, int rank, Work work) {
+    std::string failure;
+    int kind = 0;  // 1 option error, 2 mesh error, 3 other
+    if (rank == 0) {
+        try {
+            work();
+        } catch (const OptionError& e) {
+            failure = e.what(), kind = 1;
+        } catch (const MeshError& e) {
+            failure = e.what(), kind = 2;
+        } catch (const std::exception& e) {
+            failure = e.what(), kind = 3;
+        }
+    }
+    MPI_Bcast(&kind, 1, MPI_INT, 0, comm);
+    if (kind == 0) return;
+    int length = static_cast<int>(failure.size());
+    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+    failure.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(failure.data(), length, MPI_CHAR, 0, comm);
+    if (kind == 1) throw OptionError(failure);
+    if (kind == 2) throw MeshError(failure);
+    throw Error(failure);
+}
+
+// The pieces of one rank's part, as rank 0 sends them.
+struct PartArrays {
+    std::vector<double> coordinates;
+    std::vector<std::uint8_t> fixed;
+    std::vector<std::int64_t> canonical;  // per vertex
+    std::vector<std::int32_t> owner;      // per vertex
+    std::vector<std::int32_t> connectivity;
+    std::vector<std::int64_t> element_order;
+};
+
+class MpiReducer final : public Reducer {
+public:
+    explicit MpiReducer(MPI_Comm comm) : comm_(comm) {}
+    void sum(std::span<ExactSum> sums) const override {
+        if (sums.empty()) return;
+        std::vector<std::int64_t> digits(sums.size() * ExactSum::kDigits);
+        std::vector<std::int64_t> special(sums.size());
+        for (std::size_t i = 0; i < sums.size(); ++i) {
+            sums[i].normalize();
+            std::copy(sums[i].digits().begin(), sums[i].digits().end(), digits.begin() + i * ExactSum::kDigits);
+            special[i] = sums[i].special();
+        }
+        MPI_Allreduce(MPI_IN_PLACE, digits.data(), static_cast<int>(digits.size()), MPI_INT64_T, MPI_SUM, comm_);
+        MPI_Allreduce(MPI_IN_PLACE, special.data(), static_cast<int>(special.size()), MPI_INT64_T, MPI_BOR, comm_);
+        for (std::size_t i = 0; i < sums.size(); ++i) {
+            std::copy(digits.begin() + i * ExactSum::kDigits, digits.begin() + (i + 1) * ExactSum::kDigits,
+                      sums[i].digits().begin());
+            sums[i].special() = special[i];
+        }
+    }
+    double min(double value) const override {
+        MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MIN, comm_);
+        return value;
+    }
+    double max(double value) const override {
+        MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, comm_);
+        return value;
+    }
+
+private:
+    MPI_Comm comm_;
+};
+
+class MpiHalo final : public Halo {
+public:
+    MpiHalo(MPI_Comm comm, int rank, int ranks, const ExchangeSchedule& schedule)
+        : comm_(comm), rank_(rank), ranks_(ranks), schedule_(schedule) {}
+
+    void update(std::span<double> values, int width) const override {
+        if (schedule_.mode == ExchangeMode::Colored) colored(values, width);
+        else root_relayed(values, width);
+    }
+
+private:
+    static std::vector<double> pack(std::span<const double> values, int width, const std::vector<VertexId>& list) {
+        std::vector<double> out(list.size() * static_cast<std::size_t>(width));
+        for (std::size_t i = 0; i < list.size(); ++i)
+            for (int c = 0; c < width; ++c) out[i * width + c] = values[static_cast<std::size_t>(list[i]) * width + c];
+        return out;
+    }
+    static void unpack(std::span<double> values, int width, const std::vector<VertexId>& list, const double* in) {
+        for (std::size_t i = 0; i < list.size(); ++i)
+            for (int c = 0; c < width; ++c) values[static_cast<std::size_t>(list[i]) * width + c] = in[i * width + c];
+    }
+
+    // Color by color, each rank trades with at most one partner per color.
+    void colored(std::span<double> values, int width) const {
+        std::vector<double> incoming;
+        for (const ExchangePartner& p : schedule_.partners) {
+            const auto outgoing = pack(values, width, p.send);
+            incoming.resize(p.receive.size() * static_cast<std::size_t>(width));
+            MPI_Sendrecv(outgoing.data(), static_cast<int>(outgoing.size()), MPI_DOUBLE, p.rank, p.color,
+                         incoming.data(), static_cast<int>(incoming.size()), MPI_DOUBLE, p.rank, p.color, comm_,
+                         MPI_STATUS_IGNORE);
+            unpack(values, width, p.receive, incoming.data());
+        }
+    }
+
+    // Every rank sends all its outgoing values to rank 0, which forwards each block to its
+    // destination: the paper's baseline.
+    void root_relayed(std::span<double> values, int width) const {
+        std::vector<int> counts(static_cast<std::size_t>(ranks_), 0);  // doubles to each destination
+        std::vector<double> outgoing;
+        for (int to = 0; to < ranks_; ++to)
+            for (const ExchangePartner& p : schedule_.partners)
+                if (p.rank == to) {
+                    const auto block = pack(values, width, p.send);
+                    outgoing.insert(outgoing.end(), block.begin(), block.end());
+                    counts[to] = static_cast<int>(block.size());
+                }
+        std::vector<int> all_counts(rank_ == 0 ? static_cast<std::size_t>(ranks_) * ranks_ : 0);
+        MPI_Gather(counts.data(), ranks_, MPI_INT, all_counts.data(), ranks_, MPI_INT, 0, comm_);
+        std::vector<int> gathered_sizes(rank_ == 0 ? ranks_ : 0), gathered_offsets(rank_ == 0 ? ranks_ : 0);
+        std::vector<double> gathered;
+        if (rank_ == 0) {
+            int offset = 0;
+            for (int from = 0; from < ranks_; ++from) {
+                gathered_offsets[from] = offset;
+                gathered_sizes[from] = std::accumulate(all_counts.begin() + from * ranks_, all_counts.begin() + (from + 1) * ranks_, 0);
+                offset += gathered_sizes[from];
+            }
+            gathered.resize(static_cast<std::size_t>(offset));
+        }
+        MPI_Gatherv(outgoing.data(), static_cast<int>(outgoing.size()), MPI_DOUBLE, gathered.data(),
+                    gathered_sizes.data(), gathered_offsets.data(), MPI_DOUBLE, 0, comm_);
+        // Rank 0 regroups by destination, sources in rank order.
+        std::vector<double> forward;
+        std::vector<int> forward_sizes(rank_ == 0 ? ranks_ : 0), forward_offsets(rank_ == 0 ? ranks_ : 0);
+        if (rank_ == 0) {
+            for (int to = 0; to < ranks_; ++to) {
+                forward_offsets[to] = static_cast<int>(forward.size());
+                for (int from = 0; from < ranks_; ++from) {
+                    int within = 0;
+                    for (int d = 0; d < to; ++d) within += all_counts[from * ranks_ + d];
+                    const double* block = gathered.data() + gathered_offsets[from] + within;
+                    forward.insert(forward.end(), block, block + all_counts[from * ranks_ + to]);
+                }
+                forward_sizes[to] = static_cast<int>(forward.size()) - forward_offsets[to];
+            }
+        }
+        std::size_t expected = 0;
+        for (const ExchangePartner& p : schedule_.partners) expected += p.receive.size() * static_cast<std::size_t>(width);
+        std::vector<double> incoming(expected);
+        MPI_Scatterv(forward.data(), forward_sizes.data(), forward_offsets.data(), MPI_DOUBLE, incoming.data(),
+                     static_cast<int>(incoming.size()), MPI_DOUBLE, 0, comm_);
+        std::size_t offset = 0;
+        for (int from = 0; from < ranks_; ++from)
+            for (const ExchangePartner& p : schedule_.partners)
+                if (p.rank == from) {
+                    unpack(values, width, p.receive, incoming.data() + offset);
+                    offset += p.receive.size() * static_cast<std::size_t>(width);
+                }
+    }
+
+    MPI_Comm comm_;
+    int rank_, ranks_;
+    const ExchangeSchedule& schedule_;
+};
+
+// Rank 0: splits the whole mesh (canonical numbering given by `canonical`) into the ranks' parts.
+std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId> canonical,
+                              std::span<const GlobalId> element_order, std::span<const int> part, int ranks) {
+    std::vector<std::vector<ElementId>> elements(static_cast<std::size_t>(ranks));
+    std::vector<int> touching;
+    for (ElementId e = 0; e < whole.num_elements(); ++e) {
+        touching.clear();
+        for (VertexId v : whole.element(e)) touching.push_back(part[v]);
+        std::sort(touching.begin(), touching.end());
+        touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
+        for (int p : touching) elements[p].push_back(e);
+    }
+    std::vector<PartArrays> parts(static_cast<std::size_t>(ranks));
+    std::vector<VertexId> local(static_cast<std::size_t>(whole.num_vertices()), -1);
+    for (int p = 0; p < ranks; ++p) {
+        std::vector<VertexId> vertices;
+        for (ElementId e : elements[p])
+            for (VertexId v : whole.element(e)) vertices.push_back(v);
+        for (VertexId v = 0; v < whole.num_vertices(); ++v)
+            if (part[v] == p && whole.elements_of(v).empty()) vertices.push_back(v);  // isolated vertices
+        std::sort(vertices.begin(), vertices.end(), [&](VertexId a, VertexId b) { return canonical[a] < canonical[b]; });
+        vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+        PartArrays& out = parts[p];
+        for (std::size_t i = 0; i < vertices.size(); ++i) {
+            const VertexId v = vertices[i];
+            local[v] = static_cast<VertexId>(i);
+            for (int c = 0; c < 3; ++c) out.coordinates.push_back(whole.coordinates()[3 * static_cast<std::size_t>(v) + c]);
+            out.fixed.push_back(whole.fixed()[v]);
+            out.canonical.push_back(canonical[v]);
+            out.owner.push_back(part[v]);
+        }
+        for (ElementId e : elements[p]) {
+            for (VertexId v : whole.element(e)) out.connectivity.push_back(local[v]);
+            out.element_order.push_back(element_order[e]);
+        }
+        for (VertexId v : vertices) local[v] = -1;
+    }
+    return parts;
+}
+
+}  // namespace
+
+DistributedMesh::DistributedMesh() : reducer_(std::make_unique<Reducer>()), halo_(std::make_unique<Halo>()) {}
+DistributedMesh::~DistributedMesh() = default;
+DistributedMesh::DistributedMesh(DistributedMesh&&) noexcept = default;
+DistributedMesh& DistributedMesh::operator=(DistributedMesh&&) noexcept = default;
+
+DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole, const DistributeOptions& options) {
+    options.validate();
+    DistributedMesh out;
+    out.comm = comm;
+    MPI_Comm_rank(comm, &out.rank);
+    MPI_Comm_size(comm, &out.ranks);
+    const int ranks = out.ranks;
+
+    auto start = Clock::now();
+    std::vector<PartArrays> parts;
+    std::int64_t header[4] = {0, 0, 0, 0};  // kind, global vertices, global elements
+    double normal[3] = {0.0, 0.0, 1.0};
+    on_root_or_fail_everywhere(comm, out.rank, [&] {
+        if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
+        if (whole->num_vertices() < ranks)
+            throw OptionError("cannot distribute a mesh of " + std::to_string(whole->num_vertices()) + " vertices over " +
+                              std::to_string(ranks) + " processes: use at most as many processes as vertices");
+        const Renumbering order = locality_order(*whole);
+        std::vector<GlobalId> canonical(static_cast<std::size_t>(whole->num_vertices()));
+        for (VertexId i = 0; i < whole->num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
+        out.original_vertex_ = order.old_vertex;
+        const auto element_order = detail::canonical_element_positions(*whole, canonical);
+        const auto part = partition_vertices(*whole, ranks);
+        out.timings.partition = seconds_since(start);
+        start = Clock::now();
+        parts = split(*whole, canonical, element_order, part, ranks);
+        header[0] = static_cast<std::int64_t>(whole->kind());
+        header[1] = whole->num_vertices();
+        header[2] = whole->num_elements();
+        normal[0] = whole->plane_normal()[0], normal[1] = whole->plane_normal()[1], normal[2] = whole->plane_normal()[2];
+    });
+    MPI_Bcast(header, 4, MPI_INT64_T, 0, comm);
+    MPI_Bcast(normal, 3, MPI_DOUBLE, 0, comm);
+    out.global_vertices = header[1];
+    out.global_elements = header[2];
+    out.plane_normal = {normal[0], normal[1], normal[2]};
+
+    PartArrays mine;
+    if (out.rank == 0) {
+        for (int p = 1; p < ranks; ++p) {
+            send_vector(parts[p].coordinates, p, 1, comm);
+            send_vector(parts[p].fixed, p, 2, comm);
+            send_vector(parts[p].canonical, p, 3, comm);
+            send_vector(parts[p].owner, p, 4, comm);
+            send_vector(parts[p].connectivity, p, 5, comm);
+            send_vector(parts[p].element_order, p, 6, comm);
+            parts[p] = {};
+        }
+        mine = std::move(parts[0]);
+    } else {
+        mine.coordinates = receive_vector<double>(0, 1, comm);
+        mine.fixed = receive_vector<std::uint8_t>(0, 2, comm);
+        mine.canonical = receive_vector<std::int64_t>(0, 3, comm);
+        mine.owner = receive_vector<std::int32_t>(0, 4, comm);
+        mine.connectivity = receive_vector<std::int32_t>(0, 5, comm);
+        mine.element_order = receive_vector<std::int64_t>(0, 6, comm);
+    }
+    out.mesh = SimplexMesh(static_cast<ElementKind>(header[0]), std::move(mine.coordinates),
+                           std::vector<VertexId>(mine.connectivity.begin(), mine.connectivity.end()));
+    out.mesh.set_fixed(std::move(mine.fixed));
+    out.mesh.set_global_ids(std::vector<GlobalId>(mine.canonical.begin(), mine.canonical.end()));
+    out.vertex_owner.assign(mine.owner.begin(), mine.owner.end());
+    out.element_order = std::move(mine.element_order);
+    // The smallest canonical id is the first corner in local order (vertices are sorted by it).
+    out.counted.resize(static_cast<std::size_t>(out.mesh.num_elements()));
+    for (ElementId e = 0; e < out.mesh.num_elements(); ++e) {
+        const auto corners = out.mesh.element(e);
+        out.counted[e] = out.vertex_owner[*std::min_element(corners.begin(), corners.end())] == out.rank;
+    }
+    MPI_Barrier(comm);
+    out.timings.distribute = seconds_since(start);
+    start = Clock::now();
+    out.build_schedule(options.exchange);
+    out.timings.schedule = seconds_since(start);
+    out.reducer_ = std::make_unique<MpiReducer>(comm);
+    out.halo_ = std::make_unique<MpiHalo>(comm, out.rank, out.ranks, out.schedule);
+    return out;
+}
+
+void DistributedMesh::build_schedule(ExchangeMode mode) {
+    schedule = {};
+    schedule.mode = mode;
+    const auto ids = mesh.global_ids();
+    // Ghosts, grouped by owner (in canonical order within each group).
+    std::vector<std::vector<VertexId>> receive(static_cast<std::size_t>(ranks));
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (vertex_owner[v] != rank) receive[vertex_owner[v]].push_back(v);
+    // Tell each owner which of its vertices this rank holds.
+    std::vector<int> request_counts(static_cast<std::size_t>(ranks)), offer_counts(static_cast<std::size_t>(ranks));
+    for (int p = 0; p < ranks; ++p) request_counts[p] = static_cast<int>(receive[p].size());
+    MPI_Alltoall(request_counts.data(), 1, MPI_INT, offer_counts.data(), 1, MPI_INT, comm);
+    std::vector<int> request_offsets(static_cast<std::size_t>(ranks), 0), offer_offsets(static_cast<std::size_t>(ranks), 0);
+    std::partial_sum(request_counts.begin(), request_counts.end() - 1, request_offsets.begin() + 1);
+    std::partial_sum(offer_counts.begin(), offer_counts.end() - 1, offer_offsets.begin() + 1);
+    std::vector<std::int64_t> requested;
+    for (const auto& list : receive)
+        for (VertexId v : list) requested.push_back(ids[v]);
+    std::vector<std::int64_t> offered(static_cast<std::size_t>(offer_offsets.back() + offer_counts.back()));
+    MPI_Alltoallv(requested.data(), request_counts.data(), request_offsets.data(), MPI_INT64_T, offered.data(),
+                  offer_counts.data(), offer_offsets.data(), MPI_INT64_T, comm);
+
+    std::vector<std::pair<int, int>> my_edges;
+    for (int p = 0; p < ranks; ++p) {
+        if (receive[p].empty() && offer_counts[p] == 0) continue;
+        ExchangePartner partner;
+        partner.rank = p;
+        partner.receive = receive[p];
+        for (int i = 0; i < offer_counts[p]; ++i) {
+            const GlobalId id = offered[offer_offsets[p] + i];
+            const auto it = std::lower_bound(ids.begin(), ids.end(), id);
+            if (it == ids.end() || *it != id || vertex_owner[it - ids.begin()] != rank)
+                throw MeshError("rank " + std::to_string(p) + " holds vertex " + std::to_string(id) + " as owned by rank " +
+                                std::to_string(rank) + ", which does not own it");
+            partner.send.push_back(static_cast<VertexId>(it - ids.begin()));
+        }
+        schedule.partners.push_back(std::move(partner));
+        my_edges.push_back({std::min(rank, p), std::max(rank, p)});
+    }
+    // The whole process graph on every rank, colored the same way everywhere.
+    int mine = static_cast<int>(my_edges.size());
+    std::vector<int> edge_counts(static_cast<std::size_t>(ranks));
+    MPI_Allgather(&mine, 1, MPI_INT, edge_counts.data(), 1, MPI_INT, comm);
+    std::vector<int> edge_offsets(static_cast<std::size_t>(ranks), 0);
+    for (int p = 1; p < ranks; ++p) edge_offsets[p] = edge_offsets[p - 1] + 2 * edge_counts[p - 1];
+    std::vector<int> flat;
+    for (const auto& [a, b] : my_edges) flat.push_back(a), flat.push_back(b);
+    std::vector<int> flat_counts(static_cast<std::size_t>(ranks));
+    for (int p = 0; p < ranks; ++p) flat_counts[p] = 2 * edge_counts[p];
+    std::vector<int> all_flat(static_cast<std::size_t>(edge_offsets.back() + flat_counts.back()));
+    MPI_Allgatherv(flat.data(), static_cast<int>(flat.size()), MPI_INT, all_flat.data(), flat_counts.data(),
+                   edge_offsets.data(), MPI_INT, comm);
+    std::set<std::pair<int, int>> edge_set;
+    for (std::size_t i = 0; i + 1 < all_flat.size(); i += 2) edge_set.insert({all_flat[i], all_flat[i + 1]});
+    const std::vector<std::pair<int, int>> edges(edge_set.begin(), edge_set.end());
+    const auto colors = color_process_graph(ranks, edges);
+    schedule.colors = colors.empty() ? 0 : *std::max_element(colors.begin(), colors.end()) + 1;
+    for (ExchangePartner& p : schedule.partners) {
+        const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(rank, p.rank), std::max(rank, p.rank)});
+        p.color = colors[static_cast<std::size_t>(it - edges.begin())];
+    }
+    std::sort(schedule.partners.begin(), schedule.partners.end(),
+              [](const ExchangePartner& a, const ExchangePartner& b) { return a.color < b.color; });
+}
+
+void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }
+
+void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
+    std::vector<std::int64_t> ids;
+    std::vector<double> xyz;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (vertex_owner[v] == rank) {
+            ids.push_back(mesh.global_ids()[v]);
+            for (int c = 0; c < 3; ++c) xyz.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]);
+        }
+    int count = static_cast<int>(ids.size());
+    std::vector<int> counts(rank == 0 ? ranks : 0), offsets(rank == 0 ? ranks : 0);
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+    std::vector<std::int64_t> all_ids;
+    std::vector<double> all_xyz;
+    std::vector<int> counts3, offsets3;
+    if (rank == 0) {
+        for (int p = 1; p < ranks; ++p) offsets[p] = offsets[p - 1] + counts[p - 1];
+        all_ids.resize(static_cast<std::size_t>(offsets.back() + counts.back()));
+        all_xyz.resize(3 * all_ids.size());
+        for (int p = 0; p < ranks; ++p) counts3.push_back(3 * counts[p]), offsets3.push_back(3 * offsets[p]);
+    }
+    MPI_Gatherv(ids.data(), count, MPI_INT64_T, all_ids.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, comm);
+    MPI_Gatherv(xyz.data(), 3 * count, MPI_DOUBLE, all_xyz.data(), counts3.data(), offsets3.data(), MPI_DOUBLE, 0, comm);
+    if (rank != 0) return;
+    if (!whole || static_cast<GlobalId>(whole->num_vertices()) != global_vertices ||
+        all_ids.size() != static_cast<std::size_t>(global_vertices))
+        throw OptionError("DistributedMesh::gather_coordinates: rank 0 must pass the mesh given to scatter()");
+    auto out = whole->coordinates();
+    for (std::size_t i = 0; i < all_ids.size(); ++i) {
+        const VertexId v = original_vertex_[static_cast<std::size_t>(all_ids[i])];
+        for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(v) + c] = all_xyz[3 * i + c];
+    }
+}
+
+std::int64_t DistributedMesh::received_vertices() const {
+    std::int64_t total = 0;
+    for (const auto& p : schedule.partners) total += static_cast<std::int64_t>(p.receive.size());
+    return total;
+}
+
+std::int64_t DistributedMesh::sent_vertices() const {
+    std::int64_t total = 0;
+    for (const auto& p : schedule.partners) total += static_cast<std::int64_t>(p.send.size());
+    return total;
+}
+
+}  // namespace paloverde

@@ -1,0 +1,192 @@
+// Distributed meshes and solvers: run by CTest on 1, 2 and 4 ranks. Every check compares with
+// the serial computation on the whole mesh, which every rank can do for itself.
+#include <mpi.h>
+
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/parallel/partition.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "support/solver_checks.hpp"
+
+namespace pv = paloverde;
+
+namespace {
+
+struct MpiSession {
+    MpiSession() { MPI_Init(nullptr, nullptr); }
+    ~MpiSession() { MPI_Finalize(); }
+};
+
+int rank() {
+    int r = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &r);
+    return r;
+}
+int ranks() {
+    int n = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &n);
+    return n;
+}
+
+pv::DistributedMesh scatter(const pv::SimplexMesh& whole, pv::ExchangeMode mode = pv::ExchangeMode::Colored) {
+    pv::DistributeOptions options;
+    options.exchange = mode;
+    return pv::DistributedMesh::scatter(MPI_COMM_WORLD, rank() == 0 ? &whole : nullptr, options);
+}
+
+// The largest coordinate difference, relative to the mesh's extent.
+double relative_difference(const pv::SimplexMesh& a, const pv::SimplexMesh& b) {
+    double extent = 0.0, difference = 0.0;
+    for (std::size_t i = 0; i < a.coordinates().size(); ++i) {
+        extent = std::max(extent, std::abs(a.coordinates()[i]));
+        difference = std::max(difference, std::abs(a.coordinates()[i] - b.coordinates()[i]));
+    }
+    return difference / extent;
+}
+
+}  // namespace
+
+BOOST_TEST_GLOBAL_FIXTURE(MpiSession);
+
+BOOST_AUTO_TEST_SUITE(distributed)
+
+BOOST_AUTO_TEST_CASE(every_vertex_owned_once_every_element_counted_once) {
+    const auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    auto part = scatter(whole);
+    long owned = 0, counted = 0;
+    for (int owner : part.vertex_owner) owned += owner == rank();
+    for (auto c : part.counted) counted += c;
+    BOOST_TEST(part.reducer().total(static_cast<double>(owned)) == whole.num_vertices());
+    BOOST_TEST(part.reducer().total(static_cast<double>(counted)) == whole.num_elements());
+    // A rank holds every element of the vertices it owns.
+    for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v)
+        if (part.vertex_owner[v] == rank()) {
+            const auto global = part.mesh.global_ids()[v];
+            (void)global;
+            BOOST_TEST(!part.mesh.elements_of(v).empty());
+        }
+    // No two partners share a color at this rank.
+    for (std::size_t i = 1; i < part.schedule.partners.size(); ++i)
+        BOOST_TEST(part.schedule.partners[i].color != part.schedule.partners[i - 1].color);
+    if (ranks() == 1) BOOST_TEST(part.schedule.partners.empty());
+}
+
+BOOST_AUTO_TEST_CASE(ghosts_receive_their_owners_values_both_ways) {
+    const auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    for (auto mode : {pv::ExchangeMode::Colored, pv::ExchangeMode::RootRelayed}) {
+        auto part = scatter(whole, mode);
+        const pv::VertexId n = part.mesh.num_vertices();
+        std::vector<double> values(2 * static_cast<std::size_t>(n));
+        for (pv::VertexId v = 0; v < n; ++v) {
+            const bool mine = part.vertex_owner[v] == rank();
+            values[2 * v] = mine ? static_cast<double>(part.mesh.global_ids()[v]) : -1.0;
+            values[2 * v + 1] = mine ? 0.5 * rank() : -1.0;
+        }
+        part.halo().update(values, 2);
+        long wrong = 0;
+        for (pv::VertexId v = 0; v < n; ++v)
+            wrong += values[2 * v] != static_cast<double>(part.mesh.global_ids()[v]) ||
+                     values[2 * v + 1] != 0.5 * part.vertex_owner[v];
+        BOOST_TEST(part.reducer().total(static_cast<double>(wrong)) == 0.0);
+    }
+}
+
+BOOST_AUTO_TEST_CASE(gather_returns_the_mesh_and_the_report_equals_the_serial_one) {
+    const auto whole = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.3, 1);
+    auto part = scatter(whole);
+    const pv::QualityAssessor assessor;
+    const auto serial = assessor.assess(whole);
+    const auto distributed = assessor.assess(part);
+    BOOST_TEST(distributed.elements == serial.elements);
+    BOOST_TEST(distributed.vertices == serial.vertices);
+    BOOST_TEST(distributed.free_vertices == serial.free_vertices);
+    BOOST_TEST(distributed.inverted == serial.inverted);
+    BOOST_TEST(distributed.frozen_elements == serial.frozen_elements);
+    for (std::size_t i = 0; i < serial.metrics.size(); ++i) {
+        BOOST_TEST(distributed.metrics[i].movable.min == serial.metrics[i].movable.min);
+        BOOST_TEST(distributed.metrics[i].all.mean == serial.metrics[i].all.mean);
+        BOOST_TEST(distributed.metrics[i].all.histogram == serial.metrics[i].all.histogram);
+    }
+    pv::SimplexMesh copy = whole;
+    for (double& c : copy.coordinates()) c = 0.0;
+    part.gather_coordinates(rank() == 0 ? &copy : nullptr);
+    if (rank() == 0) BOOST_TEST(relative_difference(copy, whole) == 0.0);
+}
+
+// The paper's claim made exact: any number of ranks, the same mesh as the serial run.
+BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
+    for (auto mode : {pv::ExchangeMode::Colored, pv::ExchangeMode::RootRelayed}) {
+        const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.05, 2);
+        pv::GlobalSolverOptions options;
+        options.termination.max_iterations = 12;
+        options.untangle_termination.max_iterations = 150;
+        options.local_untangle_rounds = 0;  // local steps are serial-only
+        pv::SimplexMesh serial = input;
+        const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+
+        pv::SimplexMesh gathered = input;
+        auto part = scatter(input, mode);
+        const auto summary = pv::GlobalSolver(options).improve(part);
+        part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+        BOOST_TEST(summary.iterations == serial_summary.iterations);
+        BOOST_TEST(pv::to_string(summary.reason) == pv::to_string(serial_summary.reason));
+        BOOST_TEST(summary.after.inverted == serial_summary.after.inverted);
+        BOOST_TEST(summary.worst_after == serial_summary.worst_after, boost::test_tools::tolerance(1e-12));
+        BOOST_TEST(summary.after.inverted == 0);
+        if (rank() == 0) {
+            const double difference = relative_difference(gathered, serial);
+            BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report() << "; relative difference " << difference);
+            BOOST_TEST(difference <= 1e-10);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(shape_improvement_on_a_valid_mesh_matches_too) {
+    const auto input = pv::test::shared_mesh("stellar/house2.node");
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 15;
+    pv::SimplexMesh serial = input;
+    const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+    pv::SimplexMesh gathered = input;
+    auto part = scatter(input);
+    const auto summary = pv::GlobalSolver(options).improve(part);
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.iterations == serial_summary.iterations);
+    if (rank() == 0) BOOST_TEST(relative_difference(gathered, serial) <= 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(more_ranks_than_vertices_is_an_error_on_every_rank) {
+    if (ranks() < 2) return;
+    // ranks - 1 vertices (at least one element needs 3; fewer vertices make a mesh of none).
+    std::vector<double> xyz;
+    for (int i = 0; i < ranks() - 1; ++i) xyz.insert(xyz.end(), {double(i), 0.0, 0.0});
+    const pv::SimplexMesh tiny(pv::ElementKind::Triangle, xyz, {});
+    BOOST_CHECK_THROW(scatter(tiny), pv::OptionError);
+}
+
+BOOST_AUTO_TEST_CASE(partition_statistics_count_the_exchange) {
+    const auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    const auto part = pv::partition_vertices(whole, 4);
+    const auto stats = pv::partition_statistics(whole, part, 4);
+    BOOST_TEST(stats.ghost_copies > 0);
+    BOOST_TEST(stats.shared_vertices > 0);
+    BOOST_TEST(stats.shared_vertices <= stats.ghost_copies);
+    BOOST_TEST(stats.colors >= stats.max_neighbours);  // a color per partner at the busiest part
+    BOOST_TEST(stats.process_edges <= 6);
+    BOOST_CHECK_THROW(pv::partition_vertices(whole, 0), pv::OptionError);
+    BOOST_CHECK_THROW(pv::partition_vertices(whole, whole.num_vertices() + 1), pv::OptionError);
+    const auto one = pv::partition_statistics(whole, pv::partition_vertices(whole, 1), 1);
+    BOOST_TEST(one.ghost_copies == 0);
+    BOOST_TEST(one.colors == 0);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

@@ -1,0 +1,77 @@
+// ExactSum: the sum must not depend on the order of the terms or on how partial sums were split
+// and merged, and must be exact where rounding would lose everything.
+#include <boost/test/unit_test.hpp>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "paloverde/core/exact_sum.hpp"
+
+namespace pv = paloverde;
+
+BOOST_AUTO_TEST_SUITE(exact_sum)
+
+BOOST_AUTO_TEST_CASE(keeps_what_rounding_loses) {
+    pv::ExactSum s;
+    for (double x : {1e100, 1.0, -1e100, 1e-300, -1.0}) s.add(x);
+    BOOST_TEST(s.value() == 1e-300);
+    pv::ExactSum tiny;
+    tiny.add(std::numeric_limits<double>::denorm_min());
+    tiny.add(std::numeric_limits<double>::denorm_min());
+    BOOST_TEST(tiny.value() == 2 * std::numeric_limits<double>::denorm_min());
+    pv::ExactSum huge;
+    huge.add(std::numeric_limits<double>::max());
+    huge.add(std::numeric_limits<double>::max());
+    huge.add(-std::numeric_limits<double>::max());
+    BOOST_TEST(huge.value() == std::numeric_limits<double>::max());  // no overflow in between
+    pv::ExactSum negative;
+    negative.add(-3.5);
+    negative.add(1.25);
+    BOOST_TEST(negative.value() == -2.25);
+    BOOST_TEST(pv::ExactSum{}.value() == 0.0);
+}
+
+BOOST_AUTO_TEST_CASE(does_not_depend_on_order_or_split) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-40, 40);
+    std::vector<double> terms(20000);
+    for (double& t : terms) t = std::ldexp(mantissa(random), exponent(random));
+    pv::ExactSum forward;
+    for (double t : terms) forward.add(t);
+    for (int trial = 0; trial < 5; ++trial) {
+        std::shuffle(terms.begin(), terms.end(), random);
+        // Split among "processes" of random sizes, normalized and merged as a reduction does.
+        pv::ExactSum total;
+        std::size_t begin = 0;
+        while (begin < terms.size()) {
+            const std::size_t end = std::min(terms.size(), begin + 1 + random() % 3000);
+            pv::ExactSum part;
+            for (std::size_t i = begin; i < end; ++i) part.add(terms[i]);
+            part.normalize();
+            total += part;
+            begin = end;
+        }
+        BOOST_TEST(total.value() == forward.value());  // bit for bit
+    }
+    // And close to a careful floating-point sum.
+    long double reference = 0.0L;
+    for (double t : terms) reference += t;
+    BOOST_TEST(std::abs(forward.value() - static_cast<double>(reference)) <= 1e-9 * std::abs(static_cast<double>(reference)));
+}
+
+BOOST_AUTO_TEST_CASE(special_values) {
+    pv::ExactSum s;
+    s.add(1.0);
+    s.add(std::numeric_limits<double>::infinity());
+    BOOST_TEST(s.value() == std::numeric_limits<double>::infinity());
+    s.add(-std::numeric_limits<double>::infinity());
+    BOOST_TEST(std::isnan(s.value()));
+    pv::ExactSum n;
+    n.add(std::nan(""));
+    BOOST_TEST(std::isnan(n.value()));
+}
+
+BOOST_AUTO_TEST_SUITE_END()
