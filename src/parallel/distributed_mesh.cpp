@@ -1,12 +1,19 @@
 #include "paloverde/parallel/distributed_mesh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
 #include <numeric>
 #include <set>
 #include <string>
 
+#include "io/xml_reader.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/io/atomic_file.hpp"
+#include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
 #include "solvers/workspace.hpp"
@@ -69,7 +76,53 @@ void on_root_or_fail_everywhere(MPI_Comm comm, int rank, Work work) {
     throw Error(failure);
 }
 
-// The pieces of one rank's part, as rank 0 sends them.
+// Collective: each rank's values, concatenated in rank order on rank 0, with each rank's count.
+struct Gathered {
+    std::vector<std::int64_t> values;
+    std::vector<int> counts;
+};
+Gathered gather_to_root(MPI_Comm comm, const std::vector<std::int64_t>& mine) {
+    int rank = 0, ranks = 1;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &ranks);
+    Gathered out;
+    int count = static_cast<int>(mine.size());
+    if (rank == 0) out.counts.resize(static_cast<std::size_t>(ranks));
+    MPI_Gather(&count, 1, MPI_INT, out.counts.data(), 1, MPI_INT, 0, comm);
+    std::vector<int> offsets(out.counts.size(), 0);
+    for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + out.counts[p - 1];
+    if (rank == 0) out.values.resize(static_cast<std::size_t>(offsets.back() + out.counts.back()));
+    MPI_Gatherv(mine.data(), count, MPI_INT64_T, out.values.data(), out.counts.data(), offsets.data(), MPI_INT64_T, 0, comm);
+    return out;
+}
+// The inverse: rank 0's values cut by `counts`, `expected` of them to each rank.
+std::vector<std::int64_t> scatter_from_root(MPI_Comm comm, const std::vector<std::int64_t>& values,
+                                            const std::vector<int>& counts, std::size_t expected) {
+    std::vector<int> offsets(counts.size(), 0);
+    for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + counts[p - 1];
+    std::vector<std::int64_t> mine(expected);
+    MPI_Scatterv(values.data(), counts.data(), offsets.data(), MPI_INT64_T, mine.data(), static_cast<int>(expected),
+                 MPI_INT64_T, 0, comm);
+    return mine;
+}
+
+// Collective: when any rank failed (a non-empty message), every rank throws the message of the
+// lowest failing rank.
+void agree(MPI_Comm comm, const std::string& failure) {
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    int first = failure.empty() ? std::numeric_limits<int>::max() : rank;
+    MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
+    if (first == std::numeric_limits<int>::max()) return;
+    std::string message = failure;
+    int length = static_cast<int>(message.size());
+    MPI_Bcast(&length, 1, MPI_INT, first, comm);
+    message.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(message.data(), length, MPI_CHAR, first, comm);
+    throw MeshError(message);
+}
+
+// The pieces of one rank's part, as rank 0 sends them or a piece file holds them.
 struct PartArrays {
     std::vector<double> coordinates;
     std::vector<std::uint8_t> fixed;
@@ -248,6 +301,140 @@ std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId
     return parts;
 }
 
+// The whole mesh cut into parts: canonical order, METIS, the parts' arrays.
+struct WholeSplit {
+    std::vector<PartArrays> parts;
+    std::vector<VertexId> original_vertex;  // canonical id -> index in the whole mesh
+};
+
+WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
+    if (whole.num_vertices() < ranks)
+        throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
+                          std::to_string(ranks) + " processes: use at most as many processes as vertices");
+    const Renumbering order = locality_order(whole);
+    std::vector<GlobalId> canonical(static_cast<std::size_t>(whole.num_vertices()));
+    for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
+    const auto element_order = detail::canonical_element_positions(whole, canonical);
+    const auto part = partition_vertices(whole, ranks);
+    return {split(whole, canonical, element_order, part, ranks), order.old_vertex};
+}
+
+// Piece files: the part's mesh with its global ids, owners and which elements it counts.
+const char* const kGlobalIds = "GlobalNodeIds";
+const char* const kOwner = "OwnerRank";
+const char* const kGhostCells = "vtkGhostType";  // 1: counted by another piece (ParaView hides those)
+const char* const kPartition = "PartitionId";
+
+void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
+                 std::span<const std::uint8_t> counted, int piece, bool mesquite_names) {
+    std::vector<Field> points(2), cells(2);
+    points[0].name = mesquite_names ? "GLOBAL_ID" : kGlobalIds;
+    points[1].name = mesquite_names ? "PROCESSOR_ID" : kOwner;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        points[0].values.push_back(static_cast<double>(mesh.global_ids()[v]));
+        points[1].values.push_back(owner[v]);
+    }
+    cells[0].name = kPartition;
+    cells[1].name = kGhostCells;
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        cells[0].values.push_back(piece);
+        cells[1].values.push_back(counted[e] ? 0.0 : 1.0);
+    }
+    write_mesh(path, mesh, {}, points, cells);
+}
+
+// Where piece p of `path` lives: OUT.pvtu -> OUT/OUT_p.vtu; OUT.vtk (Mesquite style) -> OUT_p.vtk.
+std::filesystem::path piece_path(const std::filesystem::path& path, int piece) {
+    const std::string stem = path.stem().string(), number = std::to_string(piece);
+    if (path.extension() == ".pvtu") return path.parent_path() / stem / (stem + "_" + number + ".vtu");
+    return path.parent_path() / (stem + "_" + number + path.extension().string());
+}
+
+void write_pvtu(const std::filesystem::path& path, int pieces) {
+    std::string text =
+        "<?xml version=\"1.0\"?>\n"
+        "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
+        "  <PUnstructuredGrid GhostLevel=\"1\">\n"
+        "    <PPointData>\n";
+    for (const char* name : {"fixed", kGlobalIds, kOwner})
+        text += "      <PDataArray type=\"Float64\" Name=\"" + std::string(name) + "\"/>\n";
+    text += "    </PPointData>\n    <PCellData>\n";
+    for (const char* name : {kPartition, kGhostCells})
+        text += "      <PDataArray type=\"Float64\" Name=\"" + std::string(name) + "\"/>\n";
+    text += "    </PCellData>\n    <PPoints>\n      <PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
+    for (int p = 0; p < pieces; ++p)
+        text += "    <Piece Source=\"" + piece_path(path.filename(), p).generic_string() + "\"/>\n";
+    text += "  </PUnstructuredGrid>\n</VTKFile>\n";
+    write_text_file(path, text);
+}
+
+// The piece files a .pvtu lists (relative to its folder), or the per-rank files of a pattern.
+std::vector<std::filesystem::path> piece_files(const std::filesystem::path& path, int ranks) {
+    std::vector<std::filesystem::path> files;
+    if (path.extension() != ".pvtu") {
+        for (int p = 0; p < ranks; ++p) files.push_back(piece_path(path, p));
+        return files;
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw FileError(path.string(), 0, "cannot open the .pvtu file");
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const io::XmlDocument doc = io::parse_xml(text, path.string(), "AppendedData");
+    for (const io::XmlElement& e : doc.elements)
+        if (e.name == "Piece") {
+            const std::string* source = e.attribute("Source");
+            if (!source) throw FileError(path.string(), e.line, "<Piece> has no Source attribute");
+            files.push_back(path.parent_path() / *source);
+        }
+    return files;
+}
+
+// One rank's piece file as part arrays, vertices sorted by global id.
+PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind& kind) {
+    ReadOptions options;
+    options.fix_boundary = false;
+    MeshFile piece = read_mesh(file, options);
+    const Field* ids = piece.point_field(kGlobalIds);
+    if (!ids) ids = piece.point_field("GLOBAL_ID");
+    const Field* owners = piece.point_field(kOwner);
+    if (!owners) owners = piece.point_field("PROCESSOR_ID");
+    if (!ids || !owners)
+        throw FileError(file.string(), 0, "a piece needs the point fields GlobalNodeIds (or GLOBAL_ID) and OwnerRank "
+                                          "(or PROCESSOR_ID); write pieces with `paloverde partition`");
+    if (!piece.fixed_from_file)
+        throw FileError(file.string(), 0, "a piece needs a `fixed` point field: a piece alone cannot tell the "
+                                          "boundary of the whole mesh");
+    const SimplexMesh& mesh = piece.mesh;
+    kind = mesh.kind();
+    const VertexId n = mesh.num_vertices();
+    for (VertexId v = 0; v < n; ++v) {
+        const double id = ids->values[v], owner = owners->values[v];
+        if (!(id >= 0.0 && id < 9e15 && id == std::floor(id)))
+            throw FileError(file.string(), 0, "vertex " + std::to_string(v) + " has global id " + std::to_string(id) +
+                                                  ", not a non-negative integer");
+        if (!(owner >= 0.0 && owner < ranks && owner == std::floor(owner)))
+            throw FileError(file.string(), 0, "vertex " + std::to_string(v) + " has owner " + std::to_string(owner) +
+                                                  ", not a rank in [0, " + std::to_string(ranks) + ")");
+    }
+    std::vector<VertexId> order(static_cast<std::size_t>(n));
+    std::iota(order.begin(), order.end(), VertexId{0});
+    std::sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return ids->values[a] < ids->values[b]; });
+    std::vector<VertexId> local(static_cast<std::size_t>(n));
+    PartArrays out;
+    for (VertexId i = 0; i < n; ++i) {
+        const VertexId v = order[i];
+        local[v] = i;
+        if (i > 0 && ids->values[v] == ids->values[order[i - 1]])
+            throw FileError(file.string(), 0, "global id " + std::to_string(static_cast<GlobalId>(ids->values[v])) +
+                                                  " appears twice in the piece");
+        for (int c = 0; c < 3; ++c) out.coordinates.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]);
+        out.fixed.push_back(mesh.fixed()[v]);
+        out.canonical.push_back(static_cast<std::int64_t>(ids->values[v]));
+        out.owner.push_back(static_cast<std::int32_t>(owners->values[v]));
+    }
+    for (VertexId v : mesh.connectivity()) out.connectivity.push_back(local[v]);
+    return out;
+}
+
 }  // namespace
 
 DistributedMesh::DistributedMesh() : reducer_(std::make_unique<Reducer>()), halo_(std::make_unique<Halo>()) {}
@@ -264,29 +451,21 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
     const int ranks = out.ranks;
 
     auto start = Clock::now();
-    std::vector<PartArrays> parts;
-    std::int64_t header[4] = {0, 0, 0, 0};  // kind, global vertices, global elements
+    WholeSplit split;
+    std::int64_t header[3] = {0, 0, 0};  // kind, global vertices, global elements
     double normal[3] = {0.0, 0.0, 1.0};
     on_root_or_fail_everywhere(comm, out.rank, [&] {
         if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
-        if (whole->num_vertices() < ranks)
-            throw OptionError("cannot distribute a mesh of " + std::to_string(whole->num_vertices()) + " vertices over " +
-                              std::to_string(ranks) + " processes: use at most as many processes as vertices");
-        const Renumbering order = locality_order(*whole);
-        std::vector<GlobalId> canonical(static_cast<std::size_t>(whole->num_vertices()));
-        for (VertexId i = 0; i < whole->num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
-        out.original_vertex_ = order.old_vertex;
-        const auto element_order = detail::canonical_element_positions(*whole, canonical);
-        const auto part = partition_vertices(*whole, ranks);
-        out.timings.partition = seconds_since(start);
-        start = Clock::now();
-        parts = split(*whole, canonical, element_order, part, ranks);
+        split = split_whole(*whole, ranks);
+        out.original_vertex_ = std::move(split.original_vertex);
         header[0] = static_cast<std::int64_t>(whole->kind());
         header[1] = whole->num_vertices();
         header[2] = whole->num_elements();
         normal[0] = whole->plane_normal()[0], normal[1] = whole->plane_normal()[1], normal[2] = whole->plane_normal()[2];
     });
-    MPI_Bcast(header, 4, MPI_INT64_T, 0, comm);
+    out.timings.partition = seconds_since(start);
+    start = Clock::now();
+    MPI_Bcast(header, 3, MPI_INT64_T, 0, comm);
     MPI_Bcast(normal, 3, MPI_DOUBLE, 0, comm);
     out.global_vertices = header[1];
     out.global_elements = header[2];
@@ -295,15 +474,16 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
     PartArrays mine;
     if (out.rank == 0) {
         for (int p = 1; p < ranks; ++p) {
-            send_vector(parts[p].coordinates, p, 1, comm);
-            send_vector(parts[p].fixed, p, 2, comm);
-            send_vector(parts[p].canonical, p, 3, comm);
-            send_vector(parts[p].owner, p, 4, comm);
-            send_vector(parts[p].connectivity, p, 5, comm);
-            send_vector(parts[p].element_order, p, 6, comm);
-            parts[p] = {};
+            PartArrays& part = split.parts[p];
+            send_vector(part.coordinates, p, 1, comm);
+            send_vector(part.fixed, p, 2, comm);
+            send_vector(part.canonical, p, 3, comm);
+            send_vector(part.owner, p, 4, comm);
+            send_vector(part.connectivity, p, 5, comm);
+            send_vector(part.element_order, p, 6, comm);
+            part = {};
         }
-        mine = std::move(parts[0]);
+        mine = std::move(split.parts[0]);
     } else {
         mine.coordinates = receive_vector<double>(0, 1, comm);
         mine.fixed = receive_vector<std::uint8_t>(0, 2, comm);
@@ -312,28 +492,124 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
         mine.connectivity = receive_vector<std::int32_t>(0, 5, comm);
         mine.element_order = receive_vector<std::int64_t>(0, 6, comm);
     }
-    out.mesh = SimplexMesh(static_cast<ElementKind>(header[0]), std::move(mine.coordinates),
-                           std::vector<VertexId>(mine.connectivity.begin(), mine.connectivity.end()));
-    out.mesh.set_fixed(std::move(mine.fixed));
-    out.mesh.set_global_ids(std::vector<GlobalId>(mine.canonical.begin(), mine.canonical.end()));
-    out.vertex_owner.assign(mine.owner.begin(), mine.owner.end());
-    out.element_order = std::move(mine.element_order);
-    // The smallest canonical id is the first corner in local order (vertices are sorted by it).
-    out.counted.resize(static_cast<std::size_t>(out.mesh.num_elements()));
-    for (ElementId e = 0; e < out.mesh.num_elements(); ++e) {
-        const auto corners = out.mesh.element(e);
-        out.counted[e] = out.vertex_owner[*std::min_element(corners.begin(), corners.end())] == out.rank;
-    }
-    MPI_Barrier(comm);
+    out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
     out.timings.distribute = seconds_since(start);
-    start = Clock::now();
-    out.build_schedule(options.exchange);
-    out.timings.schedule = seconds_since(start);
-    out.reducer_ = std::make_unique<MpiReducer>(comm);
-    out.halo_ = std::make_unique<MpiHalo>(comm, out.rank, out.ranks, out.schedule);
     return out;
 }
 
+DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesystem::path& path,
+                                             const DistributeOptions& options) {
+    options.validate();
+    DistributedMesh out;
+    out.comm = comm;
+    MPI_Comm_rank(comm, &out.rank);
+    MPI_Comm_size(comm, &out.ranks);
+    const auto start = Clock::now();
+    PartArrays mine;
+    ElementKind kind = ElementKind::Tetrahedron;
+    std::string failure;
+    try {
+        const auto files = piece_files(path, out.ranks);
+        if (static_cast<int>(files.size()) != out.ranks)
+            throw OptionError(path.string() + " has " + std::to_string(files.size()) + " pieces; run it on as many " +
+                              "processes (got " + std::to_string(out.ranks) + ")");
+        mine = read_piece(files[static_cast<std::size_t>(out.rank)], out.ranks, kind);
+    } catch (const std::exception& e) {
+        failure = e.what();
+    }
+    agree(comm, failure);
+    int kinds[2] = {static_cast<int>(kind), -static_cast<int>(kind)};
+    MPI_Allreduce(MPI_IN_PLACE, kinds, 2, MPI_INT, MPI_MAX, comm);
+    agree(comm, kinds[0] != -kinds[1] ? "the pieces of " + path.string() + " mix triangles and tetrahedra" : "");
+
+    // Every global id must be owned exactly once, by the rank whose piece says so.
+    std::vector<std::int64_t> owned;
+    for (std::size_t v = 0; v < mine.owner.size(); ++v)
+        if (mine.owner[v] == out.rank) owned.push_back(mine.canonical[v]);
+    const auto all_owned = gather_to_root(comm, owned);
+    std::int64_t counts[2] = {0, 0};  // vertices, elements
+    std::vector<std::int64_t> element_keys;  // sorted global ids per element, padded to 4
+    const int k = corner_count(kind);
+    for (std::size_t e = 0; e < mine.connectivity.size() / k; ++e) {
+        std::array<std::int64_t, 4> key{-1, -1, -1, -1};
+        for (int i = 0; i < k; ++i) key[i] = mine.canonical[mine.connectivity[e * k + i]];
+        std::sort(key.begin(), key.begin() + k);
+        element_keys.insert(element_keys.end(), key.begin(), key.end());
+    }
+    const auto all_keys = gather_to_root(comm, element_keys);
+    std::vector<std::int64_t> positions_flat;
+    std::vector<int> key_counts;
+    failure.clear();
+    if (out.rank == 0) {
+        std::vector<std::int64_t> ids = all_owned.values;
+        std::sort(ids.begin(), ids.end());
+        for (std::size_t i = 0; i < ids.size() && failure.empty(); ++i)
+            if (ids[i] != static_cast<std::int64_t>(i))
+                failure = path.string() + ": global vertex id " + std::to_string(i < ids.size() && ids[i] < static_cast<std::int64_t>(i) ? ids[i] : static_cast<std::int64_t>(i)) +
+                          (ids[i] < static_cast<std::int64_t>(i) ? " is owned by more than one piece" : " is owned by no piece");
+        counts[0] = static_cast<std::int64_t>(ids.size());
+        // Canonical element positions: the elements' keys sorted, duplicates (copies) merged.
+        std::vector<std::array<std::int64_t, 4>> keys(all_keys.values.size() / 4);
+        for (std::size_t i = 0; i < keys.size(); ++i)
+            std::copy_n(all_keys.values.begin() + 4 * i, 4, keys[i].begin());
+        std::vector<std::array<std::int64_t, 4>> unique = keys;
+        std::sort(unique.begin(), unique.end());
+        unique.erase(std::unique(unique.begin(), unique.end()), unique.end());
+        counts[1] = static_cast<std::int64_t>(unique.size());
+        for (const auto& key : keys)
+            positions_flat.push_back(std::lower_bound(unique.begin(), unique.end(), key) - unique.begin());
+        for (int c : all_keys.counts) key_counts.push_back(c / 4);
+    }
+    agree(comm, out.rank == 0 ? failure : "");
+    MPI_Bcast(counts, 2, MPI_INT64_T, 0, comm);
+    out.global_vertices = counts[0];
+    out.global_elements = counts[1];
+    mine.element_order = scatter_from_root(comm, positions_flat, key_counts, element_keys.size() / 4);
+    out.assemble(&mine, kind, options.exchange);
+    // Each element must be counted exactly once: every piece must hold all the elements around
+    // the vertices it owns.
+    double counted = 0.0;
+    for (auto c : out.counted) counted += c;
+    agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements)
+                    ? path.string() + ": the pieces do not hold every element around the vertices they own"
+                    : "");
+    // Ghosts must sit where their owners put them.
+    std::vector<double> xyz(out.mesh.coordinates().begin(), out.mesh.coordinates().end());
+    out.halo().update(xyz, 3);
+    failure.clear();
+    for (VertexId v = 0; v < out.mesh.num_vertices() && failure.empty(); ++v)
+        for (int c = 0; c < 3; ++c)
+            if (xyz[3 * static_cast<std::size_t>(v) + c] != out.mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]) {
+                failure = path.string() + ": vertex " + std::to_string(out.mesh.global_ids()[v]) + " has coordinates in piece " +
+                          std::to_string(out.rank) + " that differ from those in its owner's piece " +
+                          std::to_string(out.vertex_owner[v]);
+                break;
+            }
+    agree(comm, failure);
+    out.timings.distribute = seconds_since(start);
+    return out;
+}
+
+void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode) {
+    PartArrays& mine = *static_cast<PartArrays*>(arrays);
+    mesh = SimplexMesh(kind, std::move(mine.coordinates),
+                       std::vector<VertexId>(mine.connectivity.begin(), mine.connectivity.end()));
+    mesh.set_fixed(std::move(mine.fixed));
+    mesh.set_global_ids(std::vector<GlobalId>(mine.canonical.begin(), mine.canonical.end()));
+    vertex_owner.assign(mine.owner.begin(), mine.owner.end());
+    element_order = std::move(mine.element_order);
+    // The smallest canonical id is the first corner in local order (vertices are sorted by it).
+    counted.resize(static_cast<std::size_t>(mesh.num_elements()));
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto corners = mesh.element(e);
+        counted[e] = vertex_owner[*std::min_element(corners.begin(), corners.end())] == rank;
+    }
+    const auto start = Clock::now();
+    build_schedule(mode);
+    reducer_ = std::make_unique<MpiReducer>(comm);
+    halo_ = std::make_unique<MpiHalo>(comm, rank, ranks, schedule);
+    timings.schedule = seconds_since(start);
+}
 void DistributedMesh::build_schedule(ExchangeMode mode) {
     schedule = {};
     schedule.mode = mode;
@@ -357,6 +633,7 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
                   offer_counts.data(), offer_offsets.data(), MPI_INT64_T, comm);
 
     std::vector<std::pair<int, int>> my_edges;
+    std::string failure;
     for (int p = 0; p < ranks; ++p) {
         if (receive[p].empty() && offer_counts[p] == 0) continue;
         ExchangePartner partner;
@@ -365,14 +642,18 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
         for (int i = 0; i < offer_counts[p]; ++i) {
             const GlobalId id = offered[offer_offsets[p] + i];
             const auto it = std::lower_bound(ids.begin(), ids.end(), id);
-            if (it == ids.end() || *it != id || vertex_owner[it - ids.begin()] != rank)
-                throw MeshError("rank " + std::to_string(p) + " holds vertex " + std::to_string(id) + " as owned by rank " +
-                                std::to_string(rank) + ", which does not own it");
+            if (it == ids.end() || *it != id || vertex_owner[it - ids.begin()] != rank) {
+                if (failure.empty())
+                    failure = "rank " + std::to_string(p) + " holds vertex " + std::to_string(id) + " as owned by rank " +
+                              std::to_string(rank) + ", which does not own it";
+                continue;
+            }
             partner.send.push_back(static_cast<VertexId>(it - ids.begin()));
         }
         schedule.partners.push_back(std::move(partner));
         my_edges.push_back({std::min(rank, p), std::max(rank, p)});
     }
+    agree(comm, failure);
     // The whole process graph on every rank, colored the same way everywhere.
     int mine = static_cast<int>(my_edges.size());
     std::vector<int> edge_counts(static_cast<std::size_t>(ranks));
@@ -397,6 +678,42 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
     }
     std::sort(schedule.partners.begin(), schedule.partners.end(),
               [](const ExchangePartner& a, const ExchangePartner& b) { return a.color < b.color; });
+}
+
+void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
+    std::string failure;
+    try {
+        if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, rank).parent_path());
+        write_piece(piece_path(path, rank), mesh, vertex_owner, counted, rank, path.extension() != ".pvtu");
+        if (rank == 0 && path.extension() == ".pvtu") write_pvtu(path, ranks);
+    } catch (const std::exception& e) {
+        failure = e.what();
+    }
+    agree(comm, failure);
+}
+
+void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path) {
+    if (path.extension() != ".pvtu" && path.extension() != ".vtk")
+        throw OptionError("pieces are written as OUT.pvtu (with OUT/OUT_<rank>.vtu) or Mesquite-style OUT.vtk "
+                          "(OUT_<rank>.vtk); got '" + path.string() + "'");
+    WholeSplit split = split_whole(whole, parts);
+    if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, 0).parent_path());
+    const ElementKind kind = whole.kind();
+    for (int p = 0; p < parts; ++p) {
+        PartArrays& arrays = split.parts[p];
+        SimplexMesh piece(kind, std::move(arrays.coordinates),
+                          std::vector<VertexId>(arrays.connectivity.begin(), arrays.connectivity.end()));
+        piece.set_fixed(std::move(arrays.fixed));
+        piece.set_global_ids(std::vector<GlobalId>(arrays.canonical.begin(), arrays.canonical.end()));
+        std::vector<std::uint8_t> counted(static_cast<std::size_t>(piece.num_elements()));
+        for (ElementId e = 0; e < piece.num_elements(); ++e) {
+            const auto corners = piece.element(e);
+            counted[e] = arrays.owner[*std::min_element(corners.begin(), corners.end())] == p;
+        }
+        const std::vector<int> owner(arrays.owner.begin(), arrays.owner.end());
+        write_piece(piece_path(path, p), piece, owner, counted, p, path.extension() != ".pvtu");
+    }
+    if (path.extension() == ".pvtu") write_pvtu(path, parts);
 }
 
 void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }

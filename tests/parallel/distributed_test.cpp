@@ -3,7 +3,9 @@
 #include <mpi.h>
 
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -187,6 +189,81 @@ BOOST_AUTO_TEST_CASE(partition_statistics_count_the_exchange) {
     const auto one = pv::partition_statistics(whole, pv::partition_vertices(whole, 1), 1);
     BOOST_TEST(one.ghost_copies == 0);
     BOOST_TEST(one.colors == 0);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(pieces)
+
+namespace {
+std::filesystem::path scratch(const std::string& name) {
+    auto dir = std::filesystem::temp_directory_path() / ("paloverde_pieces_" + std::to_string(ranks()));
+    if (rank() == 0) std::filesystem::create_directories(dir);
+    MPI_Barrier(MPI_COMM_WORLD);
+    return dir / name;
+}
+}  // namespace
+
+BOOST_AUTO_TEST_CASE(pieces_written_then_read_give_the_serial_answer) {
+    const auto input = pv::test::shared_mesh("stellar/house2.node");
+    for (const char* name : {"house.pvtu", "house.vtk"}) {
+        const auto path = scratch(name);
+        if (rank() == 0) pv::DistributedMesh::write_partitioned(input, ranks(), path);
+        MPI_Barrier(MPI_COMM_WORLD);
+        auto part = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path);
+        BOOST_TEST(part.global_vertices == input.num_vertices());
+        BOOST_TEST(part.global_elements == input.num_elements());
+        pv::GlobalSolverOptions options;
+        options.termination.max_iterations = 10;
+        const auto summary = pv::GlobalSolver(options).improve(part);
+        pv::SimplexMesh serial = input;
+        const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+        BOOST_TEST(summary.worst_after == serial_summary.worst_after);
+        BOOST_TEST(summary.iterations == serial_summary.iterations);
+        // Written back as pieces and read again: the same coordinates.
+        const auto again_path = scratch(std::string("again_") + name);
+        part.write_pieces(again_path);
+        auto again = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, again_path);
+        BOOST_TEST(again.mesh.num_vertices() == part.mesh.num_vertices());
+        BOOST_TEST(std::equal(again.mesh.coordinates().begin(), again.mesh.coordinates().end(),
+                              part.mesh.coordinates().begin()));
+    }
+}
+
+BOOST_AUTO_TEST_CASE(the_wrong_number_of_pieces_is_an_error_on_every_rank) {
+    const auto input = pv::test::shared_mesh("stellar/house2.node");
+    const auto path = scratch("wrong_count.pvtu");
+    if (rank() == 0) pv::DistributedMesh::write_partitioned(input, ranks() + 1, path);
+    MPI_Barrier(MPI_COMM_WORLD);
+    BOOST_CHECK_EXCEPTION(pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path), pv::MeshError,
+                          [](const pv::MeshError& e) { return std::string(e.what()).find("pieces") != std::string::npos; });
+}
+
+BOOST_AUTO_TEST_CASE(a_vertex_owned_twice_is_an_error_on_every_rank) {
+    if (ranks() < 2) return;
+    const auto input = pv::test::shared_mesh("stellar/house2.node");
+    const auto path = scratch("owned_twice.pvtu");
+    if (rank() == 0) {
+        pv::DistributedMesh::write_partitioned(input, ranks(), path);
+        // Piece 1 claims one of its ghosts (owned by another piece) as its own.
+        const auto piece = path.parent_path() / "owned_twice" / "owned_twice_1.vtu";
+        auto file = pv::read_mesh(piece, {.format = pv::MeshFormat::FromExtension, .fix_boundary = false});
+        auto points = file.point_fields;
+        for (auto& f : points)
+            if (f.name == "OwnerRank")
+                for (double& owner : f.values)
+                    if (owner != 1.0) {
+                        owner = 1.0;
+                        break;
+                    }
+        std::vector<pv::Field> without_fixed;
+        for (auto& f : points)
+            if (f.name != "fixed") without_fixed.push_back(f);
+        pv::write_mesh(piece, file.mesh, {}, without_fixed, file.cell_fields);
+    }
+    MPI_Barrier(MPI_COMM_WORLD);
+    BOOST_CHECK_EXCEPTION(pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path), pv::MeshError,
+                          [](const pv::MeshError& e) { return std::string(e.what()).find("more than one") != std::string::npos; });
 }
 
 BOOST_AUTO_TEST_SUITE_END()

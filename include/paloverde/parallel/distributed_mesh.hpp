@@ -11,6 +11,7 @@
 #include <mpi.h>
 
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -58,6 +59,21 @@ public:
     // nullptr. Throws (on every rank) when the mesh has fewer vertices than there are ranks.
     static DistributedMesh scatter(MPI_Comm comm, const SimplexMesh* whole, const DistributeOptions& options = {});
 
+    // Collective: reads pre-partitioned pieces, one per rank: a .pvtu and the .vtu files it lists,
+    // or Mesquite-style per-rank files OUT_<rank>.vtk for a path OUT.vtk. Each piece holds the
+    // elements around the vertices it owns, with the point fields GlobalNodeIds (or GLOBAL_ID),
+    // OwnerRank (or PROCESSOR_ID) and `fixed`. Pieces that disagree (an id owned twice or by no
+    // piece, a ghost placed elsewhere than by its owner, missing elements, the wrong number of
+    // pieces) are an error on every rank.
+    static DistributedMesh read_pieces(MPI_Comm comm, const std::filesystem::path& path,
+                                       const DistributeOptions& options = {});
+    // Collective: writes this distributed mesh as pieces (see read_pieces); rank 0 writes the
+    // .pvtu. Each piece has a PartitionId cell field, and vtkGhostType marks the elements another
+    // piece counts, so ParaView shows each element once, colored by rank.
+    void write_pieces(const std::filesystem::path& path) const;
+    // Serial: cuts `whole` into `parts` pieces as scatter() would, and writes them.
+    static void write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path);
+
     // Collective: rank 0 passes the mesh it gave to scatter(), whose coordinates become the
     // owners' current ones; the other ranks pass nullptr.
     void gather_coordinates(SimplexMesh* whole) const;
@@ -89,6 +105,8 @@ public:
     DistributedMesh& operator=(DistributedMesh&&) noexcept;
 
 private:
+    // Builds the part from its arrays (an internal type), then the schedule and the reductions.
+    void assemble(void* arrays, ElementKind kind, ExchangeMode mode);
     void build_schedule(ExchangeMode mode);
     std::unique_ptr<Reducer> reducer_;
     std::unique_ptr<Halo> halo_;

@@ -1,0 +1,109 @@
+#include "paloverde/parallel/distributed_run.hpp"
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+
+namespace paloverde {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// Runs `work` on rank 0; a failure there is thrown on every rank.
+template <class Work>
+void on_root(MPI_Comm comm, int rank, Work work) {
+    std::string failure;
+    if (rank == 0) {
+        try {
+            work();
+        } catch (const std::exception& e) {
+            failure = e.what();
+            if (failure.empty()) failure = "unknown error";
+        }
+    }
+    int length = static_cast<int>(failure.size());
+    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
+    if (length == 0) return;
+    failure.resize(static_cast<std::size_t>(length));
+    MPI_Bcast(failure.data(), length, MPI_CHAR, 0, comm);
+    throw Error(failure);
+}
+}  // namespace
+
+void DistributedRunOptions::validate() const {
+    if (input.empty()) throw OptionError("a distributed run needs an input mesh or pieces");
+    distribute.validate();
+}
+
+DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, GlobalSolver& solver) {
+    options.validate();
+    DistributedRunReport report;
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    MPI_Comm_size(comm, &report.ranks);
+    report.exchange = options.distribute.exchange == ExchangeMode::Colored ? "colored" : "root_relayed";
+
+    const bool pieces = options.pieces || options.input.extension() == ".pvtu";
+    SimplexMesh whole;  // rank 0, whole-file runs
+    auto start = Clock::now();
+    DistributedMesh part;
+    if (pieces) {
+        part = DistributedMesh::read_pieces(comm, options.input, options.distribute);
+        report.read_seconds = part.timings.distribute;  // reading and checking the pieces
+    } else {
+        on_root(comm, rank, [&] {
+            ReadOptions read;
+            read.fix_boundary = options.fix_boundary;
+            whole = read_mesh(options.input, read).mesh;
+        });
+        report.read_seconds = seconds_since(start);
+        part = DistributedMesh::scatter(comm, rank == 0 ? &whole : nullptr, options.distribute);
+    }
+    report.timings = part.timings;
+    const double local[2] = {static_cast<double>(part.received_vertices()), static_cast<double>(part.schedule.partners.size())};
+    report.ghost_copies = static_cast<std::int64_t>(part.reducer().total(local[0]));
+    report.messages = static_cast<std::int64_t>(part.reducer().total(local[1]));
+    report.colors = part.schedule.colors;
+
+    MPI_Barrier(comm);
+    start = Clock::now();
+    report.summary = solver.improve(part);
+    report.solve_seconds = part.reducer().max(seconds_since(start));
+
+    start = Clock::now();
+    if (!options.output.empty()) {
+        if (options.output.extension() == ".pvtu") {
+            part.write_pieces(options.output);
+        } else {
+            if (pieces)
+                throw OptionError("a run from pieces writes pieces: give an output ending in .pvtu (got '" +
+                                  options.output.string() + "')");
+            part.gather_coordinates(rank == 0 ? &whole : nullptr);
+            on_root(comm, rank, [&] { write_mesh(options.output, whole); });
+        }
+    }
+    report.write_seconds = part.reducer().max(seconds_since(start));
+    return report;
+}
+
+std::string DistributedRunReport::to_json() const {
+    nlohmann::json j = nlohmann::json::parse(summary.to_json());
+    j["parallel"] = {{"ranks", ranks},
+                     {"exchange", exchange},
+                     {"colors", colors},
+                     {"ghost_copies", ghost_copies},
+                     {"messages_per_exchange", messages},
+                     {"seconds",
+                      {{"read", read_seconds},
+                       {"partition", timings.partition},
+                       {"distribute", timings.distribute},
+                       {"schedule", timings.schedule},
+                       {"solve", solve_seconds},
+                       {"write", write_seconds}}}};
+    return j.dump(2);
+}
+
+}  // namespace paloverde
