@@ -6,6 +6,7 @@
 #include <limits>
 #include <vector>
 
+#include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "local_untangle.hpp"
@@ -167,26 +168,80 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 Summary LocalSolver::improve(SimplexMesh& mesh) {
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(mesh, std::string(name()), options_.metric);
+    if (auto nothing = run.nothing_to_move()) return *nothing;
+    const Reducer serial_reducer;
+    const Halo no_ghosts;
+    Domain domain{mesh, detail::movable_elements(mesh), serial_reducer, no_ghosts,
+                  color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
+    return sweep_colors(run, domain);
+}
+
+Summary LocalSolver::improve(DistributedMesh& part) {
+    detail::ThreadScope threads(options_.threads);
+    detail::SolverRun run(part, std::string(name()), options_.metric);
+    if (auto nothing = run.nothing_to_move()) return *nothing;
+    std::vector<ElementId> counted;
+    for (ElementId e : detail::movable_elements(part.mesh))
+        if (part.counted[e]) counted.push_back(e);
+    VertexColoring coloring = color_vertices(part);
+    // A rank moves only the vertices it owns.
+    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v)
+        if (part.vertex_owner[v] != part.rank) coloring.color[v] = -1;
+    MetricScale scale = MetricScale::of(part.mesh);
+    {
+        // The whole mesh's mean element volume.
+        auto volume = make_metric("scaled_volume");
+        MetricScale unit = scale;
+        unit.reference_volume = 1.0;
+        unit.plane_normal = part.plane_normal;
+        volume->set_scale(unit);
+        ExactSum sums[2];
+        double v = 0.0;
+        for (ElementId e = 0; e < part.mesh.num_elements(); ++e)
+            if (part.counted[e]) {
+                volume->evaluate(part.mesh, part.mesh.coordinates(), e, e + 1, &v);
+                sums[0].add(std::abs(v));
+                sums[1].add(1.0);
+            }
+        part.reducer().sum(sums);
+        if (sums[0].value() > 0.0 && std::isfinite(sums[0].value())) scale.reference_volume = sums[0].value() / sums[1].value();
+        scale.plane_normal = part.plane_normal;
+    }
+    Domain domain{part.mesh, std::move(counted), part.reducer(), part.halo(), std::move(coloring), scale};
+    return sweep_colors(run, domain);
+}
+
+Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) {
+    const SimplexMesh& mesh = domain.mesh;
+    const Reducer& reducer = domain.reducer;
     Summary& summary = run.summary;
     const auto start = run.start();
-
-    if (auto nothing = run.nothing_to_move()) return *nothing;
-    const std::vector<ElementId> movable = detail::movable_elements(mesh);
-
-    const VertexColoring coloring = color_vertices(mesh, options_.coloring);
+    const std::vector<ElementId>& movable = domain.counted_movable;
+    const VertexColoring& coloring = domain.coloring;
     const auto classes = coloring.classes();
     const std::string colors = " (" + std::to_string(coloring.count) + " colors)";
-    const MetricScale scale = MetricScale::of(mesh);
+    const MetricScale& scale = domain.scale;
     auto metric = make_metric(options_.metric, options_.metric_options);
     metric->set_scale(scale);
     // The untangling ascent maximizes the smallest signed volume, which is linear in the vertex.
     auto volume = make_metric("scaled_volume", options_.metric_options);
     volume->set_scale(scale);
+    // Whole-mesh figures: every process stops at the same sweep.
+    auto count_inverted = [&](std::span<const double> at) {
+        return static_cast<long>(reducer.total(static_cast<double>(detail::count_not_positive(mesh, at, movable))));
+    };
+    auto elapsed = [&] { return reducer.max(seconds_since(start)); };
 
     std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
     std::vector<double> scratch;
     auto record = [&](const char* phase, const QualityMetric& m, long inverted, int moved, double best) {
-        const detail::SweepStats s = detail::sweep_stats(m, mesh, xyz, movable, scratch);
+        detail::SweepStats s = detail::sweep_stats(m, mesh, xyz, movable, scratch);
+        ExactSum sums[2];
+        for (double q : scratch) sums[0].add(q);
+        sums[1].add(static_cast<double>(scratch.size()));
+        reducer.sum(sums);
+        s.worst = reducer.min(scratch.empty() ? std::numeric_limits<double>::infinity() : s.worst);
+        s.mean = sums[0].value() / std::max(1.0, sums[1].value());
         ++summary.quality_passes;
         IterationRecord r;
         r.iteration = summary.iterations;
@@ -201,7 +256,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
         return s;
     };
     auto done = [&](TerminationReason reason, std::string message) {
-        std::copy(xyz.begin(), xyz.end(), mesh.coordinates().begin());
+        std::copy(xyz.begin(), xyz.end(), run.coordinates().begin());
         if (summary.before.inverted_frozen > 0 && reason != TerminationReason::CannotUntangle)
             return run.finish(TerminationReason::CannotUntangle,
                               std::to_string(summary.before.inverted_frozen) +
@@ -209,10 +264,13 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
         return run.finish(reason, message + colors);
     };
     // One pass over the colors; within a color every vertex's update reads only vertices of
-    // other colors, so the parallel loop gives the same result for any thread count.
+    // other colors, so the parallel loop gives the same result for any thread count. After each
+    // color, ghosts take their owners' new positions.
     auto sweep = [&](auto&& visit) {
         int moved = 0;
-        for (const auto& members : classes) {
+        for (std::size_t c = 0; c < static_cast<std::size_t>(coloring.count); ++c) {
+            static const std::vector<VertexId> none;
+            const auto& members = c < classes.size() ? classes[c] : none;
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
@@ -221,11 +279,12 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
                 for (std::ptrdiff_t i = 0; i < count; ++i)
                     moved += visit(members[static_cast<std::size_t>(i)], shape, untangle);
             }
+            domain.halo.update(xyz, 3);
         }
-        return moved;
+        return static_cast<int>(reducer.total(static_cast<double>(moved)));
     };
 
-    long inverted = detail::count_not_positive(mesh, xyz, movable);
+    long inverted = count_inverted(xyz);
     if (inverted > 0 && !options_.untangle)
         return done(TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off");
     if (inverted > 0) {
@@ -237,7 +296,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
                 return done(TerminationReason::CannotUntangle, "untangling stopped after " +
                                                                    std::to_string(stop.max_iterations) +
                                                                    " sweeps with elements still inverted");
-            if (stop.max_seconds > 0.0 && seconds_since(start) > stop.max_seconds)
+            if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
                 return done(TerminationReason::TimeLimit, "time limit reached while untangling");
             const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent) {
                 bool touches_inverted = false;
@@ -251,7 +310,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
             });
             ++summary.iterations;
             ++summary.untangle_iterations;
-            inverted = detail::count_not_positive(mesh, xyz, movable);
+            inverted = count_inverted(xyz);
             const double worst = record("untangle", *volume, inverted, moved, worst_history.back()).worst;
             inverted_history.push_back(inverted);
             worst_history.push_back(std::max(worst, worst_history.back()));
@@ -278,7 +337,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
         if (s > stop.max_iterations)
             return done(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop.max_iterations) + " sweeps");
-        if (stop.max_seconds > 0.0 && seconds_since(start) > stop.max_seconds)
+        if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
             return done(TerminationReason::TimeLimit, "time limit reached");
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&) {
@@ -286,7 +345,7 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
             return ascent.improve(xyz, v) ? 1 : 0;
         });
         ++summary.iterations;
-        const detail::SweepStats st = record("shape", *metric, detail::count_not_positive(mesh, xyz, movable), moved, best);
+        const detail::SweepStats st = record("shape", *metric, count_inverted(xyz), moved, best);
         best = std::max(best, st.worst);
         best_history.push_back(best);
         if (moved == 0) return done(TerminationReason::Converged, "no vertex can raise its worst element any more");

@@ -70,6 +70,8 @@ public:
     SolverRun& operator=(const SolverRun&) = delete;
 
     Clock::time_point start() const { return start_; }
+    // The mesh's coordinates, at unit scale until finish().
+    std::span<double> coordinates() { return mesh_.coordinates(); }
 
     // The checks every solver makes before moving anything: a finished Summary when there is
     // nothing to move (no elements, no free vertex, no element with one); a MeshError for a

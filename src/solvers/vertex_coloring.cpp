@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "paloverde/mesh/renumber.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
 
@@ -112,6 +113,61 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
             }
     }
     return true;
+}
+
+VertexColoring color_vertices(const DistributedMesh& part) {
+    const SimplexMesh& mesh = part.mesh;
+    const VertexId n = mesh.num_vertices();
+    const auto fixed = mesh.fixed();
+    const auto ids = mesh.global_ids();
+    // SplitMix64 of the global id: a priority that looks random (few rounds) yet is the same on
+    // every rank.
+    auto priority = [&](VertexId v) {
+        std::uint64_t z = static_cast<std::uint64_t>(ids[v]) + 0x9e3779b97f4a7c15ULL;
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+        return std::pair{z ^ (z >> 31), ids[v]};
+    };
+    const VertexGraph graph = vertex_graph(mesh);
+    std::vector<double> color(static_cast<std::size_t>(n), -1.0);  // doubles: they travel through the halo
+    std::vector<std::pair<VertexId, int>> chosen;
+    std::vector<char> used;
+    for (;;) {
+        chosen.clear();
+        double uncolored = 0.0;
+        for (VertexId v = 0; v < n; ++v) {
+            if (fixed[v] || part.vertex_owner[v] != part.rank || color[v] >= 0.0) continue;
+            uncolored += 1.0;
+            bool first = true;
+            used.assign(1, 0);
+            for (auto i = graph.offsets[v]; i < graph.offsets[v + 1] && first; ++i) {
+                const VertexId w = graph.neighbours[i];
+                if (fixed[w]) continue;
+                if (color[w] < 0.0) first = priority(w) < priority(v);
+                else {
+                    const auto c = static_cast<std::size_t>(color[w]);
+                    if (c >= used.size()) used.resize(c + 1, 0);
+                    used[c] = 1;
+                }
+            }
+            if (!first) continue;
+            int c = 0;
+            while (static_cast<std::size_t>(c) < used.size() && used[static_cast<std::size_t>(c)]) ++c;
+            chosen.push_back({v, c});
+        }
+        if (part.reducer().total(uncolored) == 0.0) break;
+        for (const auto& [v, c] : chosen) color[v] = c;
+        part.halo().update(color, 1);
+    }
+    VertexColoring result;
+    result.color.resize(static_cast<std::size_t>(n));
+    int count = 0;
+    for (VertexId v = 0; v < n; ++v) {
+        result.color[v] = fixed[v] ? -1 : static_cast<int>(color[v]);
+        count = std::max(count, result.color[v] + 1);
+    }
+    result.count = static_cast<int>(part.reducer().max(count));
+    return result;
 }
 
 }  // namespace paloverde

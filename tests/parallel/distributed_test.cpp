@@ -15,6 +15,7 @@
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/parallel/partition.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 #include "support/solver_checks.hpp"
 
 namespace pv = paloverde;
@@ -264,6 +265,81 @@ BOOST_AUTO_TEST_CASE(a_vertex_owned_twice_is_an_error_on_every_rank) {
     MPI_Barrier(MPI_COMM_WORLD);
     BOOST_CHECK_EXCEPTION(pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path), pv::MeshError,
                           [](const pv::MeshError& e) { return std::string(e.what()).find("more than one") != std::string::npos; });
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(distributed_local)
+
+BOOST_AUTO_TEST_CASE(coloring_is_proper_and_independent_of_the_rank_count) {
+    const auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    auto part = scatter(whole);
+    const auto coloring = pv::color_vertices(part);
+    // Proper on every local element (ghosts carry their owners' colors).
+    long clashes = 0;
+    for (pv::ElementId e = 0; e < part.mesh.num_elements(); ++e) {
+        const auto corners = part.mesh.element(e);
+        for (std::size_t i = 0; i < corners.size(); ++i)
+            for (std::size_t j = i + 1; j < corners.size(); ++j)
+                clashes += coloring.color[corners[i]] >= 0 && coloring.color[corners[i]] == coloring.color[corners[j]];
+    }
+    BOOST_TEST(part.reducer().total(static_cast<double>(clashes)) == 0.0);
+    // The same colors as a one-rank run, vertex by vertex.
+    const auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &whole);
+    const auto reference = pv::color_vertices(alone);
+    long different = 0;
+    for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v) {
+        const auto id = part.mesh.global_ids()[v];
+        const auto ids = alone.mesh.global_ids();
+        const auto at = std::lower_bound(ids.begin(), ids.end(), id) - ids.begin();
+        different += coloring.color[v] != reference.color[static_cast<std::size_t>(at)];
+    }
+    BOOST_TEST(part.reducer().total(static_cast<double>(different)) == 0.0);
+    BOOST_TEST(coloring.count == reference.count);
+}
+
+BOOST_AUTO_TEST_CASE(untangles_and_never_makes_the_worst_element_worse) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.05, 3);
+    auto part = scatter(input);
+    pv::LocalSolverOptions options;
+    options.termination.max_iterations = 5;
+    const auto summary = pv::LocalSolver(options).improve(part);
+    BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted > 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    pv::SimplexMesh gathered = input;
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    if (rank() == 0) {
+        BOOST_TEST(pv::count_orientations(gathered).inverted == 0);
+        const auto after = pv::QualityAssessor().assess(gathered);
+        BOOST_TEST(after.metric("aspect_ratio")->movable.min == summary.worst_after);
+    }
+    // Ghosts sit where their owners put them.
+    std::vector<double> xyz(part.mesh.coordinates().begin(), part.mesh.coordinates().end());
+    part.halo().update(xyz, 3);
+    BOOST_TEST(std::equal(xyz.begin(), xyz.end(), part.mesh.coordinates().begin()));
+}
+
+BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
+    const auto input = pv::test::shared_mesh("stellar/house2.node");
+    pv::LocalSolverOptions options;
+    options.termination.max_iterations = 8;
+    auto part = scatter(input);
+    const auto summary = pv::LocalSolver(options).improve(part);
+    pv::SimplexMesh serial = input;
+    const auto serial_summary = pv::LocalSolver(options).improve(serial);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    BOOST_TEST(summary.after.inverted == 0);
+    // A different (global) coloring visits vertices in another order: close, not equal.
+    BOOST_TEST(summary.worst_after >= 0.8 * serial_summary.worst_after);
+    BOOST_TEST_MESSAGE(ranks() << " ranks: local " << summary.worst_after << " vs serial " << serial_summary.worst_after);
+    // Colors and updates do not depend on the split: the same mesh as on one rank.
+    auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input);
+    pv::LocalSolver(options).improve(alone);
+    pv::SimplexMesh from_one = input, from_all = input;
+    alone.gather_coordinates(&from_one);
+    part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
+    if (rank() == 0) BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -10,9 +10,14 @@
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
 
 namespace paloverde {
+
+namespace detail {
+class SolverRun;
+}
 
 struct LocalSolverOptions {
     std::string metric = "aspect_ratio";
@@ -41,8 +46,24 @@ public:
     std::string_view name() const override { return "local"; }
     // Summary::message ends with the number of colors, e.g. "(12 colors)".
     Summary improve(SimplexMesh& mesh) override;
+    // Collective: each rank moves the vertices it owns; the coloring is global, and after each
+    // color the ghosts take their owners' new positions. (Not bitwise the serial result: the
+    // coloring differs from the serial smallest-last one.)
+    Summary improve(DistributedMesh& part);
 
 private:
+    // What a sweep needs of the mesh: the elements whose statistics this process counts, the
+    // reductions and ghost updates (no-ops serially), the colors of the vertices it moves.
+    struct Domain {
+        const SimplexMesh& mesh;
+        std::vector<ElementId> counted_movable;
+        const Reducer& reducer;
+        const Halo& halo;
+        VertexColoring coloring;
+        MetricScale scale;
+    };
+    Summary sweep_colors(detail::SolverRun& run, const Domain& domain);
+
     LocalSolverOptions options_;
 };
 

@@ -9,6 +9,8 @@
 
 namespace paloverde {
 
+class DistributedMesh;
+
 enum class ColoringOrder {
     Greedy,       // first fit in vertex id order
     SmallestLast  // first fit in smallest-last order: usually fewer colors
@@ -22,6 +24,12 @@ struct VertexColoring {
 };
 
 VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order = ColoringOrder::SmallestLast);
+
+// Collective: a coloring of the whole distributed mesh (Jones & Plassmann: in rounds, each free
+// vertex whose uncolored neighbours all have lower priority takes the smallest color its
+// neighbours do not have; priorities are a hash of the global id). Every rank learns the colors
+// of its ghosts; the colors do not depend on the number of ranks. `count` is global.
+VertexColoring color_vertices(const DistributedMesh& part);
 
 // Whether every free vertex has a color in [0, count), every fixed vertex -1, and no element
 // holds two free vertices of the same color.
