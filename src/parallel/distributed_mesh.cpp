@@ -437,7 +437,8 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
 
 }  // namespace
 
-DistributedMesh::DistributedMesh() : reducer_(std::make_unique<Reducer>()), halo_(std::make_unique<Halo>()) {}
+DistributedMesh::DistributedMesh()
+    : schedule_(std::make_unique<ExchangeSchedule>()), reducer_(std::make_unique<Reducer>()), halo_(std::make_unique<Halo>()) {}
 DistributedMesh::~DistributedMesh() = default;
 DistributedMesh::DistributedMesh(DistributedMesh&&) noexcept = default;
 DistributedMesh& DistributedMesh::operator=(DistributedMesh&&) noexcept = default;
@@ -607,10 +608,11 @@ void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode
     const auto start = Clock::now();
     build_schedule(mode);
     reducer_ = std::make_unique<MpiReducer>(comm);
-    halo_ = std::make_unique<MpiHalo>(comm, rank, ranks, schedule);
+    halo_ = std::make_unique<MpiHalo>(comm, rank, ranks, *schedule_);
     timings.schedule = seconds_since(start);
 }
 void DistributedMesh::build_schedule(ExchangeMode mode) {
+    ExchangeSchedule& schedule = *schedule_;
     schedule = {};
     schedule.mode = mode;
     const auto ids = mesh.global_ids();
@@ -753,13 +755,13 @@ void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
 
 std::int64_t DistributedMesh::received_vertices() const {
     std::int64_t total = 0;
-    for (const auto& p : schedule.partners) total += static_cast<std::int64_t>(p.receive.size());
+    for (const auto& p : schedule_->partners) total += static_cast<std::int64_t>(p.receive.size());
     return total;
 }
 
 std::int64_t DistributedMesh::sent_vertices() const {
     std::int64_t total = 0;
-    for (const auto& p : schedule.partners) total += static_cast<std::int64_t>(p.send.size());
+    for (const auto& p : schedule_->partners) total += static_cast<std::int64_t>(p.send.size());
     return total;
 }
 

@@ -1,6 +1,7 @@
 #include "paloverde/parallel/distributed_run.hpp"
 
 #include <chrono>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "paloverde/core/error.hpp"
@@ -38,7 +39,9 @@ void DistributedRunOptions::validate() const {
     distribute.validate();
 }
 
-DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, GlobalSolver& solver) {
+namespace {
+DistributedRunReport run(MPI_Comm comm, const DistributedRunOptions& options,
+                         const std::function<Summary(DistributedMesh&)>& improve) {
     options.validate();
     DistributedRunReport report;
     int rank = 0;
@@ -63,14 +66,14 @@ DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOpti
         part = DistributedMesh::scatter(comm, rank == 0 ? &whole : nullptr, options.distribute);
     }
     report.timings = part.timings;
-    const double local[2] = {static_cast<double>(part.received_vertices()), static_cast<double>(part.schedule.partners.size())};
+    const double local[2] = {static_cast<double>(part.received_vertices()), static_cast<double>(part.schedule().partners.size())};
     report.ghost_copies = static_cast<std::int64_t>(part.reducer().total(local[0]));
     report.messages = static_cast<std::int64_t>(part.reducer().total(local[1]));
-    report.colors = part.schedule.colors;
+    report.colors = part.schedule().colors;
 
     MPI_Barrier(comm);
     start = Clock::now();
-    report.summary = solver.improve(part);
+    report.summary = improve(part);
     report.solve_seconds = part.reducer().max(seconds_since(start));
 
     start = Clock::now();
@@ -87,6 +90,15 @@ DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOpti
     }
     report.write_seconds = part.reducer().max(seconds_since(start));
     return report;
+}
+}  // namespace
+
+DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, GlobalSolver& solver) {
+    return run(comm, options, [&](DistributedMesh& part) { return solver.improve(part); });
+}
+
+DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, LocalSolver& solver) {
+    return run(comm, options, [&](DistributedMesh& part) { return solver.improve(part); });
 }
 
 std::string DistributedRunReport::to_json() const {

@@ -13,6 +13,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/parallel/distributed_run.hpp"
 #include "paloverde/parallel/partition.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
@@ -76,15 +77,16 @@ BOOST_AUTO_TEST_CASE(every_vertex_owned_once_every_element_counted_once) {
             BOOST_TEST(!part.mesh.elements_of(v).empty());
         }
     // No two partners share a color at this rank.
-    for (std::size_t i = 1; i < part.schedule.partners.size(); ++i)
-        BOOST_TEST(part.schedule.partners[i].color != part.schedule.partners[i - 1].color);
-    if (ranks() == 1) BOOST_TEST(part.schedule.partners.empty());
+    for (std::size_t i = 1; i < part.schedule().partners.size(); ++i)
+        BOOST_TEST(part.schedule().partners[i].color != part.schedule().partners[i - 1].color);
+    if (ranks() == 1) BOOST_TEST(part.schedule().partners.empty());
 }
 
 BOOST_AUTO_TEST_CASE(ghosts_receive_their_owners_values_both_ways) {
     const auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
     for (auto mode : {pv::ExchangeMode::Colored, pv::ExchangeMode::RootRelayed}) {
-        auto part = scatter(whole, mode);
+        pv::DistributedMesh part;
+        part = scatter(whole, mode);  // moved in: the halo must follow
         const pv::VertexId n = part.mesh.num_vertices();
         std::vector<double> values(2 * static_cast<std::size_t>(n));
         for (pv::VertexId v = 0; v < n; ++v) {
@@ -340,6 +342,34 @@ BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
     alone.gather_coordinates(&from_one);
     part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
     if (rank() == 0) BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(distributed_run)
+
+// The command line's path: read on rank 0, solve on all, gather and write one file.
+BOOST_AUTO_TEST_CASE(a_whole_run_writes_the_serial_answer) {
+    const auto input_path = pv::test::shared_data("stellar/house2.node");
+    const auto input = pv::read_mesh(input_path).mesh;
+    const auto output = std::filesystem::temp_directory_path() / ("paloverde_run_" + std::to_string(ranks()) + ".vtk");
+    pv::DistributedRunOptions options;
+    options.input = input_path;
+    options.output = output;
+    pv::GlobalSolverOptions solver_options;
+    solver_options.termination.max_iterations = 10;
+    pv::GlobalSolver solver(solver_options);
+    const auto report = pv::improve_distributed(MPI_COMM_WORLD, options, solver);
+    BOOST_TEST(report.ranks == ranks());
+    BOOST_TEST(report.summary.after.inverted == 0);
+    if (ranks() == 1) BOOST_TEST(report.ghost_copies == 0);
+    else BOOST_TEST(report.ghost_copies > 0);
+    if (rank() == 0) {
+        pv::SimplexMesh serial = input;
+        pv::GlobalSolver(solver_options).improve(serial);
+        const auto written = pv::read_mesh(output).mesh;
+        BOOST_TEST(relative_difference(written, serial) <= 1e-10);
+    }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

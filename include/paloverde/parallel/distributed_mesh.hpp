@@ -92,7 +92,9 @@ public:
     std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank
     GlobalId global_vertices = 0, global_elements = 0;
     Vec3 plane_normal{0.0, 0.0, 1.0};     // triangle meshes: the whole mesh's plane
-    ExchangeSchedule schedule;
+    // Partners and send/receive lists. (Held on the heap: the halo refers to it, and a moved
+    // DistributedMesh must keep working.)
+    const ExchangeSchedule& schedule() const { return *schedule_; }
     DistributeTimings timings;
 
     // Communication counts (this rank): ghost values it receives per exchange, messages per exchange.
@@ -108,6 +110,7 @@ private:
     // Builds the part from its arrays (an internal type), then the schedule and the reductions.
     void assemble(void* arrays, ElementKind kind, ExchangeMode mode);
     void build_schedule(ExchangeMode mode);
+    std::unique_ptr<ExchangeSchedule> schedule_;
     std::unique_ptr<Reducer> reducer_;
     std::unique_ptr<Halo> halo_;
     // Rank 0 only: for each canonical vertex id, its index in the mesh given to scatter().

@@ -11,6 +11,7 @@
 
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 
 namespace paloverde {
 
@@ -41,5 +42,6 @@ struct DistributedRunReport {
 // Collective over `comm`; every rank returns the same report. Errors (unreadable input, bad
 // pieces, options) are thrown on every rank.
 DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, GlobalSolver& solver);
+DistributedRunReport improve_distributed(MPI_Comm comm, const DistributedRunOptions& options, LocalSolver& solver);
 
 }  // namespace paloverde
