@@ -29,7 +29,7 @@ with tempfile.TemporaryDirectory() as scratch:
         for method in METHODS:
             history, summary = os.path.join(scratch, "h.csv"), os.path.join(scratch, "s.json")
             done = subprocess.run([args.paloverde, "improve", mesh, "-o", os.path.join(scratch, "out.vtu"), "--method",
-                                   method, "--history", history, "--json", summary, "--threads", args.threads, "-q"])
+                                   method, "--history", history, "--summary", summary, "--threads", args.threads, "-q"])
             if done.returncode not in (0, 3):
                 print(f"{mesh} {method}: paloverde exited {done.returncode}")
                 continue

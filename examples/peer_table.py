@@ -25,7 +25,7 @@ with tempfile.TemporaryDirectory() as scratch:
     for mesh in MESHES:
         summary_file = os.path.join(scratch, "summary.json")
         subprocess.run([args.paloverde, "improve", os.path.join(args.data, mesh), "-o", os.path.join(scratch, "out.vtu"),
-                        "--json", summary_file, "--threads", args.threads, "-q"], check=True)
+                        "--summary", summary_file, "--threads", args.threads, "-q"], check=True)
         s = json.load(open(summary_file))
         before, after = s["before"]["metrics"], s["after"]["metrics"]
         row = [os.path.basename(mesh), s["before"]["elements"],

@@ -19,6 +19,7 @@ PACKAGES=(
   libopenmesh-dev                     # the OpenMesh adapter
   libboost-test-dev                   # tests
   libcli11-dev nlohmann-json3-dev     # command line, JSON
+  libyaml-cpp-dev                     # config files (paloverde run)
   zlib1g-dev                          # compressed .vtu
   python3-matplotlib                  # plots of examples/compare_methods.py
   tetgen                              # benchmark meshes (docs/global_solver.md)

@@ -1,8 +1,13 @@
 #pragma once
 // One function per subcommand of the `paloverde` program; each adds itself to the app and runs
-// when chosen. Exit codes: 0 done, 1 error, 2 bad usage, 3 finished but the target was not
-// reached while the mesh is still valid.
+// when chosen. Exit codes (docs/cli.md): 0 done, 1 error (unreadable input, a solver that could
+// not untangle, an unwritable output), 2 bad usage (a flag, a config key or value), 3 finished
+// but a target was not reached while the mesh is still valid.
 #include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+#include "paloverde/config/config.hpp"
 
 namespace paloverde::cli {
 
@@ -12,5 +17,20 @@ void add_quality_command(CLI::App& app, int& exit_code);
 void add_convert_command(CLI::App& app, int& exit_code);
 void add_improve_command(CLI::App& app, int& exit_code);
 void add_perturb_command(CLI::App& app, int& exit_code);
+void add_run_command(CLI::App& app, int& exit_code);
+void add_partition_command(CLI::App& app, int& exit_code);
+
+// What `run` and `improve` share: how to report.
+struct ReportFlags {
+    bool print_config = false;  // print the resolved config instead of running
+    bool json = false;          // the summary as JSON on stdout instead of the text report
+    bool quiet = false;         // nothing but errors (and --json's output)
+    std::vector<std::string> sets;  // --set key.path=value, in order
+
+    void add_to(CLI::App& command);
+};
+
+// Runs (or prints) a resolved config and returns the exit code.
+int execute(const config::RunSpec& spec, const ReportFlags& flags);
 
 }  // namespace paloverde::cli

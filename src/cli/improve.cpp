@@ -1,111 +1,116 @@
-#include <iostream>
 #include <memory>
 #include <string>
 
 #include "commands.hpp"
-#include "paloverde/assess/quality_assessor.hpp"
-#include "paloverde/core/error.hpp"
-#include "paloverde/io/atomic_file.hpp"
-#include "paloverde/io/mesh_io.hpp"
-#include "paloverde/solvers/global_solver.hpp"
-#include "paloverde/solvers/laplace_solver.hpp"
-#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/config/registry.hpp"
 
 namespace paloverde::cli {
 
+namespace {
+// The help of a registry option, so a flag and its config key say the same thing.
+std::string help_of(std::string_view kind, std::string_view name, std::string_view key) {
+    for (const auto& option : config::describe(kind, name).options)
+        if (option.key == key) return option.help;
+    return "";
+}
+}  // namespace
+
+// `improve` is a one-step run: each flag stands for a config key (docs/cli.md lists them), so
+// `--print-config` turns a command line into the equivalent config file.
 void add_improve_command(CLI::App& app, int& exit_code) {
-    // Options bind straight to the solver's options struct: one set of defaults.
     struct Options {
-        std::string input, output, history, json, method = "global";
-        bool untangle_only = false, no_untangle = false, quiet = false, ascii = false, steepest = false;
-        std::optional<double> target;
-        GlobalSolverOptions solver;
-        LocalSolverOptions local;
+        std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads;
+        std::string iterations, target, time_limit, barrier_shrink, improve_below;
+        bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
+        ReportFlags report;
     };
     auto o = std::make_shared<Options>();
-    GlobalSolverOptions& s = o->solver;
     CLI::App* cmd = app.add_subcommand(
-        "improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's quality");
-    cmd->add_option("input", o->input, "Mesh to improve")->required();
-    cmd->add_option("-o,--output", o->output, "Where to write the improved mesh (.vtk .vtu .msh .mesh)")->required();
+        "improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's quality: a run of "
+                   "one improve step, each flag a config key (see --print-config)");
+    std::vector<std::string> methods = config::names_of("solver");
+    methods.push_back("smart-laplace");  // the spelling of earlier versions
+    cmd->add_option("input", o->input, "Mesh to improve (input.mesh)")->required()->type_name("IN");
+    cmd->add_option("-o,--output", o->output, "Where to write the improved mesh, .vtk .vtu .msh .mesh (output.mesh)")
+        ->required()
+        ->type_name("OUT");
     cmd->add_option("--method", o->method,
-                    "Solver: global (log-barrier over the whole mesh), local (Freitag-Plassmann max-min per vertex, "
-                    "by colors), smart-laplace, or laplace (may invert elements)")
-        ->check(CLI::IsMember({"global", "local", "laplace", "smart-laplace"}))
-        ->capture_default_str();
-    cmd->add_option("--improve-below", o->local.improve_below,
-                    "Local method: move only vertices whose worst element is in this lowest fraction of the range worst..ideal")
-        ->capture_default_str();
-    cmd->add_option("--iterations", s.termination.max_iterations, "Most shape-improvement iterations")
-        ->capture_default_str();
-    cmd->add_flag("--untangle", o->untangle_only, "Only untangle: stop once no element is inverted");
-    cmd->add_flag("--no-untangle", o->no_untangle, "Do not untangle; only improve a mesh that is already valid");
-    cmd->add_flag("--steepest", o->steepest, "Steepest ascent instead of conjugate gradient directions");
-    cmd->add_option("--objective", s.objective, "Objective: log_barrier, p_mean or min_quality")->capture_default_str();
-    cmd->add_option("--metric", s.shape_metric, "Shape metric: aspect_ratio, mean_ratio, inverse_condition, edge_ratio")
-        ->capture_default_str();
-    cmd->add_option("--barrier-shrink", s.objective_options.barrier_shrink,
-                    "Log-barrier: mu is multiplied by this after each round of steps, in (0, 1]")
-        ->capture_default_str();
-    cmd->add_option("--target", o->target, "Stop once the worst quality reaches this value");
-    cmd->add_option("--time-limit", s.termination.max_seconds, "Stop after this many seconds (0: no limit)");
-    cmd->add_option("--threads", s.threads, "Threads (0: OpenMP's default); results do not depend on it");
-    cmd->add_option("--history", o->history, "Write the per-iteration history as CSV");
-    cmd->add_option("--json", o->json, "Write the summary as JSON");
-    cmd->add_flag("--ascii", o->ascii, "Write the mesh as text where the format has a binary form");
-    cmd->add_flag("-q,--quiet", o->quiet, "Print nothing but errors");
+                    "Solver (queue[0].improve.name): global (log-barrier over the whole mesh, the default), local "
+                    "(Freitag-Plassmann max-min per vertex, by colors), smart_laplace, or laplace (may invert elements)")
+        ->check(CLI::IsMember(methods))
+        ->type_name("NAME");
+    cmd->add_option("--iterations", o->iterations,
+                    "termination.max_iterations: " + help_of("termination", "termination", "max_iterations"))
+        ->type_name("N");
+    cmd->add_option("--target", o->target,
+                    "termination.target_worst_quality: " + help_of("termination", "termination", "target_worst_quality"))
+        ->type_name("Q");
+    cmd->add_option("--time-limit", o->time_limit,
+                    "termination.max_seconds (and untangle_termination.max_seconds): stop after this many seconds")
+        ->type_name("SECONDS");
+    cmd->add_flag("--untangle", o->untangle_only, "Only untangle: stop once no element is inverted (improve_shape: false; global)");
+    cmd->add_flag("--no-untangle", o->no_untangle, "Do not untangle; only improve a mesh that is already valid (untangle: false)");
+    cmd->add_flag("--steepest", o->steepest, "Steepest ascent instead of conjugate gradient directions (direction; global)");
+    cmd->add_option("--metric", o->metric, "metric: " + help_of("solver", "global", "metric"))
+        ->type_name("NAME");
+    cmd->add_option("--objective", o->objective, "objective: " + help_of("solver", "global", "objective"))
+        ->type_name("NAME");
+    cmd->add_option("--barrier-shrink", o->barrier_shrink,
+                    "objective.barrier_shrink: " + help_of("objective", "log_barrier", "barrier_shrink"))
+        ->type_name("X");
+    cmd->add_option("--improve-below", o->improve_below, "improve_below (local): " + help_of("solver", "local", "improve_below"))
+        ->type_name("X");
+    cmd->add_option("--fixed", o->fixed, "input.fixed: auto, boundary, file or none (which vertices stay put)")
+        ->type_name("MODE");
+    cmd->add_option("--threads", o->threads, "threads: threads of the solver; 0: OpenMP's default. Results do not depend on it")
+        ->type_name("N");
+    cmd->add_option("--history", o->history, "output.history: write the per-iteration history as CSV")
+        ->type_name("FILE");
+    cmd->add_option("--summary", o->summary, "output.summary: write the run's summary as JSON")
+        ->type_name("FILE");
+    cmd->add_option("--table", o->table, "output.table: write one CSV row with the outcome")
+        ->type_name("FILE");
+    cmd->add_option("--plot", o->plot, "output.plot: plot the worst quality per iteration and over time (SVG)")
+        ->type_name("FILE");
+    cmd->add_flag("--ascii", o->ascii, "output.ascii: write the mesh as text where the format has a binary form");
+    o->report.add_to(*cmd);
+    cmd->footer("Exit codes: 0 done, 1 error (including \"could not untangle\"), 2 bad usage, 3 --target not reached "
+                "(the mesh is valid).");
     cmd->callback([o, &exit_code] {
-        GlobalSolverOptions options = o->solver;
-        if (o->steepest) options.direction = GlobalSolverOptions::Direction::SteepestAscent;
-        options.untangle = !o->no_untangle;
-        options.improve_shape = !o->untangle_only;
-        options.untangle_termination.max_seconds = options.termination.max_seconds;
-        options.termination.target_worst_quality = o->target;
-        // Each solver is built (and its options validated) before the mesh is read.
-        std::unique_ptr<Solver> solver;
-        if (o->method == "global") {
-            solver = std::make_unique<GlobalSolver>(options);
-        } else if (o->method == "local") {
-            if (o->untangle_only) throw OptionError("--untangle: only the global method stops after untangling");
-            LocalSolverOptions local = o->local;
-            local.metric = options.shape_metric;
-            local.untangle = options.untangle;
-            local.termination.max_iterations = options.termination.max_iterations;
-            local.termination.max_seconds = options.termination.max_seconds;
-            local.termination.target_worst_quality = o->target;
-            local.untangle_termination.max_seconds = options.termination.max_seconds;
-            local.threads = options.threads;
-            solver = std::make_unique<LocalSolver>(local);
-        } else {
-            if (o->untangle_only || o->no_untangle)
-                throw OptionError("--untangle/--no-untangle: the Laplace methods do not untangle");
-            LaplaceSolverOptions laplace;
-            laplace.smart = o->method == "smart-laplace";
-            laplace.metric = options.shape_metric;
-            laplace.termination.max_iterations = options.termination.max_iterations;
-            laplace.termination.max_seconds = options.termination.max_seconds;
-            laplace.termination.target_worst_quality = o->target;
-            laplace.threads = options.threads;
-            solver = std::make_unique<LaplaceSolver>(laplace);
+        std::vector<config::Override> set;
+        auto flag = [&](const std::string& key, const std::string& value, const std::string& source, bool literal = false) {
+            set.push_back({key + "=" + value, source, literal});
+        };
+        const std::string step = "queue[0].improve.";
+        std::string method = o->method;
+        for (char& c : method)
+            if (c == '-') c = '_';
+        flag("input.mesh", o->input, "input", true);
+        flag("output.mesh", o->output, "--output", true);
+        if (!method.empty()) flag(step + "name", method, "--method");
+        if (!o->iterations.empty()) flag(step + "termination.max_iterations", o->iterations, "--iterations");
+        if (!o->target.empty()) flag(step + "termination.target_worst_quality", o->target, "--target");
+        if (!o->time_limit.empty()) {
+            flag(step + "termination.max_seconds", o->time_limit, "--time-limit");
+            if (method.empty() || method == "global" || method == "local")
+                flag(step + "untangle_termination.max_seconds", o->time_limit, "--time-limit");
         }
-
-        MeshFile file = read_mesh(o->input);
-        const Summary summary = solver->improve(file.mesh);
-
-        WriteOptions write;
-        write.encoding = o->ascii ? Encoding::Ascii : Encoding::Binary;
-        write_mesh(o->output, file.mesh, write, file.point_fields);
-        if (!o->history.empty()) write_text_file(o->history, summary.history_csv());
-        if (!o->json.empty()) write_text_file(o->json, summary.to_json() + "\n");
-        if (!o->quiet) std::cout << summary.full_report();
-        if (!summary.success()) {
-            std::cerr << "paloverde: " << summary.message << "\n";
-            exit_code = kError;
-        } else if (o->target && summary.reason != TerminationReason::TargetReached) {
-            exit_code = kTargetNotReached;
-        } else {
-            exit_code = kDone;
-        }
+        if (o->untangle_only) flag(step + "improve_shape", "false", "--untangle");
+        if (o->no_untangle) flag(step + "untangle", "false", "--no-untangle");
+        if (o->steepest) flag(step + "direction", "steepest_ascent", "--steepest");
+        if (!o->metric.empty()) flag(step + "metric.name", o->metric, "--metric");
+        if (!o->objective.empty()) flag(step + "objective.name", o->objective, "--objective");
+        if (!o->barrier_shrink.empty()) flag(step + "objective.barrier_shrink", o->barrier_shrink, "--barrier-shrink");
+        if (!o->improve_below.empty()) flag(step + "improve_below", o->improve_below, "--improve-below");
+        if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
+        if (!o->threads.empty()) flag("threads", o->threads, "--threads");
+        if (!o->history.empty()) flag("output.history", o->history, "--history", true);
+        if (!o->summary.empty()) flag("output.summary", o->summary, "--summary", true);
+        if (!o->table.empty()) flag("output.table", o->table, "--table", true);
+        if (!o->plot.empty()) flag("output.plot", o->plot, "--plot", true);
+        if (o->ascii) flag("output.ascii", "true", "--ascii");
+        for (const auto& s : o->report.sets) set.push_back({s, "--set"});
+        exit_code = execute(config::parse_config("", "improve", set), o->report);
     });
 }
 

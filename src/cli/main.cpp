@@ -1,4 +1,5 @@
 #include <iostream>
+#include <string_view>
 
 #include "commands.hpp"
 #include "paloverde/core/error.hpp"
@@ -12,10 +13,20 @@ int main(int argc, char** argv) {
     add_improve_command(app, exit_code);
     add_convert_command(app, exit_code);
     add_perturb_command(app, exit_code);
+    add_run_command(app, exit_code);
+    add_partition_command(app, exit_code);
+    app.footer("Exit codes: 0 done, 1 error, 2 bad usage, 3 finished but a target was not reached (the mesh is "
+               "valid). Run `paloverde COMMAND --help` for a command's options; docs/cli.md and docs/config.md.");
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         const int code = app.exit(e);
+        // Earlier versions took a file name after `improve --json`.
+        if (dynamic_cast<const CLI::ExtrasError*>(&e))
+            for (int i = 1; i + 1 < argc; ++i)
+                if (std::string_view(argv[i]) == "--json")
+                    std::cerr << "paloverde: --json prints the summary on stdout; write it to a file with --summary "
+                              << argv[i + 1] << "\n";
         return code == 0 ? kDone : kUsage;
     } catch (const paloverde::OptionError& e) {
         std::cerr << "paloverde: " << e.what() << "\n";

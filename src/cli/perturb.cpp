@@ -1,4 +1,5 @@
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <memory>
 #include <string>
 
@@ -12,7 +13,7 @@ namespace paloverde::cli {
 void add_perturb_command(CLI::App& app, int& exit_code) {
     struct Options {
         std::string input, output;
-        bool boundary = false, only_boundary = false, quiet = false, ascii = false;
+        bool boundary = false, only_boundary = false, quiet = false, ascii = false, json = false;
         PerturbOptions perturb;
     };
     auto o = std::make_shared<Options>();
@@ -27,6 +28,7 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
     cmd->add_flag("--boundary", o->boundary, "Also move fixed (boundary) vertices");
     cmd->add_flag("--only-boundary", o->only_boundary, "Move only fixed (boundary) vertices, as the seed paper did");
     cmd->add_flag("--ascii", o->ascii, "Write text where the format has a binary form");
+    cmd->add_flag("--json", o->json, "Print what was done as JSON (moved, elements, inverted, degenerate)");
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing but errors");
     cmd->callback([o, &exit_code] {
         PerturbOptions options = o->perturb;
@@ -39,8 +41,13 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
         write.encoding = o->ascii ? Encoding::Ascii : Encoding::Binary;
         // The fixed flags travel with the mesh, so the boundary stays what it was.
         write_mesh(o->output, file.mesh, write, file.point_fields, file.cell_fields);
-        if (!o->quiet) {
-            const auto counts = count_orientations(file.mesh);
+        const auto counts = count_orientations(file.mesh);
+        if (o->json) {
+            std::cout << nlohmann::json{{"output", o->output}, {"moved", moved}, {"elements", file.mesh.num_elements()},
+                                        {"inverted", counts.inverted}, {"degenerate", counts.degenerate}}
+                             .dump(2)
+                      << "\n";
+        } else if (!o->quiet) {
             std::cout << "moved " << moved << " vertices; " << counts.inverted << " of " << file.mesh.num_elements()
                       << " elements inverted, " << counts.degenerate << " degenerate\n";
         }

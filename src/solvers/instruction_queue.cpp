@@ -14,8 +14,33 @@ InstructionQueue& InstructionQueue::assess(std::string label, QualityAssessor as
 InstructionQueue& InstructionQueue::improve(std::unique_ptr<Solver> solver) {
     if (!solver) throw OptionError("InstructionQueue::improve needs a solver, got none");
     std::string label(solver->name());
+    return improve(std::move(label), std::move(solver));
+}
+
+InstructionQueue& InstructionQueue::improve(std::string label, std::unique_ptr<Solver> solver) {
+    if (!solver) throw OptionError("InstructionQueue::improve needs a solver, got none");
     steps_.push_back({std::move(label), nullptr, std::shared_ptr<Solver>(std::move(solver))});
+    attach(steps_.back());
     return *this;
+}
+
+InstructionQueue& InstructionQueue::append(const InstructionQueue& other) {
+    for (const Instruction& step : other.steps_) {
+        steps_.push_back(step);
+        attach(steps_.back());
+    }
+    return *this;
+}
+
+InstructionQueue& InstructionQueue::observe(StepObserver observer) {
+    observer_ = std::move(observer);
+    for (const Instruction& step : steps_) attach(step);
+    return *this;
+}
+
+void InstructionQueue::attach(const Instruction& step) const {
+    if (!step.solver || !observer_) return;
+    step.solver->set_observer([observer = observer_, label = step.label](const IterationRecord& r) { observer(label, r); });
 }
 
 QueueResult InstructionQueue::run(SimplexMesh& mesh) const {

@@ -40,7 +40,7 @@ BOOST_AUTO_TEST_CASE(improve_untangles_writes_history_and_json_and_exits_zero) {
     const pv::test::ScratchDir dir("cli_improve");
     const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
     const auto result = run_cli("improve " + quoted(input) + " -o " + quoted(dir / "out.vtu") + " --history " +
-                                quoted(dir / "h.csv") + " --json " + quoted(dir / "s.json"));
+                                quoted(dir / "h.csv") + " --summary " + quoted(dir / "s.json"));
     BOOST_TEST_INFO(result.output);
     BOOST_TEST_REQUIRE(result.exit_code == 0);
     BOOST_TEST(pv::read_mesh(dir / "out.vtu").mesh.num_elements() == 408);
@@ -57,7 +57,7 @@ BOOST_AUTO_TEST_CASE(improve_method_selects_the_solver) {
     const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
     for (const std::string method : {"global", "local", "smart-laplace", "laplace"}) {
         const auto result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --method " +
-                                    method + " --iterations 5 --json " + quoted(dir / "s.json"));
+                                    method + " --iterations 5 --summary " + quoted(dir / "s.json"));
         BOOST_TEST_INFO(method << ": " << result.output);
         const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
         std::string name = method == "smart-laplace" ? "smart_laplace" : method;

@@ -1,4 +1,6 @@
 #include <boost/test/unit_test.hpp>
+#include <string>
+#include <vector>
 
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
@@ -47,6 +49,23 @@ BOOST_AUTO_TEST_CASE(shape_improvers_refuse_a_tangled_mesh_and_improve_a_valid_o
         BOOST_TEST(report(result, 2).inverted == 0);
         BOOST_TEST(report(result, 2).metric("aspect_ratio")->movable.min >= report(result, 0).metric("aspect_ratio")->movable.min);
     }
+}
+
+BOOST_AUTO_TEST_CASE(queues_label_their_steps_and_tell_an_observer) {
+    auto mesh = tangled();
+    auto queue = pv::wrappers::untangle_then_improve();
+    std::vector<std::string> seen;
+    queue.observe([&](std::string_view label, const pv::IterationRecord&) {
+        if (seen.empty() || seen.back() != label) seen.emplace_back(label);
+    });
+    pv::InstructionQueue longer;
+    longer.append(queue).assess("end");
+    const auto result = longer.run(mesh);
+    BOOST_REQUIRE(result.steps.size() == 5u);
+    BOOST_TEST(result.steps[1].label == "untangle");
+    BOOST_TEST(result.steps[2].label == "global");
+    BOOST_TEST(result.steps[4].label == "end");
+    BOOST_TEST((seen == std::vector<std::string>{"untangle", "global"}));
 }
 
 BOOST_AUTO_TEST_SUITE_END()

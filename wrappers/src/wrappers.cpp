@@ -1,13 +1,17 @@
 #include "paloverde/wrappers.hpp"
 
 #include <memory>
+#include <string>
 
 namespace paloverde::wrappers {
 
 namespace {
-InstructionQueue around(std::unique_ptr<Solver> solver) {
+InstructionQueue around(std::unique_ptr<Solver> solver, std::string label = {}) {
     InstructionQueue queue;
-    queue.assess("before").improve(std::move(solver)).assess("after");
+    queue.assess("before");
+    if (label.empty()) queue.improve(std::move(solver));
+    else queue.improve(std::move(label), std::move(solver));
+    queue.assess("after");
     return queue;
 }
 }  // namespace
@@ -15,7 +19,7 @@ InstructionQueue around(std::unique_ptr<Solver> solver) {
 InstructionQueue untangle(GlobalSolverOptions options) {
     options.untangle = true;
     options.improve_shape = false;
-    return around(std::make_unique<GlobalSolver>(options));
+    return around(std::make_unique<GlobalSolver>(options), "untangle");
 }
 
 InstructionQueue shape_improvement(GlobalSolverOptions options) {
@@ -38,7 +42,7 @@ InstructionQueue untangle_then_improve(GlobalSolverOptions options) {
     options.improve_shape = true;
     InstructionQueue queue;
     queue.assess("before")
-        .improve(std::make_unique<GlobalSolver>(untangling))
+        .improve("untangle", std::make_unique<GlobalSolver>(untangling))
         .improve(std::make_unique<GlobalSolver>(options))
         .assess("after");
     return queue;

@@ -3,8 +3,10 @@
 // (solvers), in Mesquite's sense. A queue stops at the first improver that fails (it could not
 // untangle, or had nothing to move), so later steps never work on a mesh in an unexpected state;
 // the result says which step stopped it and why.
+#include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <variant>
 #include <vector>
 
@@ -25,10 +27,20 @@ struct QueueResult {
     std::string report() const;  // assessments as tables, summaries as brief reports
 };
 
+// Told of each iteration of every improver of a queue, with the improver's label.
+using StepObserver = std::function<void(std::string_view label, const IterationRecord&)>;
+
 class InstructionQueue {
 public:
     InstructionQueue& assess(std::string label, QualityAssessor assessor = QualityAssessor());
+    // Labelled with the solver's name, or with `label`.
     InstructionQueue& improve(std::unique_ptr<Solver> solver);
+    InstructionQueue& improve(std::string label, std::unique_ptr<Solver> solver);
+    // The steps of `other`, after these (its solvers are shared, not copied).
+    InstructionQueue& append(const InstructionQueue& other);
+    // Sets the observer of every improver of the queue, also those added later. Copies of a queue
+    // share their solvers, and so the observer.
+    InstructionQueue& observe(StepObserver observer);
     std::size_t size() const { return steps_.size(); }
 
     QueueResult run(SimplexMesh& mesh) const;
@@ -39,7 +51,10 @@ private:
         std::shared_ptr<const QualityAssessor> assessor;  // one of the two is set
         std::shared_ptr<Solver> solver;
     };
+    void attach(const Instruction& step) const;
+
     std::vector<Instruction> steps_;
+    StepObserver observer_;
 };
 
 }  // namespace paloverde

@@ -1,7 +1,8 @@
 #pragma once
 // Ready-made instruction queues for the everyday jobs (Mesquite's wrappers): each assesses the
 // mesh, runs its improver(s) and assesses again. Tune the parts through the options structs; run
-// with `queue.run(mesh)`.
+// with `queue.run(mesh)`. A run config names them the same (`queue: untangle_then_improve`, or a
+// `wrapper:` step with the options of the solver; docs/config.md).
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/instruction_queue.hpp"
 #include "paloverde/solvers/laplace_solver.hpp"

@@ -1,0 +1,524 @@
+// The registry: every metric, objective, termination criterion, solver, assessor and wrapper by
+// name, each option declared once here.
+#include <algorithm>
+#include <sstream>
+
+#include "config/registry_internal.hpp"
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/wrappers.hpp"
+
+namespace paloverde::config {
+namespace detail {
+namespace {
+
+// What each metric is (docs/metrics.md has the details).
+const std::vector<std::pair<std::string, std::string>>& metric_help() {
+    static const std::vector<std::pair<std::string, std::string>> help{
+        {"aspect_ratio", "72 sqrt(3) V / L^(3/2) (triangles: 4 sqrt(3) A / L), L the sum of squared edge lengths; "
+                         "range [-1, 1], ideal 1 (regular simplex), <= 0 when inverted. The seed paper's metric."},
+        {"mean_ratio", "sign(V) 12 (3|V|)^(2/3) / L (triangles: as aspect_ratio); range [-1, 1], ideal 1."},
+        {"inverse_condition", "3 det S / (|S|_F |adj S|_F), S the map from the regular element; range [-1, 1], ideal 1."},
+        {"edge_ratio", "sign(V) l_min / l_max; range [-1, 1], ideal 1; not smooth where two edges tie."},
+        {"scaled_volume", "V / V_ref, V_ref the mean absolute element volume (area) of the mesh; any value, no ideal (1: an "
+                          "element of average size)."},
+        {"untangle_hybrid", "w v + (1 - w) q, v = V / V_ref, q the aspect ratio, w = 1 / (1 + e^(hybrid_sharpness v)); "
+                            "> 0 exactly when valid, 1 for the regular element of reference size. The untangling metric."},
+        {"min_dihedral_deg", "smallest dihedral angle in degrees, negative if inverted; tetrahedra; range [-70.53, 70.53], ideal 70.53. "
+                             "No gradient: for assessments and smart Laplace."},
+        {"min_angle_deg", "smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal 60. No gradient: for "
+                          "assessments and smart Laplace."},
+    };
+    return help;
+}
+
+
+const std::vector<std::pair<std::string, std::string>>& objective_help() {
+    static const std::vector<std::pair<std::string, std::string>> help{
+        {"log_barrier", "F(mu, t) = t + mu sum_i log(q_i - t), t < min q (Sastry & Shontz): t climbs to the worst "
+                        "quality as mu shrinks."},
+        {"p_mean", "(1/n sum_i q_i^p)^(1/p) (Mesquite's LPtoP, normalized); p < 0 stresses the worst elements; "
+                   "positive qualities only."},
+        {"min_quality", "The worst quality (Mesquite's LInf): nonsmooth, for comparison."},
+    };
+    return help;
+}
+
+std::vector<std::string> names_in(const std::vector<std::pair<std::string, std::string>>& list) {
+    std::vector<std::string> out;
+    for (const auto& [n, h] : list) out.push_back(n);
+    return out;
+}
+
+// A sub-object chosen by name with options that depend on the name: `objective: log_barrier` or
+// `objective: {name: p_mean, p: -4}`. The name and the options live in two fields of T.
+template <class T, class O>
+typename Table<T>::Field named_field(std::string key, std::string kind, std::string help, std::string T::*name_member,
+                                     O T::*options_member, std::function<std::vector<std::string>()> names,
+                                     std::function<const Table<O>&(const std::string&)> table_of,
+                                     std::function<void(const std::string&, const O&)> validate) {
+    typename Table<T>::Field f;
+    f.key = key;
+    f.type = std::string("name of a") + (kind == "objective" ? "n " : " ") + kind + ", or a map: name and the " + kind + "'s options";
+    f.help = std::move(help);
+    f.read = [=](T& t, const Node& n, const std::string& p, const Reader& r) {
+        auto check = [&](const Location& where, const std::string& path, const std::string& k) {
+            try {
+                validate(t.*name_member, t.*options_member);
+            } catch (const ConfigError&) {
+                throw;
+            } catch (const OptionError& e) {
+                fail_at(e, where, path, k);
+            }
+        };
+        if (n.is_null()) return;
+        if (n.kind == Node::Kind::Scalar) {
+            t.*name_member = one_of(n, p, names(), kind);
+            return check(n.where, p, key);
+        }
+        if (!n.is_map())
+            fail(n.where, p, "expected the name of a " + kind + " or a map (name: ... and its options), got " +
+                                 n.describe());
+        if (const Node* name = n.find("name")) {
+            const std::string np = child_path(p, "name");
+            t.*name_member = one_of(*name, np, names(), kind);
+            r.record(np, name->where);
+            check(name->where, np, "name");
+        }
+        const Table<O>& table = table_of(t.*name_member);
+        for (const auto& e : n.entries) {
+            if (e.key == "name") continue;
+            const std::string ep = child_path(p, e.key);
+            const auto* field = table.field(e.key);
+            if (!field) {
+                std::vector<std::string> owners;
+                for (const auto& other : names())
+                    if (other != t.*name_member && table_of(other).field(e.key)) owners.push_back(other);
+                std::string message = table.unknown_key(e.key, {}, {"name"});
+                if (!owners.empty())
+                    message = "'" + e.key + "' is an option of " + kind + " " + join(owners, " and ") + ", not of " +
+                              t.*name_member + " (" + kind + " " + t.*name_member + " takes: " +
+                              (table.keys().empty() ? std::string("no options") : join(table.keys())) + ")";
+                fail(e.key_where, ep, message);
+            }
+            r.record(ep, e.value.where);
+            field->read(t.*options_member, e.value, ep, r);
+            check(e.value.where, ep, e.key);
+        }
+    };
+    f.write = [=](const T& t, bool comments) {
+        Node out = Node::map({});
+        Node name = Node::text(t.*name_member, {});
+        name.quote_text = true;
+        if (comments) name.comment = join(names(), ", ");
+        out.add("name", std::move(name));
+        for (auto& e : table_of(t.*name_member).write(t.*options_member, {}, comments).entries)
+            out.entries.push_back(std::move(e));
+        return out;
+    };
+    return f;
+}
+
+template <class O>
+OptionsKind options_kind(const Table<O>& table) {
+    OptionsKind k;
+    k.what = table.what();
+    k.read = [&table](SolverOptions& o, const Node& n, const std::string& p, const Reader& r, const Skip& s,
+                      const std::vector<std::string>& also) { table.read(std::get<O>(o), n, p, r, s, also); };
+    k.write = [&table](const SolverOptions& o, const Skip& s, bool c) { return table.write(std::get<O>(o), s, c); };
+    k.describe = [&table](const SolverOptions& o, const Skip& s) { return table.describe(std::get<O>(o), s); };
+    k.keys = [&table](const Skip& s) { return table.keys(s); };
+    k.has = [&table](const std::string& key) { return table.field(key) != nullptr; };
+    return k;
+}
+
+template <class O>
+const O& options_as(const SolverOptions& options, const std::string& name) {
+    if (const O* o = std::get_if<O>(&options)) return *o;
+    throw OptionError("solver or wrapper '" + name + "' was given the options of another solver");
+}
+
+struct Tables {
+    Table<TerminationCriterion> termination{"termination", [](const TerminationCriterion& t) { t.validate(); }};
+    Table<MetricOptions> metric{"metric", [](const MetricOptions& m) { m.validate(); }};
+    Table<ObjectiveOptions> log_barrier{"objective log_barrier", [](const ObjectiveOptions& o) { o.validate(); }};
+    Table<ObjectiveOptions> p_mean{"objective p_mean", [](const ObjectiveOptions& o) { o.validate(); }};
+    Table<ObjectiveOptions> min_quality{"objective min_quality", [](const ObjectiveOptions& o) { o.validate(); }};
+    Table<GlobalSolverOptions> global{"the global solver", [](const GlobalSolverOptions& o) { o.validate(); }};
+    Table<LocalSolverOptions> local{"the local solver", [](const LocalSolverOptions& o) { o.validate(); }};
+    Table<LaplaceSolverOptions> laplace{"a Laplace solver", [](const LaplaceSolverOptions& o) { o.validate(); }};
+    Table<AssessSpec> assess{"an assess step", [](const AssessSpec& a) { a.validate(); }};
+    OptionsKind global_kind, local_kind, laplace_kind;
+    std::vector<SolverKind> solvers;
+    std::vector<WrapperKind> wrappers;
+    Skip untangle{{"untangle", "improve_shape", "termination"},
+                  "an untangle step only untangles (its limits are untangle_termination); use an improve step to "
+                  "raise the shape"};
+
+    Tables();
+
+    const Table<ObjectiveOptions>& objective_table(const std::string& name) const {
+        if (name == "p_mean") return p_mean;
+        if (name == "min_quality") return min_quality;
+        return log_barrier;
+    }
+
+    template <class T>
+    typename Table<T>::Field metric_field(std::string T::*name, MetricOptions T::*options, std::string help) const {
+        return named_field<T, MetricOptions>(
+            "metric", "metric", std::move(help), name, options, [] { return metric_names(); },
+            [this](const std::string&) -> const Table<MetricOptions>& { return metric; },
+            [](const std::string& n, const MetricOptions& o) { make_metric(n, o); });
+    }
+};
+
+Tables::Tables() {
+    termination.integer("max_iterations", &TerminationCriterion::max_iterations, "Most iterations (sweeps for the local and Laplace solvers), >= 0.")
+        .real("max_seconds", &TerminationCriterion::max_seconds, "Stop after this many seconds; 0: no limit.")
+        .maybe_real("target_worst_quality", &TerminationCriterion::target_worst_quality,
+                    "Stop once the worst quality reaches this; ~: no target. Missing it ends a run with exit code 3.")
+        .real("min_progress", &TerminationCriterion::min_progress,
+              "Converged when the worst quality rose by less than this (relative) over progress_window iterations, >= 0.")
+        .integer("progress_window", &TerminationCriterion::progress_window, "Iterations that min_progress looks back over, >= 1.")
+        .real("gradient_tolerance", &TerminationCriterion::gradient_tolerance,
+              "Stop when the gradient norm falls below this fraction of its first value, in [0, 1).");
+
+    metric.real("hybrid_sharpness", &MetricOptions::hybrid_sharpness,
+                "Steepness alpha of the untangling metric's logistic blend, per unit of scale-free volume, > 0.");
+
+    log_barrier.real("barrier_shrink", &ObjectiveOptions::barrier_shrink, "mu is multiplied by this after steps_per_mu steps, in (0, 1].")
+        .real("initial_mu", &ObjectiveOptions::initial_mu, "First mu; 0: chosen from the qualities.")
+        .real("barrier_initial_active", &ObjectiveOptions::barrier_initial_active,
+              "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1.");
+    p_mean.real("p", &ObjectiveOptions::p, "Exponent, nonzero; negative stresses the worst elements.");
+
+    const auto objective_field = named_field<GlobalSolverOptions, ObjectiveOptions>(
+        "objective", "objective", "What the global solver maximizes: log_barrier, p_mean or min_quality.",
+        &GlobalSolverOptions::objective, &GlobalSolverOptions::objective_options,
+        [] { return names_in(objective_help()); },
+        [this](const std::string& n) -> const Table<ObjectiveOptions>& { return objective_table(n); },
+        [](const std::string& n, const ObjectiveOptions& o) { make_objective(n, o); });
+
+    global.add(metric_field(&GlobalSolverOptions::shape_metric, &GlobalSolverOptions::metric_options,
+                            "Shape metric to raise (one with a gradient: aspect_ratio, mean_ratio, inverse_condition, edge_ratio)."))
+        .add(objective_field)
+        .choice("direction", &GlobalSolverOptions::direction,
+                {{"conjugate_gradient", GlobalSolverOptions::Direction::ConjugateGradient},
+                 {"steepest_ascent", GlobalSolverOptions::Direction::SteepestAscent}},
+                "Search direction of each step.")
+        .flag("untangle", &GlobalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
+        .flag("improve_shape", &GlobalSolverOptions::improve_shape, "Run the shape phase (false: stop once untangled).")
+        .object("termination", &GlobalSolverOptions::termination, termination, "When the shape phase stops.")
+        .object("untangle_termination", &GlobalSolverOptions::untangle_termination, termination, "When untangling stops.")
+        .flag("precondition_untangling", &GlobalSolverOptions::precondition_untangling,
+              "While untangling, scale each vertex's move by its block of the objective's curvature.")
+        .integer("local_untangle_rounds", &GlobalSolverOptions::local_untangle_rounds,
+                 "Rounds of local vertex untangling when the global ascent stalls with elements inverted, >= 0.")
+        .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu, "Steps at one mu before it shrinks, >= 1.")
+        .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
+                 "Line searches in a row without a step before giving up, >= 1.")
+        .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).");
+
+    local.add(metric_field(&LocalSolverOptions::metric, &LocalSolverOptions::metric_options,
+                           "Shape metric whose minimum over each vertex's elements is raised (one with a gradient)."))
+        .flag("untangle", &LocalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
+        .object("termination", &LocalSolverOptions::termination, termination, "When the shape sweeps stop.")
+        .object("untangle_termination", &LocalSolverOptions::untangle_termination, termination, "When untangling stops.")
+        .choice("coloring", &LocalSolverOptions::coloring,
+                {{"smallest_last", ColoringOrder::SmallestLast}, {"greedy", ColoringOrder::Greedy}},
+                "Vertex coloring order (smallest_last usually needs fewer colors).")
+        .integer("ascent_steps", &LocalSolverOptions::ascent_steps, "Ascent steps per vertex visit, >= 1.")
+        .real("active_tolerance", &LocalSolverOptions::active_tolerance,
+              "Elements within this fraction of the patch minimum are active, in [0, 1).")
+        .real("improve_below", &LocalSolverOptions::improve_below,
+              "Move only vertices whose worst element lies in this lowest fraction of worst..ideal, > 0 (1: all).");
+
+    laplace.flag("smart", &LaplaceSolverOptions::smart,
+                 "Smart Laplace: keep a move only if the vertex's worst element does not get worse and nothing inverts. "
+                 "false: plain Laplace, which may invert elements.")
+        .add(metric_field(&LaplaceSolverOptions::metric, &LaplaceSolverOptions::metric_options,
+                          "Metric that smart Laplace protects and the summary reports (any metric)."))
+        .object("termination", &LaplaceSolverOptions::termination, termination,
+                "When the sweeps stop (also once no vertex moves by more than min_progress mean edge lengths).")
+        .choice("coloring", &LaplaceSolverOptions::coloring,
+                {{"smallest_last", ColoringOrder::SmallestLast}, {"greedy", ColoringOrder::Greedy}},
+                "Vertex coloring order; smart Laplace moves one color at a time.");
+
+    assess.names("metrics", &AssessSpec::metrics, [] { return metric_names(); }, "metric",
+                 "Metrics to report; [] (empty): the shape metrics, scaled volume and the smallest angle.")
+        .integer("histogram_bins", &AssessSpec::histogram_bins, "Bins of each histogram, 1 to 10000.");
+
+    global_kind = options_kind(global);
+    local_kind = options_kind(local);
+    laplace_kind = options_kind(laplace);
+
+    const auto shape_target = [](const TerminationCriterion& t) { return t.target_worst_quality; };
+    solvers.push_back({"global",
+                       "The log-barrier solver of Sastry & Shontz: every free vertex moves at once; untangles first "
+                       "(hybrid metric), then raises the worst element.",
+                       &global_kind,
+                       {},
+                       [] { return SolverOptions(GlobalSolverOptions{}); },
+                       [](const SolverOptions& o) { return std::make_unique<GlobalSolver>(options_as<GlobalSolverOptions>(o, "global")); },
+                       [shape_target](const SolverOptions& o) {
+                           const auto& g = std::get<GlobalSolverOptions>(o);
+                           return g.improve_shape ? shape_target(g.termination) : std::nullopt;
+                       }});
+    solvers.push_back({"local",
+                       "The Freitag-Plassmann local smoother: one vertex at a time, by colors, raises the smallest "
+                       "quality of its elements; untangles first.",
+                       &local_kind,
+                       {},
+                       [] { return SolverOptions(LocalSolverOptions{}); },
+                       [](const SolverOptions& o) { return std::make_unique<LocalSolver>(options_as<LocalSolverOptions>(o, "local")); },
+                       [shape_target](const SolverOptions& o) { return shape_target(std::get<LocalSolverOptions>(o).termination); }});
+    const Skip smart_by_name{{"smart"}, "the name decides it: smart_laplace is smart Laplace, laplace is plain Laplace"};
+    for (const bool smart : {true, false}) {
+        const std::string name = smart ? "smart_laplace" : "laplace";
+        solvers.push_back({name,
+                           smart ? "Smart Laplace: each vertex moves to the mean of its neighbours only if its worst "
+                                   "element does not get worse and nothing inverts. Does not untangle."
+                                 : "Plain Laplace (Jacobi): every free vertex moves to the mean of its neighbours; may "
+                                   "invert elements. Does not untangle.",
+                           &laplace_kind,
+                           smart_by_name,
+                           [smart] {
+                               LaplaceSolverOptions o;
+                               o.smart = smart;
+                               return SolverOptions(o);
+                           },
+                           [smart, name](const SolverOptions& o) {
+                               LaplaceSolverOptions l = options_as<LaplaceSolverOptions>(o, name);
+                               l.smart = smart;
+                               return std::make_unique<LaplaceSolver>(l);
+                           },
+                           [shape_target](const SolverOptions& o) { return shape_target(std::get<LaplaceSolverOptions>(o).termination); }});
+    }
+
+    using Targets = std::vector<std::optional<double>>;
+    wrappers.push_back({"untangle", "Assess, untangle with the global solver (stops once no element is inverted), assess.",
+                        "global", &global_kind, untangle,
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::untangle(options_as<GlobalSolverOptions>(o, "untangle")); },
+                        [](const SolverOptions&) { return Targets{std::nullopt}; }});
+    wrappers.push_back({"shape_improvement",
+                        "Assess, raise the worst element of a valid mesh with the global log-barrier solver, assess.",
+                        "global", &global_kind,
+                        {{"untangle", "improve_shape", "untangle_termination", "precondition_untangling", "local_untangle_rounds"},
+                         "shape_improvement does not untangle (untangle_then_improve does)"},
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::shape_improvement(options_as<GlobalSolverOptions>(o, "shape_improvement")); },
+                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<GlobalSolverOptions>(o).termination)}; }});
+    wrappers.push_back({"local_shape_improvement", "Assess, improve with the local smoother (which untangles first), assess.",
+                        "local", &local_kind, {},
+                        [] { return SolverOptions(LocalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::local_shape_improvement(options_as<LocalSolverOptions>(o, "local_shape_improvement")); },
+                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LocalSolverOptions>(o).termination)}; }});
+    wrappers.push_back({"laplace", "Assess, smart Laplace (plain Laplace with `smart: false`, which may invert elements), assess.",
+                        "smart_laplace", &laplace_kind, {},
+                        [] { return SolverOptions(LaplaceSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::laplace(options_as<LaplaceSolverOptions>(o, "laplace")); },
+                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LaplaceSolverOptions>(o).termination)}; }});
+    wrappers.push_back({"untangle_then_improve",
+                        "Assess, untangle, then improve the shape, each with the global solver, assess: the default job.",
+                        "global", &global_kind,
+                        {{"untangle", "improve_shape"}, "untangle_then_improve untangles, then improves: it sets both"},
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::untangle_then_improve(options_as<GlobalSolverOptions>(o, "untangle_then_improve")); },
+                        [shape_target](const SolverOptions& o) {
+                            return Targets{std::nullopt, shape_target(std::get<GlobalSolverOptions>(o).termination)};
+                        }});
+
+    // An option of another solver, misplaced: say whose it is.
+    const auto owner_hint = [this](const std::string& key) {
+        std::vector<std::string> owners;
+        for (const auto& s : solvers)
+            if (s.options->has(key) && !s.skip.has(key)) owners.push_back(s.name);
+        return owners.empty() ? std::string() : "'" + key + "' is an option of solver " + join(owners, ", ");
+    };
+    global.hint(owner_hint);
+    local.hint(owner_hint);
+    laplace.hint(owner_hint);
+}
+
+const Tables& tables() {
+    static const Tables t;
+    return t;
+}
+
+}  // namespace
+
+const std::vector<SolverKind>& solver_kinds() { return tables().solvers; }
+
+std::vector<std::string> solver_names() {
+    std::vector<std::string> out;
+    for (const auto& s : solver_kinds()) out.push_back(s.name);
+    return out;
+}
+
+std::vector<std::string> wrapper_names() {
+    std::vector<std::string> out;
+    for (const auto& w : wrapper_kinds()) out.push_back(w.name);
+    return out;
+}
+
+const SolverKind* find_solver(const std::string& name) {
+    for (const auto& s : solver_kinds())
+        if (s.name == name) return &s;
+    return nullptr;
+}
+
+const std::vector<WrapperKind>& wrapper_kinds() { return tables().wrappers; }
+
+const WrapperKind* find_wrapper(const std::string& name) {
+    for (const auto& w : wrapper_kinds())
+        if (w.name == name) return &w;
+    return nullptr;
+}
+
+const Skip& untangle_skip() { return tables().untangle; }
+const Table<AssessSpec>& assess_table() { return tables().assess; }
+
+std::string solvers_with(const std::string& key, const std::string& except) {
+    std::vector<std::string> owners;
+    for (const auto& s : solver_kinds())
+        if (s.name != except && s.options->has(key) && !s.skip.has(key)) owners.push_back(s.name);
+    if (owners.empty()) return "";
+    return (owners.size() == 1 ? "solver " : "solvers ") + join(owners);
+}
+
+void set_threads(SolverOptions& options, int threads) {
+    std::visit([threads](auto& o) { o.threads = threads; }, options);
+}
+
+std::vector<ObjectInfo> object_infos() {
+    const Tables& t = tables();
+    std::vector<ObjectInfo> out;
+    for (const auto& [name, help] : metric_help()) out.push_back({"metric", name, help, t.metric.describe({})});
+    for (const auto& [name, help] : objective_help())
+        out.push_back({"objective", name, help, t.objective_table(name).describe({})});
+    out.push_back({"termination", "termination",
+                   "When a solver (or one of its phases) stops. Every test is relative, so a mesh scaled by 1e-4 or 1e4 "
+                   "stops at the same iteration.",
+                   t.termination.describe({})});
+    for (const auto& s : t.solvers) out.push_back({"solver", s.name, s.help, s.options->describe(s.defaults(), s.skip)});
+    out.push_back({"assessor", "quality",
+                   "Quality statistics (min / max / mean / rms / histogram) of metrics over the mesh, split between "
+                   "elements with a free vertex and the rest, and the exact count of inverted elements.",
+                   t.assess.describe({})});
+    for (const auto& w : t.wrappers) {
+        const SolverKind& solver = *find_solver(w.solver);
+        const auto theirs = solver.options->keys(solver.skip), ours = w.options->keys(w.skip);
+        std::vector<std::string> without, extra;
+        for (const auto& k : theirs)
+            if (std::find(ours.begin(), ours.end(), k) == ours.end()) without.push_back("`" + k + "`");
+        for (const auto& k : ours)
+            if (std::find(theirs.begin(), theirs.end(), k) == theirs.end()) extra.push_back("`" + k + "`");
+        std::string help = w.help + " Options: those of solver `" + w.solver + "`";
+        if (!without.empty()) help += " except " + join(without);
+        if (!extra.empty()) help += ", and " + join(extra);
+        out.push_back({"wrapper", w.name, help + ".", w.options->describe(w.defaults(), w.skip)});
+    }
+    return out;
+}
+
+}  // namespace detail
+
+const std::vector<ObjectInfo>& registry() {
+    static const std::vector<ObjectInfo> all = [] {
+        auto out = detail::object_infos();
+        for (auto& s : detail::section_infos()) out.push_back(std::move(s));
+        return out;
+    }();
+    return all;
+}
+
+std::vector<std::string> names_of(std::string_view kind) {
+    std::vector<std::string> out;
+    for (const auto& o : registry())
+        if (o.kind == kind) out.push_back(o.name);
+    return out;
+}
+
+const ObjectInfo& describe(std::string_view kind, std::string_view name) {
+    for (const auto& o : registry())
+        if (o.kind == kind && o.name == name) return o;
+    const auto known = names_of(kind);
+    if (known.empty()) throw OptionError("no kind of object is called '" + std::string(kind) + "'");
+    std::string message = "unknown " + std::string(kind) + " '" + std::string(name) + "'";
+    if (const auto near = detail::closest(name, known); !near.empty()) message += "; did you mean '" + near + "'?";
+    throw OptionError(message + " (known: " + detail::join(known) + ")");
+}
+
+std::string registry_markdown() {
+    std::ostringstream out;
+    auto escape = [](const std::string& s) {
+        std::string r;
+        for (char c : s) r += c == '|' ? std::string("\\|") : std::string(1, c);
+        return r;
+    };
+    auto table = [&](const std::vector<OptionInfo>& options) {
+        out << "\n| key | type | default | meaning |\n|---|---|---|---|\n";
+        for (const auto& o : options)
+            out << "| `" << o.key << "` | " << escape(o.type) << " | " << (o.default_value.empty() ? "" : "`" + escape(o.default_value) + "`")
+                << " | " << escape(o.help) << " |\n";
+    };
+    const auto& all = registry();
+    auto of_kind = [&](std::string_view kind) {
+        std::vector<const ObjectInfo*> list;
+        for (const auto& o : all)
+            if (o.kind == kind) list.push_back(&o);
+        return list;
+    };
+
+    out << "\n### Metrics\n\nV is the signed volume (A the signed area), L the sum of the squared edge lengths; "
+           "docs/metrics.md has the details.\n\n| name | formula, range, ideal value |\n|---|---|\n";
+    const auto metrics = of_kind("metric");
+    for (const auto* m : metrics) out << "| `" << m->name << "` | " << escape(m->help) << " |\n";
+    out << "\nEvery metric takes the same option; write `metric: NAME` or `metric: {name: NAME, hybrid_sharpness: 10}`.\n";
+    if (!metrics.empty()) table(metrics.front()->options);
+
+    const std::pair<const char*, const char*> kinds[] = {{"objective", "Objective functions (global solver)"},
+                                                          {"termination", "Termination criterion"},
+                                                          {"solver", "Solvers (improve and untangle steps)"},
+                                                          {"assessor", "Assessor (assess steps)"}};
+    for (const auto& [kind, title] : kinds) {
+        out << "\n### " << title << "\n";
+        for (const auto* o : of_kind(kind)) {
+            out << "\n#### `" << o->name << "`\n\n" << o->help << "\n";
+            if (!o->options.empty()) table(o->options);
+        }
+    }
+    out << "\n### Wrappers (wrapper steps, `queue: NAME`)\n\nReady-made queues (`paloverde/wrappers.hpp`, same names). "
+           "Each takes the options of its solver, listed above, except those it sets itself.\n\n"
+           "| name | what it runs |\n|---|---|\n";
+    for (const auto* o : of_kind("wrapper")) out << "| `" << o->name << "` | " << escape(o->help) << " |\n";
+    out << "\n### Sections of a run config\n";
+    for (const auto* o : of_kind("section")) {
+        out << "\n#### `" << o->name << "`\n";
+        if (!o->help.empty()) out << "\n" << o->help << "\n";
+        if (!o->options.empty()) table(o->options);
+    }
+    return out.str();
+}
+
+SolverOptions default_options(std::string_view name) {
+    if (const auto* s = detail::find_solver(std::string(name))) return s->defaults();
+    if (const auto* w = detail::find_wrapper(std::string(name))) return w->defaults();
+    auto known = names_of("solver");
+    for (const auto& w : names_of("wrapper")) known.push_back(w);
+    throw OptionError("unknown solver or wrapper '" + std::string(name) + "' (known: " + detail::join(known) + ")");
+}
+
+std::unique_ptr<Solver> make_solver(std::string_view name, const SolverOptions& options) {
+    if (const auto* s = detail::find_solver(std::string(name))) return s->make(options);
+    describe("solver", name);  // throws, naming the known solvers
+    return nullptr;
+}
+
+InstructionQueue make_wrapper(std::string_view name, const SolverOptions& options) {
+    if (const auto* w = detail::find_wrapper(std::string(name))) return w->make(options);
+    describe("wrapper", name);
+    return {};
+}
+
+}  // namespace paloverde::config

@@ -1,0 +1,379 @@
+#include "paloverde/config/run.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "config/partitioned_run.hpp"
+#include "config/plot.hpp"
+#include "config/registry_internal.hpp"
+#include "paloverde/io/atomic_file.hpp"
+
+namespace paloverde::config {
+
+std::string_view to_string(RunStatus status) {
+    switch (status) {
+        case RunStatus::Done: return "done";
+        case RunStatus::Failed: return "failed";
+        case RunStatus::TargetNotReached: return "target_not_reached";
+    }
+    return "unknown";
+}
+
+namespace {
+
+// QualityAssessor()'s set, which `metrics: []` stands for.
+const std::vector<std::string> kDefaultMetrics{"aspect_ratio", "mean_ratio", "inverse_condition", "edge_ratio",
+                                               "scaled_volume", "min_dihedral_deg", "min_angle_deg"};
+
+QualityAssessor assessor_of(const AssessSpec& a) {
+    return QualityAssessor(a.metrics.empty() ? kDefaultMetrics : a.metrics, a.histogram_bins);
+}
+
+struct BuiltQueue {
+    InstructionQueue queue;
+    std::vector<std::optional<double>> targets;  // per improver, in order
+};
+
+BuiltQueue build(std::span<const StepSpec> steps, int threads) {
+    BuiltQueue b;
+    for (const StepSpec& step : steps) {
+        switch (step.kind) {
+            case StepSpec::Kind::Assess: b.queue.assess(step.label, assessor_of(step.assess)); break;
+            case StepSpec::Kind::Untangle:
+            case StepSpec::Kind::Improve: {
+                const auto* kind = detail::find_solver(step.name);
+                if (!kind) describe("solver", step.name);  // throws, listing the solvers
+                SolverOptions options = step.options;
+                detail::set_threads(options, threads);
+                if (step.kind == StepSpec::Kind::Untangle) {
+                    auto* global = std::get_if<GlobalSolverOptions>(&options);
+                    if (!global || step.name != "global")
+                        throw OptionError("an untangle step runs the global solver (got '" + step.name + "')");
+                    global->untangle = true;
+                    global->improve_shape = false;
+                }
+                b.queue.improve(step.label, kind->make(options));
+                b.targets.push_back(kind->target(options));
+                break;
+            }
+            case StepSpec::Kind::Wrapper: {
+                const auto* kind = detail::find_wrapper(step.name);
+                if (!kind) describe("wrapper", step.name);
+                SolverOptions options = step.options;
+                detail::set_threads(options, threads);
+                b.queue.append(kind->make(options));
+                for (const auto& t : kind->targets(options)) b.targets.push_back(t);
+                break;
+            }
+        }
+    }
+    return b;
+}
+
+std::string origin(const RunSpec& spec, const std::string& key) {
+    const auto it = spec.origins.find(key);
+    return it == spec.origins.end() ? std::string() : it->second;
+}
+
+MeshFile read_input(const RunSpec& spec) {
+    const InputSpec& in = spec.input;
+    ReadOptions read;
+    read.format = in.format;
+    read.fix_boundary = in.fixed != FixedVertices::None;
+    MeshFile file = read_mesh(in.mesh, read);
+    SimplexMesh& mesh = file.mesh;
+    switch (in.fixed) {
+        case FixedVertices::Auto: break;
+        case FixedVertices::Boundary: mesh.fix_boundary(); break;
+        case FixedVertices::File:
+            if (!file.fixed_from_file)
+                throw ConfigError(origin(spec, "input.fixed"), "input.fixed",
+                                  "'" + in.mesh + "' has no `fixed` point field; use fixed: auto or fixed: boundary");
+            break;
+        case FixedVertices::None: mesh.set_fixed(std::vector<std::uint8_t>(static_cast<std::size_t>(mesh.num_vertices()), 0)); break;
+    }
+    if (!in.fixed_vertices.empty()) {
+        std::vector<std::uint8_t> fixed(mesh.fixed().begin(), mesh.fixed().end());
+        for (long long v : in.fixed_vertices) {
+            if (v < 0 || v >= mesh.num_vertices())
+                throw ConfigError(origin(spec, "input.fixed_vertices"), "input.fixed_vertices",
+                                  "vertex " + std::to_string(v) + " does not exist: '" + in.mesh + "' has " +
+                                      std::to_string(mesh.num_vertices()) + " vertices (ids 0 to " +
+                                      std::to_string(mesh.num_vertices() - 1) + ")");
+            fixed[static_cast<std::size_t>(v)] = 1;
+        }
+        mesh.set_fixed(std::move(fixed));
+    }
+    // The flags written with the output are the ones used, not the file's.
+    std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
+    return file;
+}
+
+QualityAssessor report_assessor(const std::string& metric) {
+    std::vector<std::string> names = kDefaultMetrics;
+    if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
+    return QualityAssessor(names);
+}
+
+void worst_and_mean(const QualityReport& report, const std::string& metric, double& worst, double& mean) {
+    const MetricReport* m = report.metric(metric);
+    if (!m) return;
+    worst = m->movable.count > 0 ? m->movable.min : m->all.min;
+    mean = m->all.mean;
+}
+
+std::string replace_method(std::string path, const std::string& method) {
+    for (std::size_t at = path.find("{method}"); at != std::string::npos; at = path.find("{method}", at + method.size()))
+        path.replace(at, 8, method);
+    return path;
+}
+
+MethodResult run_method(const MethodSpec& method, SimplexMesh& mesh, const MeshFile& file, const RunSpec& spec,
+                        const RunHooks& hooks) {
+    BuiltQueue built = build(method.queue, spec.threads);
+    if (hooks.on_iteration)
+        built.queue.observe([&](std::string_view step, const IterationRecord& r) { hooks.on_iteration(method.name, step, r); });
+    MethodResult result;
+    result.name = method.name;
+    result.metric = spec.output.metric;
+    const QualityAssessor assessor = report_assessor(spec.output.metric);
+    result.before = assessor.assess(mesh);
+    const auto start = std::chrono::steady_clock::now();
+    result.queue = built.queue.run(mesh);
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.after = assessor.assess(mesh);
+    worst_and_mean(result.before, result.metric, result.worst_before, result.mean_before);
+    worst_and_mean(result.after, result.metric, result.worst_after, result.mean_after);
+
+    std::size_t improver = 0;
+    for (const auto& step : result.queue.steps) {
+        const auto* summary = std::get_if<Summary>(&step.outcome);
+        if (!summary) continue;
+        result.iterations += summary->iterations;
+        result.untangle_iterations += summary->untangle_iterations;
+        const auto target = improver < built.targets.size() ? built.targets[improver] : std::nullopt;
+        ++improver;
+        if (target && result.status == RunStatus::Done && summary->reason != TerminationReason::TargetReached &&
+            !(summary->worst_after >= *target)) {
+            result.status = RunStatus::TargetNotReached;
+            std::ostringstream why;
+            why << "'" << step.label << "' stopped (" << to_string(summary->reason) << ") with the worst "
+                << summary->quality_metric << " at " << summary->worst_after << ", below its target " << *target;
+            result.message = why.str();
+        }
+    }
+    if (!result.queue.success) {
+        result.status = RunStatus::Failed;
+        result.message = result.queue.message;
+    }
+
+    if (!spec.output.mesh.empty()) {
+        result.mesh_written = replace_method(spec.output.mesh, method.name);
+        WriteOptions write;
+        write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
+        write_mesh(result.mesh_written, mesh, write, file.point_fields, file.cell_fields);
+    }
+    return result;
+}
+
+std::string solver_names(const MethodResult& m) {
+    std::string names;
+    for (const auto& step : m.queue.steps)
+        if (const auto* s = std::get_if<Summary>(&step.outcome)) names += (names.empty() ? "" : "+") + s->solver;
+    return names;
+}
+
+std::string last_termination(const MethodResult& m) {
+    std::string reason;
+    for (const auto& step : m.queue.steps)
+        if (const auto* s = std::get_if<Summary>(&step.outcome)) reason = std::string(to_string(s->reason));
+    return reason;
+}
+
+std::string csv_field(const std::string& s) {
+    if (s.find_first_of(",\"\n") == std::string::npos) return s;
+    std::string out = "\"";
+    for (char c : s) out += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return out + "\"";
+}
+
+nlohmann::json method_json(const MethodResult& m) {
+    using nlohmann::json;
+    json steps = json::array();
+    for (const auto& step : m.queue.steps) {
+        if (const auto* report = std::get_if<QualityReport>(&step.outcome))
+            steps.push_back({{"label", step.label}, {"kind", "assess"}, {"report", json::parse(report->to_json())}});
+        else
+            steps.push_back({{"label", step.label},
+                             {"kind", "improve"},
+                             {"summary", json::parse(std::get<Summary>(step.outcome).to_json())}});
+    }
+    return {{"name", m.name},
+            {"status", std::string(to_string(m.status))},
+            {"exit_code", static_cast<int>(m.status)},
+            {"message", m.message},
+            {"success", m.status != RunStatus::Failed},
+            {"valid", m.after.inverted == 0},
+            {"solver", solver_names(m)},
+            {"termination", last_termination(m)},
+            {"seconds", m.seconds},
+            {"iterations", m.iterations},
+            {"untangle_iterations", m.untangle_iterations},
+            {"metric", m.metric},
+            {"worst_before", m.worst_before},
+            {"worst_after", m.worst_after},
+            {"mean_before", m.mean_before},
+            {"mean_after", m.mean_after},
+            {"inverted_before", m.before.inverted},
+            {"inverted_after", m.after.inverted},
+            {"mesh", m.mesh_written},
+            {"before", json::parse(m.before.to_json())},
+            {"after", json::parse(m.after.to_json())},
+            {"steps", steps}};
+}
+
+detail::PlotSeries series_of(const MethodResult& m) {
+    detail::PlotSeries s;
+    s.name = m.name;
+    double iterations = 0.0, seconds = 0.0;
+    for (const auto& step : m.queue.steps) {
+        const auto* summary = std::get_if<Summary>(&step.outcome);
+        if (!summary) continue;
+        for (const auto& r : summary->history) {
+            s.left.emplace_back(iterations + r.iteration, r.worst_quality);
+            s.right.emplace_back(seconds + r.seconds, r.worst_quality);
+        }
+        if (!summary->history.empty()) iterations += summary->history.back().iteration + 1;
+        seconds += summary->seconds;
+    }
+    return s;
+}
+
+}  // namespace
+
+InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) { return build(steps, threads).queue; }
+
+RunResult run(const RunSpec& spec, const RunHooks& hooks) {
+    spec.check_runnable();
+    if (spec.partitioned()) return detail::run_partitioned(spec, hooks);
+    const auto methods = spec.methods();
+    for (const auto& m : methods) build(m.queue, spec.threads);  // every option checked before the mesh is read
+
+    MeshFile file = read_input(spec);
+    RunResult result;
+    result.input = spec.input.mesh;
+    for (std::size_t i = 0; i < methods.size(); ++i) {
+        // Every method starts from the input; the last may use it up.
+        SimplexMesh copy;
+        const bool last = i + 1 == methods.size();
+        if (!last) copy = file.mesh;
+        SimplexMesh& mesh = last ? file.mesh : copy;
+        result.methods.push_back(run_method(methods[i], mesh, file, spec, hooks));
+        if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
+    }
+    for (const auto& m : result.methods) {
+        if (m.status == RunStatus::Failed) result.status = RunStatus::Failed;
+        else if (m.status == RunStatus::TargetNotReached && result.status == RunStatus::Done)
+            result.status = RunStatus::TargetNotReached;
+    }
+
+    const OutputSpec& out = spec.output;
+    if (!out.history.empty()) write_text_file(out.history, result.history_csv());
+    if (!out.table.empty()) write_text_file(out.table, result.table_csv());
+    if (!out.summary.empty()) write_text_file(out.summary, result.to_json() + "\n");
+    if (!out.plot.empty()) {
+        std::vector<detail::PlotSeries> series;
+        for (const auto& m : result.methods) series.push_back(series_of(m));
+        write_text_file(out.plot, detail::svg_plot(series, {"Worst element: " + result.input,
+                                                            "worst quality (untangling: hybrid metric)",
+                                                            "iteration", "seconds"}));
+    }
+    return result;
+}
+
+std::string RunResult::report() const {
+    std::ostringstream out;
+    const bool study = methods.size() > 1;
+    for (const auto& m : methods) {
+        if (study) out << "=== method " << m.name << "\n";
+        const auto& steps = m.queue.steps;
+        if (steps.empty() || !std::holds_alternative<QualityReport>(steps.front().outcome))
+            out << "before:\n" << m.before.to_text();
+        out << m.queue.report();
+        if (steps.empty() || !std::holds_alternative<QualityReport>(steps.back().outcome) || !m.queue.success)
+            out << "after:\n" << m.after.to_text();
+        out << std::setprecision(6) << (study ? m.name : std::string("result")) << ": " << to_string(m.status) << "; worst " << m.metric << " "
+            << m.worst_before << " -> " << m.worst_after << ", inverted " << m.before.inverted << " -> "
+            << m.after.inverted << ", " << m.iterations << " iterations, " << std::setprecision(3) << m.seconds << " s\n";
+        if (!m.message.empty() && m.status != RunStatus::Done) out << "  " << m.message << "\n";
+        if (!m.mesh_written.empty()) out << "  mesh written to " << m.mesh_written << "\n";
+        if (study) out << "\n";
+    }
+    if (study) {
+        std::size_t width = 9;
+        for (const auto& m : methods) width = std::max(width, m.name.size() + 2);
+        const auto& first = methods.front();
+        out << "method comparison (" << first.metric << "; worst over elements with a free vertex):\n" << std::left
+            << std::setw(static_cast<int>(width)) << "method" << std::setw(20) << "status" << std::right << std::setw(10)
+            << "worst" << std::setw(10) << "mean" << std::setw(10) << "inverted" << std::setw(12) << "iterations"
+            << std::setw(10) << "seconds" << "\n"
+            << std::left << std::setw(static_cast<int>(width)) << "(input)" << std::setw(20) << "" << std::right
+            << std::fixed << std::setprecision(4) << std::setw(10) << first.worst_before << std::setw(10)
+            << first.mean_before << std::setw(10) << first.before.inverted << "\n";
+        for (const auto& m : methods)
+            out << std::left << std::setw(static_cast<int>(width)) << m.name << std::setw(20) << to_string(m.status)
+                << std::right << std::setprecision(4) << std::setw(10) << m.worst_after << std::setw(10) << m.mean_after
+                << std::setw(10) << m.after.inverted << std::setw(12) << m.iterations << std::setprecision(2)
+                << std::setw(10) << m.seconds << "\n";
+    }
+    return out.str();
+}
+
+std::string RunResult::to_json() const {
+    using nlohmann::json;
+    json j{{"input", input}, {"status", std::string(to_string(status))}, {"exit_code", exit_code()}};
+    json list = json::array();
+    for (const auto& m : methods) list.push_back(method_json(m));
+    if (methods.size() == 1)
+        for (const auto& [key, value] : list[0].items())
+            if (!j.contains(key)) j[key] = value;
+    j["methods"] = std::move(list);
+    return j.dump(2);
+}
+
+std::string RunResult::table_csv() const {
+    std::ostringstream out;
+    out << "method,status,solver,termination,seconds,iterations,untangle_iterations,metric,worst_before,worst_after,"
+           "mean_before,mean_after,inverted_before,inverted_after,mesh\n"
+        << std::setprecision(17);
+    for (const auto& m : methods)
+        out << csv_field(m.name) << ',' << to_string(m.status) << ',' << solver_names(m) << ',' << last_termination(m)
+            << ',' << m.seconds << ',' << m.iterations << ',' << m.untangle_iterations << ',' << m.metric << ','
+            << m.worst_before << ',' << m.worst_after << ',' << m.mean_before << ',' << m.mean_after << ','
+            << m.before.inverted << ',' << m.after.inverted << ',' << csv_field(m.mesh_written) << '\n';
+    return out.str();
+}
+
+std::string RunResult::history_csv() const {
+    const std::string empty = Summary{}.history_csv();
+    std::string out = "method,improver," + empty;
+    for (const auto& m : methods)
+        for (const auto& step : m.queue.steps) {
+            const auto* summary = std::get_if<Summary>(&step.outcome);
+            if (!summary) continue;
+            const std::string csv = summary->history_csv();
+            const std::string prefix = csv_field(m.name) + "," + csv_field(step.label) + ",";
+            std::size_t line = csv.find('\n') + 1;  // after the header
+            while (line < csv.size()) {
+                const std::size_t end = csv.find('\n', line);
+                out += prefix + csv.substr(line, end - line + 1);
+                line = end + 1;
+            }
+        }
+    return out;
+}
+
+}  // namespace paloverde::config
