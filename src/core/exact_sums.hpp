@@ -1,8 +1,13 @@
 #pragma once
 // Exact sums over index ranges, split among threads: each thread keeps its own accumulators,
-// and since the accumulation is exact the combined result does not depend on the thread count.
+// and since the accumulation is exact the combined result does not depend on the thread count
+// (nor, once reduced, on the number of processes).
 #include <array>
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <utility>
 
 #include "core/blocked_sum.hpp"
 #include "paloverde/core/exact_sum.hpp"
@@ -20,6 +25,77 @@ std::array<ExactSum, K> exact_sums(std::size_t n, Term term) {
         for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) term(static_cast<std::size_t>(i), mine);
 #pragma omp critical(paloverde_exact_sums)
         for (int k = 0; k < K; ++k) total[k] += mine[k];
+    }
+    return total;
+}
+
+// A fast accumulator for terms whose magnitude is known not to exceed `bound`, the same on every
+// process. With 2^e >= bound, each term is rounded to a multiple of about 2^(e - 84), the same
+// way wherever it is added, by splitting it against two fixed pivots: (pivot + x) - pivot keeps
+// the bits of x above the pivot's last place, exactly, and the remainder goes to the next pivot.
+// Up to kFlush such pieces sum exactly in a double (they share a grid and cannot outgrow the
+// pivot), and are then moved into an ExactSum. The result is thus as order-free as ExactSum and
+// within n 2^(e - 84) of the true sum, with only additions per term. Terms above the bound (NaN,
+// or any term when the bound is not a positive number) are added to the ExactSum directly.
+class BoundedSum {
+public:
+    static constexpr int kFlush = 1024;
+
+    explicit BoundedSum(double bound) {
+        if (std::isfinite(bound) && bound > 0.0) {
+            int e = 0;
+            std::frexp(bound, &e);  // bound <= 2^e
+            bound_ = bound;
+            // kFlush terms of up to 2^e stay below 2^(e + 11): a grid of 2^(e - 42) or finer.
+            pivot_[0] = std::ldexp(1.0, e + 11);
+            pivot_[1] = std::ldexp(1.0, e - 31);  // remainders are below 2^(e - 42)
+        }
+    }
+    void add(double x) {
+        if (!(std::abs(x) <= bound_)) {
+            exact_.add(x);
+            return;
+        }
+        const double high = (pivot_[0] + x) - pivot_[0];
+        const double rest = x - high;  // exact
+        partial_[0] += high;
+        partial_[1] += (pivot_[1] + rest) - pivot_[1];
+        if (++count_ == kFlush) flush();
+    }
+    // Adds this sum to an ExactSum, exactly.
+    void add_to(ExactSum& sum) {
+        flush();
+        sum += exact_;
+    }
+
+private:
+    void flush() {
+        exact_.add(partial_[0]);
+        exact_.add(partial_[1]);
+        partial_ = {};
+        count_ = 0;
+    }
+
+    double bound_ = -1.0;  // no term is within a negative bound
+    std::array<double, 2> pivot_{};
+    std::array<double, 2> partial_{};
+    int count_ = 0;
+    ExactSum exact_;
+};
+
+// As exact_sums, for terms bounded as BoundedSum says: bounds[k] for the k-th sum.
+template <int K, class Term>
+std::array<ExactSum, K> bounded_sums(std::size_t n, const std::array<double, K>& bounds, Term term) {
+    std::array<ExactSum, K> total{};
+#pragma omp parallel if (n > kParallelThreshold)
+    {
+        auto mine = [&]<std::size_t... k>(std::index_sequence<k...>) {
+            return std::array<BoundedSum, K>{BoundedSum(bounds[k])...};
+        }(std::make_index_sequence<K>{});
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) term(static_cast<std::size_t>(i), mine);
+#pragma omp critical(paloverde_exact_sums)
+        for (int k = 0; k < K; ++k) mine[k].add_to(total[k]);
     }
     return total;
 }

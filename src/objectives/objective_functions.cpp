@@ -27,11 +27,9 @@ LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
 
 void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     const double qmin = reducer.min(local_min(q));
-    std::array<ExactSum, 2> count_and_sum{};  // count, sum
-    count_and_sum[0].add(static_cast<double>(q.size()));
-    for (double v : q) count_and_sum[1].add(v);
-    reducer.sum(count_and_sum);
-    const double n = count_and_sum[0].value();
+    ExactSum count;
+    count.add(static_cast<double>(q.size()));
+    const double n = reducer.total(count);
     if (n == 0.0) return;
     auto total = [&](auto term) {
         return reducer.total(detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(term(q[i])); })[0]);
@@ -41,15 +39,17 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
         // weight over more than about `initial_active_` elements (a large mesh would otherwise
         // spend its first hundreds of iterations on its average elements); take the mu for which
         // that t is optimal.
-        const double mean = count_and_sum[1].value() / n;
+        const double mean = total([](double v) { return v; }) / n;
         double gap = 0.5 * (mean - qmin);
         if (!(gap > 0.0)) gap = 0.1 * std::max(std::abs(qmin), 1e-12);
         // sum_i gap / (q_i - qmin + gap): how many elements weigh about as much as the worst.
         auto active = [&](double d) { return total([&](double v) { return d / (v - qmin + d); }); };
         if (active(gap) > initial_active_) {
-            double lo = 0.0, hi = gap;
-            for (int it = 0; it < 60; ++it) {
-                const double mid = 0.5 * (lo + hi);
+            // active() rises with the gap; a relative precision of 1e-3 is plenty, so bisect
+            // geometrically between a negligible gap and this one.
+            double lo = gap * 1e-15, hi = gap;
+            while (hi > lo * (1.0 + 1e-3)) {
+                const double mid = std::sqrt(lo * hi);
                 (active(mid) > initial_active_ ? hi : lo) = mid;
             }
             gap = hi;
@@ -58,33 +58,52 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
         mu_ = 1.0 / total([&](double v) { return 1.0 / (v - t0); });
         t_ = t0;
     }
-    // dF/dt = 1 - mu * sum 1/(q_i - t) rises from 1 - 0 at t = -inf to -inf at t = qmin, so the
-    // root is bracketed by [qmin - n mu, qmin). Newton steps, kept inside the bracket.
-    double lo = qmin - n * mu_, hi = qmin;
-    double t = (t_ > lo && t_ < hi) ? t_ : 0.5 * (lo + hi);
-    for (int iteration = 0; iteration < 200; ++iteration) {
-        auto s = detail::exact_sums<2>(q.size(), [&](std::size_t i, auto& acc) {
-            const double r = 1.0 / (q[i] - t);
+    // dF/dt = 0 where S = sum 1/(q_i - t) equals 1/mu. With the gap g = qmin - t, log S falls
+    // with slope between -1 and 0 in log g (-1 where the worst elements dominate, near 0 where
+    // the bulk does), so Newton's method on log S + log mu in log g converges in a few steps
+    // where it creeps in t. The root lies in g in [mu, n mu], as 1/g <= S <= n/g.
+    double lo = std::log(mu_), hi = std::log(n * mu_);
+    double s = (t_ < qmin && qmin - t_ > mu_ && qmin - t_ < n * mu_) ? std::log(qmin - t_) : 0.5 * (lo + hi);
+    for (int iteration = 0; iteration < 100 && lo < hi; ++iteration) {
+        const double gap = std::exp(s);
+        // 1/gap bounds every term of S (qmin is the global minimum): the fast bounded sums do.
+        auto sums = detail::bounded_sums<2>(q.size(), {1.0 / gap, 1.0 / (gap * gap)}, [&](std::size_t i, auto& acc) {
+            const double r = 1.0 / ((q[i] - qmin) + gap);
             acc[0].add(r);
             acc[1].add(r * r);
         });
-        reducer.sum(s);
-        const double h = mu_ * s[0].value() - 1.0;  // = -dF/dt
-        if (h > 0.0) hi = t;
-        else lo = t;
-        if (std::abs(h) < 1e-13 || hi - lo <= 4.0 * std::numeric_limits<double>::epsilon() * std::max(1.0, std::abs(t)))
-            break;
-        double next = t - h / (mu_ * s[1].value());
-        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        t = next;
+        reducer.sum(sums);
+        const double sum = sums[0].value(), squares = sums[1].value();
+        const double excess = std::log(sum * mu_);  // > 0: the gap is too small
+        if (excess > 0.0) lo = s;
+        else if (excess < 0.0) hi = s;
+        else break;
+        double next = s + excess * sum / (gap * squares);  // d(log S)/d(log g) = -g squares / S
+        // The root can sit at a bound (one element far worse than the rest: g = mu), where
+        // rounding may push Newton's step just past it.
+        next = std::isfinite(next) ? std::clamp(next, lo, hi) : 0.5 * (lo + hi);
+        // Quadratic convergence: a step of 1e-8 leaves an error of order 1e-16 after it.
+        const bool converged = std::abs(next - s) <= 1e-8 || hi - lo <= 1e-12;
+        s = next;
+        if (converged) break;
     }
+    const double t = qmin - std::exp(s);
     t_ = std::min(t, std::nextafter(qmin, -std::numeric_limits<double>::infinity()));
 }
 
 void LogBarrier::advance() { mu_ *= shrink_; }
 
 double LogBarrier::value(std::span<const double> q, const Reducer& reducer) const {
-    const double sum = reducer.total(detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) {
+    // log(q - t) is monotone in q: the extreme qualities bound its terms.
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    for (double v : q) {
+        low = std::min(low, v);
+        high = std::max(high, v);
+    }
+    low = reducer.min(low);
+    high = reducer.max(high);
+    const double bound = std::max(std::abs(std::log(low - t_)), std::abs(std::log(high - t_)));
+    const double sum = reducer.total(detail::bounded_sums<1>(q.size(), {bound}, [&](std::size_t i, auto& acc) {
         acc[0].add(std::log(q[i] - t_));
     })[0]);
     return std::isnan(sum) ? -std::numeric_limits<double>::infinity() : t_ + mu_ * sum;

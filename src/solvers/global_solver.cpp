@@ -102,11 +102,14 @@ private:
 Phase::Stats Phase::stats(std::span<const double> all) {
     const auto q = work_.counted(all, counted_);
     Stats s{std::numeric_limits<double>::infinity(), 0.0, 0};
+    double largest = 0.0;
     for (double v : q) {
         s.worst = std::min(s.worst, v);
+        largest = std::max(largest, std::abs(v));
         s.bad += v <= 0.0;
     }
-    auto sums = detail::exact_sums<2>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(q[i]); });
+    largest = reducer_.max(largest);
+    auto sums = detail::bounded_sums<2>(q.size(), {largest, 0.0}, [&](std::size_t i, auto& acc) { acc[0].add(q[i]); });
     sums[1].add(static_cast<double>(s.bad));
     reducer_.sum(sums);
     s.worst = reducer_.min(s.worst);

@@ -100,6 +100,9 @@ int main(int argc, char** argv) {
             barrier.weights(q, w);
             work.gradient(*metric, x, w, g);
         });
+        const double t_solve = best_of(5, [&] { barrier.update(q, serial); });
+        std::cout << std::fixed << std::setprecision(2) << "t solve (barrier update) " << t_solve * per_million * 1e3
+                  << " ns per element\n";
         std::cout << std::fixed << std::setprecision(2) << "per element (ns):  streaming read " << stream * per_million * 1e3
                   << "   corner gather " << gather * per_million * 1e3 << "   objective pass "
                   << objective * per_million * 1e3 << "   gradient pass " << gradient * per_million * 1e3 << "\n"
