@@ -6,6 +6,9 @@
 #   bash scripts/setup.sh sanitize   build with AddressSanitizer + UBSan (build-sanitize/) and run
 #                                    the tests there (all but the install check, which links a
 #                                    downstream program without the sanitizers)
+#   bash scripts/setup.sh fuzz       build the mesh readers' libFuzzer targets with clang
+#                                    (build-fuzz/) and run each for a short fixed number of
+#                                    inputs (docs/robustness.md)
 # Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,10 +27,12 @@ PACKAGES=(
   python3-matplotlib                  # plots of examples/compare_methods.py
   tetgen                              # benchmark meshes (docs/global_solver.md)
 )
+# For `fuzz` only: clang and its libFuzzer runtime.
+FUZZ_PACKAGES=(clang libclang-rt-dev)
 
-install_packages() {
+install_packages() {  # also installs the packages given as arguments
   local missing=()
-  for p in "${PACKAGES[@]}"; do
+  for p in "${PACKAGES[@]}" "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   [ ${#missing[@]} -eq 0 ] && return 0
@@ -66,8 +71,14 @@ case "${1:-}" in
     cmake --build --preset sanitize -j "$(nproc)"
     ctest --preset sanitize
     ;;
+  fuzz)
+    install_packages "${FUZZ_PACKAGES[@]}"
+    cmake --preset fuzz
+    cmake --build --preset fuzz -j "$(nproc)"
+    ctest --preset fuzz
+    ;;
   *)
-    echo "usage: bash scripts/setup.sh run|test|build|sanitize" >&2
+    echo "usage: bash scripts/setup.sh run|test|build|sanitize|fuzz" >&2
     exit 2
     ;;
 esac

@@ -241,6 +241,7 @@ private:
     TagIndex element_tags_;
     std::vector<View> point_views_;
     std::vector<View> cell_views_;
+    std::size_t view_bytes_ = 0;  // of all views' values
     RawMesh raw_;
 };
 
@@ -617,11 +618,24 @@ void GmshReader::read_data(bool on_nodes) {
 
     std::vector<View>& views = on_nodes ? point_views_ : cell_views_;
     auto view = std::find_if(views.begin(), views.end(), [&](const View& v) { return v.field.name == name; });
+    // Every view is filled out to every entity, whatever few values it gives; so that many views
+    // in a small file cannot add up to a giant allocation, all views together may take at most
+    // 16 times the file's size (a view of 9 components over every node fits in 9 times).
+    auto reserve_view = [&](std::size_t released) {
+        const std::size_t bytes = entities * width * sizeof(double);
+        if (view_bytes_ - released + bytes > 16 * s_.size() + (1u << 20))
+            fail(section + " '" + name + "' would bring the views to " + std::to_string(view_bytes_ - released + bytes) +
+                 " bytes in memory, more than 16 times the file's size: too many views (each is filled out to every " +
+                 (on_nodes ? "node" : "element") + ") for a file this small");
+        view_bytes_ = view_bytes_ - released + bytes;
+    };
     if (view == views.end()) {
+        reserve_view(0);
         views.push_back({step, Field{name, static_cast<int>(components), {}}});
         view = views.end() - 1;
         view->field.values.assign(entities * width, std::numeric_limits<double>::quiet_NaN());
     } else if (view->step != step || view->field.components != components) {
+        reserve_view(view->field.values.size() * sizeof(double));
         view->step = step;
         view->field.components = static_cast<int>(components);
         view->field.values.assign(entities * width, std::numeric_limits<double>::quiet_NaN());

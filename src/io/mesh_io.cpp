@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/atomic_file.hpp"
@@ -18,36 +20,109 @@ std::string lower(std::string s) {
 }
 
 // Keeps the tuples of `field` that belong to the kept cells.
+// Checked before anything is allocated: a file may declare a cell field of many components
+// before it declares its cells (VTK legacy CELL_DATA 0 ahead of CELLS), so the declared width
+// alone bounds nothing.
 Field narrow_cell_field(const Field& field, std::span<const std::size_t> kept_cells, const std::string& path) {
-    Field out{field.name, field.components, {}};
-    out.values.reserve(kept_cells.size() * static_cast<std::size_t>(field.components));
     const std::size_t tuples = field.values.size() / static_cast<std::size_t>(field.components);
-    for (std::size_t cell : kept_cells) {
+    for (std::size_t cell : kept_cells)
         if (cell >= tuples)
             throw FileError(path, 0, "cell field '" + field.name + "' has " + std::to_string(tuples) +
                                          " values, fewer than the cells");
+    Field out{field.name, field.components, {}};
+    out.values.reserve(kept_cells.size() * static_cast<std::size_t>(field.components));
+    for (std::size_t cell : kept_cells) {
         const auto first = field.values.begin() + static_cast<std::ptrdiff_t>(cell * field.components);
         out.values.insert(out.values.end(), first, first + field.components);
     }
     return out;
 }
 // Swaps two corners of every tetrahedron if their signed volumes sum to less than zero.
-// Indices are checked here because the mesh has not been validated yet.
+// Indices are checked here because the mesh has not been validated yet. The volumes are taken at
+// unit scale (an exact power-of-two rescaling): near 1e300 they would overflow, near 1e-300
+// underflow to zero, and either way the sign would be lost.
 bool orient_by_total_volume(const std::vector<double>& xyz, std::vector<VertexId>& tets) {
     const std::size_t n = xyz.size() / 3;
+    const int scale = unit_scale_exponent(xyz);
+    auto at = [&](VertexId v, int k) { return std::ldexp(xyz[3 * static_cast<std::size_t>(v) + k], scale); };
     double total = 0.0;
     for (std::size_t e = 0; e + 3 < tets.size(); e += 4) {
         const VertexId* c = &tets[e];
         if (std::any_of(c, c + 4, [&](VertexId v) { return v < 0 || static_cast<std::size_t>(v) >= n; })) return false;
         double d[3][3];
         for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) d[i][k] = xyz[3 * static_cast<std::size_t>(c[i + 1]) + k] - xyz[3 * static_cast<std::size_t>(c[0]) + k];
+            for (int k = 0; k < 3; ++k) d[i][k] = at(c[i + 1], k) - at(c[0], k);
         total += d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
                  d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0]);
     }
     if (!(total < 0.0)) return false;
     for (std::size_t e = 0; e + 3 < tets.size(); e += 4) std::swap(tets[e + 2], tets[e + 3]);
     return true;
+}
+
+// The boundary vertices (on a face, or a triangle's edge, of one element only), as
+// boundary_vertices() finds them, and the check that no face is in more than two elements: such a
+// mesh no vertex placement can make valid (untangling could not succeed, and the face would pass
+// for an interior one). One pass does both: each face is listed at its smallest vertex from the
+// elements around that vertex, so the lists to sort are short, which makes it faster than the
+// global sort of boundary_vertices().
+std::vector<std::uint8_t> manifold_boundary(const SimplexMesh& mesh, const std::string& path) {
+    const int k = mesh.corners();
+    std::vector<std::uint8_t> boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    std::vector<std::uint64_t> faces;  // at vertex v: the other vertices of each face, packed
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        faces.clear();
+        for (ElementId e : mesh.elements_of(v)) {
+            const auto corners = mesh.element(e);
+            for (int skip = 0; skip < k; ++skip) {
+                if (corners[skip] == v) continue;
+                std::uint64_t others[2] = {0, 0};
+                int count = 0;
+                bool smallest = true;
+                for (int i = 0; i < k; ++i) {
+                    if (i == skip || corners[i] == v) continue;
+                    smallest = smallest && corners[i] > v;
+                    others[count++] = static_cast<std::uint32_t>(corners[i]);
+                }
+                if (!smallest) continue;
+                if (count == 2 && others[0] > others[1]) std::swap(others[0], others[1]);
+                faces.push_back(others[0] << 32 | others[1]);
+            }
+        }
+        std::sort(faces.begin(), faces.end());
+        for (std::size_t i = 0; i < faces.size();) {
+            std::size_t j = i + 1;
+            while (j < faces.size() && faces[j] == faces[i]) ++j;
+            const std::array<VertexId, 3> face{v, static_cast<VertexId>(faces[i] >> 32),
+                                               static_cast<VertexId>(faces[i] & 0xFFFFFFFFu)};
+            const auto size = static_cast<std::size_t>(k - 1);
+            if (j - i == 1)
+                for (std::size_t c = 0; c < size; ++c) boundary[static_cast<std::size_t>(face[c])] = 1;
+            if (j - i > 2) {
+                std::vector<ElementId> sharing;
+                for (ElementId e : mesh.elements_of(v)) {
+                    const auto element = mesh.element(e);
+                    if (std::all_of(face.begin(), face.begin() + static_cast<std::ptrdiff_t>(size), [&](VertexId u) {
+                            return std::find(element.begin(), element.end(), u) != element.end();
+                        }))
+                        sharing.push_back(e);
+                }
+                std::string vertices, elements;
+                for (std::size_t c = 0; c < size; ++c)
+                    vertices += (c == 0 ? "" : c + 1 == size ? " and " : ", ") + std::to_string(face[c]);
+                for (std::size_t c = 0; c < sharing.size() && c < 6; ++c)
+                    elements += (c == 0 ? "" : c + 1 == sharing.size() ? " and " : ", ") + std::to_string(sharing[c]);
+                if (sharing.size() > 6) elements += ", ...";
+                const bool tets = k == 4;
+                throw FileError(path, 0, std::string(tets ? "the face of vertices " : "the edge of vertices ") + vertices +
+                                             " belongs to " + std::to_string(sharing.size()) +
+                                             (tets ? " tetrahedra (elements " : " triangles (elements ") + elements +
+                                             "), but at most two can share it (a non-manifold mesh; numbers count from 0)");
+            }
+            i = j;
+        }
+    }
+    return boundary;
 }
 
 }  // namespace
@@ -112,6 +187,7 @@ MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& 
     } catch (const MeshError& e) {
         throw FileError(path, 0, e.what());
     }
+    std::vector<std::uint8_t> boundary = manifold_boundary(out.mesh, path);
     const auto n = static_cast<std::size_t>(out.mesh.num_vertices());
     for (Field& f : raw.point_fields) {
         if (f.components < 1 || f.values.size() != n * static_cast<std::size_t>(f.components))
@@ -131,7 +207,7 @@ MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& 
         out.mesh.set_fixed(std::move(flags));
         out.fixed_from_file = true;
     } else if (options.fix_boundary) {
-        out.mesh.fix_boundary();
+        out.mesh.set_fixed(std::move(boundary));
     }
     for (const char* name : {"GlobalNodeIds", "GLOBAL_ID"}) {
         if (const Field* ids = out.point_field(name); ids && ids->components == 1) {

@@ -136,6 +136,9 @@ void read_ele_file(const std::string& path, const Nodes& nodes, RawMesh& raw) {
     if (corners != 4 && corners != 3) e.fail("the number of nodes per element is " + std::to_string(corners) + ", not 4 or 3");
     if (corners == 4 && nodes.dimension == 2) e.fail("tetrahedra need a 3D .node file, but the .node file is 2D");
     const std::int64_t attributes = e.non_negative("the number of element attributes");
+    // Also what bounds the attribute count by the file's size (check_fits) before a field is made
+    // for each attribute.
+    if (m == 0) e.fail("the .ele file holds no elements");
     if (attributes > std::numeric_limits<std::int32_t>::max()) e.fail("too many element attributes");
     e.check_fits(m, 1 + corners + attributes, "elements");
 

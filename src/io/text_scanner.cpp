@@ -133,7 +133,8 @@ bool parse_real(std::string_view token, double& value) {
     const auto result = std::from_chars(token.data(), end, value);
     if (result.ec == std::errc::result_out_of_range) {
         // Underflow to a denormal or zero is fine; overflow becomes infinity (rejected by callers
-        // that need finite values).
+        // that need finite values). The whole token must still be the number: "1e-999abc" is not.
+        if (result.ptr != end) return false;
         value = std::strtod(std::string(token).c_str(), nullptr);
         return true;
     }

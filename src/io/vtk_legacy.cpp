@@ -58,6 +58,11 @@ private:
     void read_classic_cells(std::int64_t cells, std::int64_t size);
     void read_offset_cells(std::int64_t offsets, std::int64_t connectivity);
     void read_cell_types();
+    void check_early_cell_data() const {
+        if (early_cell_data_ >= 0 && early_cell_data_ != cells_)
+            s_.fail("CELLS declares " + std::to_string(cells_) + " cells, but the CELL_DATA section before it declares " +
+                    std::to_string(early_cell_data_));
+    }
     void start_section(Section section);
     void read_attribute(std::string_view keyword);
     void read_field(bool per_entity);
@@ -104,6 +109,9 @@ private:
     bool have_types_ = false;
     Section section_ = Section::None;
     std::int64_t section_size_ = 0;
+    // POINT_DATA / CELL_DATA sizes declared before POINTS / CELLS (-1: none), checked against them.
+    std::int64_t early_point_data_ = -1;
+    std::int64_t early_cell_data_ = -1;
     std::size_t value_byte_ = 0;
 };
 
@@ -204,6 +212,9 @@ void LegacyReader::read_header() {
 void LegacyReader::read_points() {
     if (points_ >= 0) s_.fail("a second POINTS section");
     points_ = s_.count("the number of points", max_values() / 3);
+    if (early_point_data_ >= 0 && early_point_data_ != points_)
+        s_.fail("POINTS " + std::to_string(points_) + " does not match the POINT_DATA " +
+                std::to_string(early_point_data_) + " declared before it");
     const ValueType type = value_type(s_.expect_token("the POINTS data type"));
     end_header_line();
     const auto n = static_cast<std::size_t>(points_);
@@ -232,6 +243,7 @@ void LegacyReader::read_classic_cells(std::int64_t cells, std::int64_t size) {
                 ": the size must count each cell's point count and its point ids");
     end_header_line();
     cells_ = cells;
+    check_early_cell_data();
     offsets_.assign(1, 0);
     offsets_.reserve(static_cast<std::size_t>(cells) + 1);
     connectivity_.reserve(static_cast<std::size_t>(size - cells));
@@ -271,6 +283,7 @@ void LegacyReader::read_offset_cells(std::int64_t offsets, std::int64_t connecti
     const ValueType offset_type = integer_type(s_.expect_token("the OFFSETS data type"), "OFFSETS");
     end_header_line();
     cells_ = offsets == 0 ? 0 : offsets - 1;
+    check_early_cell_data();
     offsets_.reserve(static_cast<std::size_t>(offsets));
     read_values<std::int64_t>(
         static_cast<std::size_t>(offsets), offset_type, "a cell offset", [&](std::size_t i, std::int64_t v) {
@@ -330,6 +343,7 @@ void LegacyReader::start_section(Section section) {
     if (expected >= 0 && n != expected)
         s_.fail(std::string(name) + " " + std::to_string(n) + " does not match the " + std::to_string(expected) +
                 (points ? " points" : " cells"));
+    if (expected < 0) (points ? early_point_data_ : early_cell_data_) = n;
     section_ = section;
     section_size_ = n;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cctype>
+#include <unordered_set>
 
 #include "paloverde/core/error.hpp"
 
@@ -151,6 +152,9 @@ void XmlParser::start_tag(std::vector<std::size_t>& open) {
     element.name = name("an element name");
     element.line = tag_line;
     element.offset = tag_offset;
+    // A set rather than a search of the attributes so far, which takes quadratic time on a tag
+    // with very many of them.
+    std::unordered_set<std::string_view> names;
     bool closed = false;
     while (true) {
         skip_space();
@@ -176,7 +180,7 @@ void XmlParser::start_tag(std::vector<std::size_t>& open) {
         if (end == std::string_view::npos) fail("unterminated value of attribute " + std::string(attribute));
         const std::string_view raw = t_.substr(pos_ + 1, end - pos_ - 1);
         if (raw.find('<') != std::string_view::npos) fail("'<' in the value of attribute " + std::string(attribute));
-        if (element.attribute(attribute)) fail("attribute " + std::string(attribute) + " appears twice");
+        if (!names.insert(attribute).second) fail("attribute " + std::string(attribute) + " appears twice");
         element.attributes.emplace_back(attribute, decode(raw));
         move_to(end + 1);
     }

@@ -78,24 +78,36 @@ void SimplexMesh::find_plane() {
     planar_ = false;
     plane_normal_ = {0.0, 0.0, 1.0};
     if (kind_ != ElementKind::Triangle || num_elements() == 0) return;
+    // At unit scale (an exact power-of-two rescaling, which changes no direction): near 1e300 the
+    // cross products would overflow, near 1e-300 underflow to zero.
+    const int scale = unit_scale_exponent(coordinates_);
+    auto scaled = [&](VertexId v) {
+        const Vec3 p = point(v);
+        return Vec3{std::ldexp(p[0], scale), std::ldexp(p[1], scale), std::ldexp(p[2], scale)};
+    };
     // The area-weighted normal: inverted triangles subtract, so a tangled but mostly valid planar
     // mesh keeps the orientation of its majority.
     Vec3 sum{0.0, 0.0, 0.0};
     for (ElementId e = 0; e < num_elements(); ++e) {
         const auto c = element(e);
-        const Vec3 a = point(c[0]), b = point(c[1]), d = point(c[2]);
+        const Vec3 a = scaled(c[0]), b = scaled(c[1]), d = scaled(c[2]);
         const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
         sum[0] += u[1] * w[2] - u[2] * w[1];
         sum[1] += u[2] * w[0] - u[0] * w[2];
         sum[2] += u[0] * w[1] - u[1] * w[0];
     }
+    // The sum is normalized at unit scale too: when the coordinates span a wide range, the areas
+    // of the small triangles are tiny even at unit scale, and their squares would underflow.
+    scale_coordinates(sum, unit_scale_exponent(sum));
     const double length = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-    Vec3 lo{coordinates_[0], coordinates_[1], coordinates_[2]}, hi = lo;
-    for (VertexId v = 0; v < num_vertices(); ++v)
+    Vec3 lo = scaled(0), hi = lo;
+    for (VertexId v = 0; v < num_vertices(); ++v) {
+        const Vec3 p = scaled(v);
         for (int i = 0; i < 3; ++i) {
-            lo[i] = std::min(lo[i], coordinates_[3 * v + i]);
-            hi[i] = std::max(hi[i], coordinates_[3 * v + i]);
+            lo[i] = std::min(lo[i], p[i]);
+            hi[i] = std::max(hi[i], p[i]);
         }
+    }
     const double diagonal = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
     if (!(length > 0.0) || !(diagonal > 0.0)) return;
     Vec3 normal{sum[0] / length, sum[1] / length, sum[2] / length};
@@ -105,13 +117,14 @@ void SimplexMesh::find_plane() {
             normal = {0.0, 0.0, 0.0};
             normal[i] = sum[i] > 0 ? 1.0 : -1.0;
         }
-    const Vec3 origin = point(connectivity_[0]);
+    const Vec3 origin = scaled(connectivity_[0]);
     // Coordinates often come from single-precision files: allow float rounding, nothing more.
     const double tolerance = 1e-6 * diagonal;
     for (VertexId v = 0; v < num_vertices(); ++v) {
         if (vertex_element_offsets_[v] == vertex_element_offsets_[v + 1]) continue;
+        const Vec3 p = scaled(v);
         double distance = 0.0;
-        for (int i = 0; i < 3; ++i) distance += (coordinates_[3 * v + i] - origin[i]) * normal[i];
+        for (int i = 0; i < 3; ++i) distance += (p[i] - origin[i]) * normal[i];
         if (std::abs(distance) > tolerance) return;
     }
     planar_ = true;
