@@ -3,7 +3,11 @@
 // hand under mpirun (examples/parallel_scaling.sh); never timed in CI.
 //   mpirun -n P paloverde_parallel_benchmark MESH [--method global|local] [--iterations N]
 //          [--exchange colored|root]
+// Prints the run's report as JSON, with the peak resident memory of the ranks.
 #include <mpi.h>
+#include <sys/resource.h>
+
+#include <nlohmann/json.hpp>
 
 #include <cstring>
 #include <iostream>
@@ -49,7 +53,19 @@ int main(int argc, char** argv) {
             pv::GlobalSolver solver(global);
             report = pv::improve_distributed(MPI_COMM_WORLD, options, solver);
         }
-        if (rank == 0) std::cout << report.to_json() << "\n";
+        // Peak resident memory: the sum over the ranks and the largest rank's (bytes per element
+        // held decide how large a mesh fits).
+        rusage usage{};
+        getrusage(RUSAGE_SELF, &usage);
+        const long long peak = static_cast<long long>(usage.ru_maxrss) * 1024;  // ru_maxrss is in KiB
+        long long total = 0, largest = 0;
+        MPI_Reduce(&peak, &total, 1, MPI_LONG_LONG, MPI_SUM, 0, MPI_COMM_WORLD);
+        MPI_Reduce(&peak, &largest, 1, MPI_LONG_LONG, MPI_MAX, 0, MPI_COMM_WORLD);
+        if (rank == 0) {
+            auto json = nlohmann::json::parse(report.to_json());
+            json["memory"] = {{"peak_rss_bytes_total", total}, {"peak_rss_bytes_largest_rank", largest}};
+            std::cout << json.dump(2) << "\n";
+        }
     } catch (const std::exception& e) {
         if (rank == 0) std::cerr << "paloverde_parallel_benchmark: " << e.what() << "\n";
         status = 1;
