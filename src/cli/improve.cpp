@@ -2,7 +2,9 @@
 #include <string>
 
 #include "commands.hpp"
+#include "mpi_session.hpp"
 #include "paloverde/config/registry.hpp"
+#include "signals.hpp"
 
 namespace paloverde::cli {
 
@@ -21,6 +23,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads;
         std::string iterations, target, time_limit, barrier_shrink, improve_below;
+        std::string checkpoint, checkpoint_every, resume;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
     };
@@ -73,9 +76,21 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     cmd->add_option("--plot", o->plot, "output.plot: plot the worst quality per iteration and over time (SVG)")
         ->type_name("FILE");
     cmd->add_flag("--ascii", o->ascii, "output.ascii: write the mesh as text where the format has a binary form");
+    cmd->add_option("--checkpoint", o->checkpoint,
+                    "checkpoint.file (global, local): write the solver's state there every --checkpoint-every "
+                    "iterations, every 300 s and on Ctrl-C / SIGTERM, to --resume from (docs/robustness.md)")
+        ->type_name("FILE");
+    cmd->add_option("--checkpoint-every", o->checkpoint_every,
+                    "checkpoint.every_iterations: write the checkpoint every N iterations (sweeps for local)")
+        ->type_name("N");
+    cmd->add_option("--resume", o->resume,
+                    "checkpoint.resume: continue from this checkpoint (same input and options) to the result the "
+                    "uninterrupted run gives")
+        ->type_name("FILE");
     o->report.add_to(*cmd);
+    stop_on_signals(*cmd);
     cmd->footer("Exit codes: 0 done, 1 error (including \"could not untangle\"), 2 bad usage, 3 --target not reached "
-                "(the mesh is valid).");
+                "(the mesh is valid), 4 interrupted by Ctrl-C or SIGTERM (the best mesh so far was written).");
     cmd->callback([o, &exit_code] {
         std::vector<config::Override> set;
         auto flag = [&](const std::string& key, const std::string& value, const std::string& source, bool literal = false) {
@@ -109,6 +124,12 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         if (!o->table.empty()) flag("output.table", o->table, "--table", true);
         if (!o->plot.empty()) flag("output.plot", o->plot, "--plot", true);
         if (o->ascii) flag("output.ascii", "true", "--ascii");
+        // Under `mpirun -n N`, the mesh is split into N parts, one per rank.
+        if (const int ranks = MpiSession::size(); ranks > 1)
+            flag("partition.parts", std::to_string(ranks), "mpirun -n " + std::to_string(ranks));
+        if (!o->checkpoint.empty()) flag(step + "checkpoint.file", o->checkpoint, "--checkpoint", true);
+        if (!o->checkpoint_every.empty()) flag(step + "checkpoint.every_iterations", o->checkpoint_every, "--checkpoint-every");
+        if (!o->resume.empty()) flag(step + "checkpoint.resume", o->resume, "--resume", true);
         for (const auto& s : o->report.sets) set.push_back({s, "--set"});
         exit_code = execute(config::parse_config("", "improve", set), o->report);
     });

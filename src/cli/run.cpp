@@ -3,6 +3,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "mpi_session.hpp"
 #include "paloverde/config/run.hpp"
 #include "progress.hpp"
 
@@ -26,7 +27,9 @@ int execute(const config::RunSpec& spec, const ReportFlags& flags) {
         std::cout << config::to_yaml(spec);
         return kDone;
     }
-    ProgressLine progress(!flags.quiet && ProgressLine::terminal());
+    // A partitioned config runs without mpirun too, as a run of one rank.
+    if (spec.partitioned()) MpiSession::ensure();
+    ProgressLine progress(!flags.quiet && MpiSession::rank() == 0 && ProgressLine::terminal());
     const config::RunResult result = config::run(spec, progress.hooks());
     progress.finish();
     if (flags.json) std::cout << result.to_json() << "\n";

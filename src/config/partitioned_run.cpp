@@ -1,25 +1,411 @@
-#include "config/partitioned_run.hpp"
+// A run config over MPI ranks: every rank parses the same config and runs this. Rank 0 reads and
+// splits input.mesh (or every rank reads its piece), each method's queue runs on the distributed
+// mesh, the outputs are written (meshes gathered on rank 0, or as pieces; reports by rank 0), and
+// every rank returns the same RunResult. Anything that can fail on one rank alone is made to fail
+// on all of them, so no rank is left waiting in a collective call.
+#include <mpi.h>
+#include <unistd.h>
 
-#include <filesystem>
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <limits>
+
+#include "config/partitioned_run.hpp"
+#include "config/registry_internal.hpp"
+#include "io/xml_reader.hpp"
+#include "paloverde/io/atomic_file.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/solvers/stop.hpp"
 
 namespace paloverde::config::detail {
 
-// Partitioned runs are wired here: split or read the pieces (input.pieces, partition.parts and
-// partition.method), run each method's queue on the distributed mesh (parallel.exchange), write
-// output.pieces and the run's other outputs, and fill the RunResult as the serial run() does.
-// Until then every config that needs them stops here, before anything is read.
+int world_size() {
+    int initialized = 0, finalized = 0;
+    MPI_Initialized(&initialized);
+    if (!initialized) return 1;
+    MPI_Finalized(&finalized);
+    if (finalized) return 1;
+    int size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    return size;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+bool is_pvtu(const std::string& path) { return std::filesystem::path(path).extension() == ".pvtu"; }
+
+// Runs `work` where `here` is true (rank 0 alone, or every rank). When it throws anywhere, it
+// throws on every rank: the lowest failing rank rethrows its own exception, the others an
+// exception of the same kind (a usage error or not: the exit code) with the same message.
+template <class Work>
+void together(MPI_Comm comm, bool here, Work&& work) {
+    std::exception_ptr failure;
+    std::string message;
+    int kind = 0;  // 0: none, 1: usage (OptionError, ConfigError), 2: anything else
+    if (here) {
+        try {
+            work();
+        } catch (const OptionError& e) {
+            failure = std::current_exception(), message = e.what(), kind = 1;
+        } catch (const std::exception& e) {
+            failure = std::current_exception(), message = e.what(), kind = 2;
+        } catch (...) {
+            failure = std::current_exception(), message = "unknown error", kind = 2;
+        }
+    }
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    int lowest = kind != 0 ? rank : std::numeric_limits<int>::max();
+    MPI_Allreduce(MPI_IN_PLACE, &lowest, 1, MPI_INT, MPI_MIN, comm);
+    if (lowest == std::numeric_limits<int>::max()) return;
+    int header[2] = {kind, static_cast<int>(message.size())};
+    MPI_Bcast(header, 2, MPI_INT, lowest, comm);
+    message.resize(static_cast<std::size_t>(header[1]));
+    MPI_Bcast(message.data(), header[1], MPI_CHAR, lowest, comm);
+    if (rank == lowest) std::rethrow_exception(failure);
+    if (header[0] == 1) throw OptionError(message);
+    throw Error(message);
+}
+
+ConfigError config_error(const RunSpec& spec, const std::string& key, const std::string& message) {
+    return ConfigError(origin(spec, key), key, message);
+}
+
+// Where a step of method `m` was written: "queue[2]" or "study[1].queue[2]".
+std::string step_path(const RunSpec& spec, std::size_t m, std::size_t i) {
+    return (spec.study.empty() ? std::string() : "study[" + std::to_string(m) + "].") + "queue[" + std::to_string(i) + "]";
+}
+
+// A queue for a distributed mesh: InstructionQueue runs on a SimplexMesh only.
+struct Step {
+    std::string label;
+    std::optional<QualityAssessor> assessor;  // an assessment, or
+    std::unique_ptr<Solver> solver;           // a GlobalSolver or LocalSolver
+};
+struct DistributedQueue {
+    std::vector<Step> steps;
+    std::vector<std::optional<double>> targets;  // per improver, in order
+};
+
+const char* const kOnlyGlobalAndLocal =
+    "has no distributed version: a partitioned run takes the global and local solvers (and the wrappers untangle, "
+    "shape_improvement, local_shape_improvement and untangle_then_improve); run it serially (partition.parts: 1, no "
+    "pieces, without mpirun)";
+
+// The steps of a wrapper, as wrappers/src/wrappers.cpp builds them (same labels, same solvers);
+// tests/config checks that both give the same steps.
+void append_wrapper(const StepSpec& step, int threads, DistributedQueue& q) {
+    const WrapperKind* kind = find_wrapper(step.name);
+    if (!kind) describe("wrapper", step.name);  // throws, listing the wrappers
+    SolverOptions options = step.options;
+    set_threads(options, threads);
+    const auto global = [&](bool untangle, bool shape) {
+        GlobalSolverOptions g = std::get<GlobalSolverOptions>(options);
+        g.untangle = untangle;
+        g.improve_shape = shape;
+        return std::make_unique<GlobalSolver>(g);
+    };
+    q.steps.push_back({"before", QualityAssessor(), nullptr});
+    if (step.name == "untangle") {
+        q.steps.push_back({"untangle", std::nullopt, global(true, false)});
+    } else if (step.name == "shape_improvement") {
+        q.steps.push_back({"global", std::nullopt, global(false, true)});
+    } else if (step.name == "untangle_then_improve") {
+        q.steps.push_back({"untangle", std::nullopt, global(true, false)});
+        q.steps.push_back({"global", std::nullopt, global(false, true)});
+    } else if (step.name == "local_shape_improvement") {
+        q.steps.push_back({"local", std::nullopt, std::make_unique<LocalSolver>(std::get<LocalSolverOptions>(options))});
+    } else {
+        throw OptionError("wrapper '" + step.name + "' " + kOnlyGlobalAndLocal);
+    }
+    q.steps.push_back({"after", QualityAssessor(), nullptr});
+    for (const auto& t : kind->targets(options)) q.targets.push_back(t);
+}
+
+// Builds method `m`'s queue; a solver without a distributed version is an error naming its step.
+DistributedQueue build_queue_for(const RunSpec& spec, const MethodSpec& method, std::size_t m) {
+    DistributedQueue q;
+    for (std::size_t i = 0; i < method.queue.size(); ++i) {
+        const StepSpec& step = method.queue[i];
+        const std::string path = step_path(spec, m, i);
+        const auto reject = [&](const std::string& key) {
+            const std::string where = origin(spec, key).empty() ? origin(spec, path) : origin(spec, key);
+            throw ConfigError(where, key, "'" + step.name + "' " + kOnlyGlobalAndLocal);
+        };
+        switch (step.kind) {
+            case StepSpec::Kind::Assess: q.steps.push_back({step.label, assessor_of(step.assess), nullptr}); break;
+            case StepSpec::Kind::Untangle:
+            case StepSpec::Kind::Improve: {
+                if (step.name != "global" && step.name != "local")
+                    reject(path + (step.kind == StepSpec::Kind::Untangle ? ".untangle" : ".improve") + ".name");
+                BuiltSolver built = build_solver(step, spec.threads);
+                q.steps.push_back({step.label, std::nullopt, std::move(built.solver)});
+                q.targets.push_back(built.target);
+                break;
+            }
+            case StepSpec::Kind::Wrapper:
+                if (step.name == "laplace") reject(path + ".wrapper.name");
+                append_wrapper(step, spec.threads, q);
+                break;
+        }
+    }
+    return q;
+}
+
+Summary improve(Solver& solver, DistributedMesh& part) {
+    if (auto* global = dynamic_cast<GlobalSolver*>(&solver)) return global->improve(part);
+    if (auto* local = dynamic_cast<LocalSolver*>(&solver)) return local->improve(part);
+    throw OptionError("solver '" + std::string(solver.name()) + "' " + kOnlyGlobalAndLocal);
+}
+
+// As InstructionQueue::run: stops at the first improver that fails.
+QueueResult run_queue(const DistributedQueue& queue, DistributedMesh& part) {
+    QueueResult result;
+    for (const Step& step : queue.steps) {
+        if (step.assessor) {
+            result.steps.push_back({step.label, step.assessor->assess(part)});
+            continue;
+        }
+        Summary summary = improve(*step.solver, part);
+        const bool ok = summary.success();
+        const std::string why = summary.message;
+        result.steps.push_back({step.label, std::move(summary)});
+        if (!ok) {
+            result.success = false;
+            result.message = "'" + step.label + "' failed: " + why;
+            break;
+        }
+    }
+    return result;
+}
+
+// Everything about the config and the number of ranks that can be wrong, before anything is read.
+// The same on every rank: it depends on the spec and the world's size only.
+void check_partitioned(const RunSpec& spec, int ranks, bool pieces) {
+    const InputSpec& in = spec.input;
+    const int parts = spec.partition.parts;
+    const std::string launch = "mpirun -n " + std::to_string(parts);
+    if (!pieces && parts != ranks) {
+        std::string message;
+        if (ranks == 1)
+            message = "splitting input.mesh into " + std::to_string(parts) + " parts needs " + std::to_string(parts) +
+                      " MPI ranks, one per part, but this run has 1: launch it with `" + launch +
+                      " paloverde run ...`, or set partition.parts: 1 for a serial run";
+        else if (parts == 1)
+            message = "this run has " + std::to_string(ranks) + " MPI ranks but partition.parts is 1 (a serial run): "
+                      "set partition.parts: " + std::to_string(ranks) + " (or --set partition.parts=" +
+                      std::to_string(ranks) + ") to split input.mesh over them, or run it without mpirun";
+        else
+            message = "must equal the number of MPI ranks (one part per rank): it is " +
+                      std::to_string(parts) + " but this run has " + std::to_string(ranks) + "; set partition.parts: " +
+                      std::to_string(ranks) + " or launch it with `" + launch + " ...`";
+        throw config_error(spec, "partition.parts", message);
+    }
+    if (pieces) {
+        const std::string key = in.pieces.empty() ? "input.mesh" : "input.pieces";
+        if (parts != 1 && parts != ranks)
+            throw config_error(spec, "partition.parts",
+                               "the pieces are read one per MPI rank; partition.parts is " + std::to_string(parts) +
+                                   " but this run has " + std::to_string(ranks) +
+                                   " ranks: launch it on as many ranks as there are pieces, or leave partition.parts out");
+        const bool listed = !in.pieces.empty() && !(in.pieces.size() == 1 && is_pvtu(in.pieces[0]));
+        if (listed) {
+            for (const auto& p : in.pieces)
+                if (is_pvtu(p))
+                    throw config_error(spec, key, "'" + p + "' is a .pvtu, which lists its pieces itself: give it "
+                                                  "alone (pieces: [" + p + "]) or as input.mesh");
+            if (static_cast<int>(in.pieces.size()) != ranks)
+                throw config_error(spec, key, "lists " + std::to_string(in.pieces.size()) + " pieces but this run has " +
+                                                  std::to_string(ranks) + (ranks == 1 ? " MPI rank" : " MPI ranks") +
+                                                  ": piece k goes to rank k, so launch it with `mpirun -n " +
+                                                  std::to_string(in.pieces.size()) + " ...`");
+        }
+        if (in.fixed == FixedVertices::Boundary)
+            throw config_error(spec, "input.fixed",
+                               "pieces carry their own `fixed` field (a piece alone cannot tell the boundary of the "
+                               "whole mesh): use fixed: auto, file or none, or split the whole mesh in this run "
+                               "(input.mesh and partition.parts)");
+        if (!in.fixed_vertices.empty())
+            throw config_error(spec, "input.fixed_vertices",
+                               "ids in the file's order do not exist for pieces: set the `fixed` field of the whole "
+                               "mesh before splitting it, or split it in this run (input.mesh and partition.parts)");
+        if (in.format != MeshFormat::FromExtension)
+            throw config_error(spec, "input.format", "pieces are read by their extension: leave input.format: auto");
+        if (!spec.output.mesh.empty() && !is_pvtu(spec.output.mesh))
+            throw config_error(spec, "output.mesh",
+                               "a run from pieces has no whole mesh on one rank to write: give a .pvtu (pieces) "
+                               "or use output.pieces");
+    }
+    if (spec.study.size() > 1 && !spec.output.pieces.empty() && spec.output.pieces.find("{method}") == std::string::npos)
+        throw config_error(spec, "output.pieces",
+                           "a study writes pieces per method: put {method} in the name (e.g. out_{method}.pvtu)");
+}
+
+// A list of piece files as a .pvtu of this rank's own (read_pieces takes one path), removed
+// when done. Each rank writes its own: ranks on other nodes may not share a temporary folder.
+class ListedPieces {
+public:
+    ListedPieces(const std::vector<std::string>& files, int rank) {
+        path_ = std::filesystem::temp_directory_path() /
+                ("paloverde_pieces_" + std::to_string(::getpid()) + "_" + std::to_string(rank) + ".pvtu");
+        std::string text = "<?xml version=\"1.0\"?>\n<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\">\n"
+                           "  <PUnstructuredGrid GhostLevel=\"1\">\n";
+        for (const auto& f : files)
+            text += "    <Piece Source=\"" + io::xml_escaped(std::filesystem::absolute(f).string()) + "\"/>\n";
+        text += "  </PUnstructuredGrid>\n</VTKFile>\n";
+        write_text_file(path_, text);
+    }
+    ~ListedPieces() {
+        std::error_code ignored;
+        std::filesystem::remove(path_, ignored);
+    }
+    ListedPieces(const ListedPieces&) = delete;
+    ListedPieces& operator=(const ListedPieces&) = delete;
+    const std::filesystem::path& path() const { return path_; }
+
+private:
+    std::filesystem::path path_;
+};
+
+// Reads the pieces of input.pieces or a .pvtu input.mesh; errors about a listed set name
+// input.pieces rather than the temporary .pvtu.
+DistributedMesh read_input_pieces(const RunSpec& spec, MPI_Comm comm, int rank, const DistributeOptions& options) {
+    const InputSpec& in = spec.input;
+    if (in.pieces.empty()) return DistributedMesh::read_pieces(comm, in.mesh, options);
+    if (in.pieces.size() == 1 && is_pvtu(in.pieces[0])) return DistributedMesh::read_pieces(comm, in.pieces[0], options);
+    std::unique_ptr<ListedPieces> listed;
+    together(comm, true, [&] { listed = std::make_unique<ListedPieces>(in.pieces, rank); });
+    try {
+        return DistributedMesh::read_pieces(comm, listed->path(), options);
+    } catch (const Error& e) {
+        std::string message = e.what();
+        const std::string temporary = listed->path().string();
+        for (std::size_t at = message.find(temporary); at != std::string::npos; at = message.find(temporary))
+            message.replace(at, temporary.size(), "the pieces of input.pieces");
+        if (dynamic_cast<const OptionError*>(&e)) throw OptionError(message);
+        throw MeshError(message);
+    }
+}
+
+std::string input_name(const RunSpec& spec) {
+    if (!spec.input.mesh.empty()) return spec.input.mesh;
+    std::string names;
+    for (const auto& p : spec.input.pieces) names += (names.empty() ? "" : ", ") + p;
+    return names;
+}
+
+}  // namespace
+
 RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
-    (void)hooks;
-    auto pvtu = [](const std::string& path) { return std::filesystem::path(path).extension() == ".pvtu"; };
-    const std::string key = !spec.input.pieces.empty() ? "input.pieces"
-                            : pvtu(spec.input.mesh)    ? "input.mesh"
-                            : spec.partition.parts > 1 ? "partition.parts"
-                            : pvtu(spec.output.mesh)   ? "output.mesh"
-                                                       : "output.pieces";
-    const auto origin = spec.origins.find(key);
-    throw ConfigError(origin == spec.origins.end() ? std::string() : origin->second, key,
-                      "partitioned (MPI) runs are not available in this build yet; for a serial run use input.mesh, "
-                      "leave input.pieces and output.pieces unset and keep partition.parts: 1");
+    const int ranks = world_size();
+    const bool pieces = !spec.input.pieces.empty() || is_pvtu(spec.input.mesh);
+    check_partitioned(spec, ranks, pieces);
+    const auto methods = spec.methods();
+    std::vector<DistributedQueue> queues;  // every option checked before the mesh is read
+    for (std::size_t m = 0; m < methods.size(); ++m) queues.push_back(build_queue_for(spec, methods[m], m));
+    int initialized = 0;
+    MPI_Initialized(&initialized);
+    if (!initialized)
+        throw Error("a partitioned run needs MPI: call MPI_Init before config::run (the paloverde program does it "
+                    "for such a config, or when launched by mpirun)");
+
+    const MPI_Comm comm = MPI_COMM_WORLD;
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    DistributeOptions distribute;
+    distribute.exchange = spec.parallel.exchange == "root" ? ExchangeMode::RootRelayed : ExchangeMode::Colored;
+    ParallelReport report;
+    report.ranks = ranks;
+    report.exchange = distribute.exchange == ExchangeMode::Colored ? "colored" : "root_relayed";
+    report.from_pieces = pieces;
+
+    MeshFile file;  // rank 0, when it reads and splits input.mesh: the whole mesh, for output.mesh
+    DistributedMesh part;
+    auto start = Clock::now();
+    if (pieces) {
+        part = read_input_pieces(spec, comm, rank, distribute);
+        report.read_seconds = seconds_since(start);
+        if (spec.input.fixed == FixedVertices::None)
+            part.mesh.set_fixed(std::vector<std::uint8_t>(static_cast<std::size_t>(part.mesh.num_vertices()), 0));
+    } else {
+        together(comm, rank == 0, [&] { file = read_input(spec); });
+        report.read_seconds = seconds_since(start);
+        part = DistributedMesh::scatter(comm, rank == 0 ? &file.mesh : nullptr, distribute);
+        report.partition_seconds = part.timings.partition;
+        report.distribute_seconds = part.timings.distribute;
+    }
+    report.schedule_seconds = part.timings.schedule;
+    report.vertices = part.global_vertices;
+    report.elements = part.global_elements;
+    report.ghost_copies = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.received_vertices())));
+    report.messages = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.schedule().partners.size())));
+    report.colors = part.schedule().colors;
+
+    RunResult result;
+    result.input = input_name(spec);
+    const QualityAssessor assessor = report_assessor(spec.output.metric);
+    const std::vector<double> initial(part.mesh.coordinates().begin(), part.mesh.coordinates().end());
+    WriteOptions write;
+    write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+        // Every method starts from the input.
+        if (m > 0) std::copy(initial.begin(), initial.end(), part.mesh.coordinates().begin());
+        const MethodSpec& method = methods[m];
+        if (hooks.on_iteration)
+            for (Step& step : queues[m].steps)
+                if (step.solver)
+                    step.solver->set_observer([&hooks, &method, label = step.label](const IterationRecord& r) {
+                        hooks.on_iteration(method.name, label, r);
+                    });
+        MethodResult r;
+        r.name = method.name;
+        r.metric = spec.output.metric;
+        r.before = assessor.assess(part);
+        MPI_Barrier(comm);
+        start = Clock::now();
+        r.queue = run_queue(queues[m], part);
+        r.seconds = part.reducer().max(seconds_since(start));
+        r.after = assessor.assess(part);
+        finish_method(r, queues[m].targets);
+        report.solve_seconds += r.seconds;
+
+        start = Clock::now();
+        if (!spec.output.mesh.empty()) {
+            r.mesh_written = replace_method(spec.output.mesh, method.name);
+            if (is_pvtu(r.mesh_written)) {
+                part.write_pieces(r.mesh_written);
+            } else {
+                // Every rank takes part in the gather; only rank 0 holds the whole mesh and writes it.
+                together(comm, true, [&] { part.gather_coordinates(rank == 0 ? &file.mesh : nullptr); });
+                together(comm, rank == 0,
+                         [&] { write_mesh(r.mesh_written, file.mesh, write, file.point_fields, file.cell_fields); });
+            }
+        }
+        if (!spec.output.pieces.empty()) part.write_pieces(replace_method(spec.output.pieces, method.name));
+        report.write_seconds += part.reducer().max(seconds_since(start));
+        result.methods.push_back(std::move(r));
+        if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
+        // Interrupted (SIGINT, SIGTERM): the methods not yet run are skipped, on every rank alike.
+        int stop = stop_requested() ? 1 : 0;
+        MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, comm);
+        if (stop) break;
+    }
+    settle_status(result);
+    // Rank 0's clock for the stages it leads, so that every rank reports the same numbers.
+    double seconds[4] = {report.read_seconds, report.partition_seconds, report.distribute_seconds,
+                         report.schedule_seconds};
+    MPI_Bcast(seconds, 4, MPI_DOUBLE, 0, comm);
+    report.read_seconds = seconds[0], report.partition_seconds = seconds[1], report.distribute_seconds = seconds[2];
+    report.schedule_seconds = seconds[3];
+    result.parallel = report;
+    together(comm, rank == 0, [&] { write_reports(spec, result); });
+    return result;
 }
 
 }  // namespace paloverde::config::detail

@@ -1,11 +1,51 @@
 #pragma once
+// What the serial run (run.cpp) and the partitioned run (partitioned_run.cpp) share, and the
+// partitioned run itself.
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
 #include "paloverde/config/run.hpp"
 
 namespace paloverde::config::detail {
 
-// A run that needs the partitioned (MPI) machinery: RunSpec::partitioned() (input.pieces, a
-// .pvtu input or output, partition.parts > 1 or output.pieces). config::run() hands such a spec
-// here after check_runnable() and before reading anything.
+// An assess step's assessor (`metrics: []` stands for QualityAssessor()'s set).
+QualityAssessor assessor_of(const AssessSpec& assess);
+// What a method's before and after reports measure: the default set and output.metric.
+QualityAssessor report_assessor(const std::string& metric);
+
+// The solver of an untangle or improve step, with `threads`, and its target_worst_quality.
+struct BuiltSolver {
+    std::unique_ptr<Solver> solver;
+    std::optional<double> target;
+};
+BuiltSolver build_solver(const StepSpec& step, int threads);
+
+// input.mesh read, with the fixed flags input.fixed and input.fixed_vertices ask for; the file's
+// own `fixed` field is dropped from the fields written back.
+MeshFile read_input(const RunSpec& spec);
+
+// "file:line:column" (or the flag) where `key` was set; "" for a default.
+std::string origin(const RunSpec& spec, const std::string& key);
+// `path` with {method} replaced by the method's name.
+std::string replace_method(std::string path, const std::string& method);
+
+// Once queue, before and after are set: worst and mean, iterations, status and message
+// (`targets`: per improver of the queue, in order).
+void finish_method(MethodResult& result, const std::vector<std::optional<double>>& targets);
+// The run's status: the worst of its methods'.
+void settle_status(RunResult& result);
+// output.history, output.table, output.summary and output.plot (each through a temporary).
+void write_reports(const RunSpec& spec, const RunResult& result);
+
+// Ranks of MPI_COMM_WORLD; 1 when MPI is not initialized.
+int world_size();
+
+// A run over the ranks of MPI_COMM_WORLD (see config::run): the spec is partitioned() or the
+// world has more than one rank. config::run() hands it here after check_runnable(); everything
+// that can be checked before reading (partition.parts against the ranks, solvers that have a
+// distributed version, outputs that fit) is checked first, with errors naming key and line.
 RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks);
 
 }  // namespace paloverde::config::detail

@@ -147,6 +147,7 @@ struct Tables {
     Table<LocalSolverOptions> local{"the local solver", [](const LocalSolverOptions& o) { o.validate(); }};
     Table<LaplaceSolverOptions> laplace{"a Laplace solver", [](const LaplaceSolverOptions& o) { o.validate(); }};
     Table<AssessSpec> assess{"an assess step", [](const AssessSpec& a) { a.validate(); }};
+    Table<CheckpointOptions> checkpoint{"checkpoint", [](const CheckpointOptions& c) { c.validate(); }};
     OptionsKind global_kind, local_kind, laplace_kind;
     std::vector<SolverKind> solvers;
     std::vector<WrapperKind> wrappers;
@@ -191,6 +192,15 @@ Tables::Tables() {
               "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1.");
     p_mean.real("p", &ObjectiveOptions::p, "Exponent, nonzero; negative stresses the worst elements.");
 
+    checkpoint.path("file", &CheckpointOptions::file,
+                    "Write the solver's state here (a temporary, then a rename) to resume from; ~: no checkpoints.")
+        .integer("every_iterations", &CheckpointOptions::every_iterations,
+                 "Write a checkpoint every this many iterations (sweeps), >= 0; 0: not by count.")
+        .real("every_seconds", &CheckpointOptions::every_seconds,
+              "And every this many seconds, >= 0; 0: not by time. A stop request (Ctrl-C, SIGTERM) also writes one.")
+        .path("resume", &CheckpointOptions::resume,
+              "Continue from this checkpoint (same mesh and options) to the result the uninterrupted run gives; ~: start afresh.");
+
     const auto objective_field = named_field<GlobalSolverOptions, ObjectiveOptions>(
         "objective", "objective", "What the global solver maximizes: log_barrier, p_mean or min_quality.",
         &GlobalSolverOptions::objective, &GlobalSolverOptions::objective_options,
@@ -216,7 +226,9 @@ Tables::Tables() {
         .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu, "Steps at one mu before it shrinks, >= 1.")
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
-        .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).");
+        .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")
+        .object("checkpoint", &GlobalSolverOptions::checkpoint, checkpoint,
+                "Checkpoints of a long run: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 
     local.add(metric_field(&LocalSolverOptions::metric, &LocalSolverOptions::metric_options,
                            "Shape metric whose minimum over each vertex's elements is raised (one with a gradient)."))
@@ -230,7 +242,9 @@ Tables::Tables() {
         .real("active_tolerance", &LocalSolverOptions::active_tolerance,
               "Elements within this fraction of the patch minimum are active, in [0, 1).")
         .real("improve_below", &LocalSolverOptions::improve_below,
-              "Move only vertices whose worst element lies in this lowest fraction of worst..ideal, > 0 (1: all).");
+              "Move only vertices whose worst element lies in this lowest fraction of worst..ideal, > 0 (1: all).")
+        .object("checkpoint", &LocalSolverOptions::checkpoint, checkpoint,
+                "Checkpoints of a long run, at sweep boundaries: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 
     laplace.flag("smart", &LaplaceSolverOptions::smart,
                  "Smart Laplace: keep a move only if the vertex's worst element does not get worse and nothing inverts. "
@@ -321,7 +335,9 @@ Tables::Tables() {
     wrappers.push_back({"untangle_then_improve",
                         "Assess, untangle, then improve the shape, each with the global solver, assess: the default job.",
                         "global", &global_kind,
-                        {{"untangle", "improve_shape"}, "untangle_then_improve untangles, then improves: it sets both"},
+                        {{"untangle", "improve_shape", "checkpoint"},
+                         "untangle_then_improve untangles, then improves: it sets both; its two solvers cannot share one "
+                         "checkpoint (use an untangle step and an improve step, each with its own)"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::untangle_then_improve(options_as<GlobalSolverOptions>(o, "untangle_then_improve")); },
                         [shape_target](const SolverOptions& o) {
@@ -400,6 +416,11 @@ std::vector<ObjectInfo> object_infos() {
                    "When a solver (or one of its phases) stops. Every test is relative, so a mesh scaled by 1e-4 or 1e4 "
                    "stops at the same iteration.",
                    t.termination.describe({})});
+    out.push_back({"checkpoint", "checkpoint",
+                   "The `checkpoint` option of the global and local solvers: periodic checkpoints of a long run, written "
+                   "through a temporary and a rename, and resuming from one to the result the uninterrupted run gives "
+                   "(docs/robustness.md). A checkpoint is refused for another mesh or other options.",
+                   t.checkpoint.describe({})});
     for (const auto& s : t.solvers) out.push_back({"solver", s.name, s.help, s.options->describe(s.defaults(), s.skip)});
     out.push_back({"assessor", "quality",
                    "Quality statistics (min / max / mean / rms / histogram) of metrics over the mesh, split between "
@@ -479,6 +500,7 @@ std::string registry_markdown() {
 
     const std::pair<const char*, const char*> kinds[] = {{"objective", "Objective functions (global solver)"},
                                                           {"termination", "Termination criterion"},
+                                                          {"checkpoint", "Checkpoints (global and local solvers)"},
                                                           {"solver", "Solvers (improve and untangle steps)"},
                                                           {"assessor", "Assessor (assess steps)"}};
     for (const auto& [kind, title] : kinds) {

@@ -10,6 +10,7 @@
 #include "config/plot.hpp"
 #include "config/registry_internal.hpp"
 #include "paloverde/io/atomic_file.hpp"
+#include "paloverde/solvers/stop.hpp"
 
 namespace paloverde::config {
 
@@ -18,59 +19,42 @@ std::string_view to_string(RunStatus status) {
         case RunStatus::Done: return "done";
         case RunStatus::Failed: return "failed";
         case RunStatus::TargetNotReached: return "target_not_reached";
+        case RunStatus::Interrupted: return "interrupted";
     }
     return "unknown";
 }
 
-namespace {
+namespace detail {
 
+namespace {
 // QualityAssessor()'s set, which `metrics: []` stands for.
 const std::vector<std::string> kDefaultMetrics{"aspect_ratio", "mean_ratio", "inverse_condition", "edge_ratio",
                                                "scaled_volume", "min_dihedral_deg", "min_angle_deg"};
+}  // namespace
 
 QualityAssessor assessor_of(const AssessSpec& a) {
     return QualityAssessor(a.metrics.empty() ? kDefaultMetrics : a.metrics, a.histogram_bins);
 }
 
-struct BuiltQueue {
-    InstructionQueue queue;
-    std::vector<std::optional<double>> targets;  // per improver, in order
-};
+QualityAssessor report_assessor(const std::string& metric) {
+    std::vector<std::string> names = kDefaultMetrics;
+    if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
+    return QualityAssessor(names);
+}
 
-BuiltQueue build(std::span<const StepSpec> steps, int threads) {
-    BuiltQueue b;
-    for (const StepSpec& step : steps) {
-        switch (step.kind) {
-            case StepSpec::Kind::Assess: b.queue.assess(step.label, assessor_of(step.assess)); break;
-            case StepSpec::Kind::Untangle:
-            case StepSpec::Kind::Improve: {
-                const auto* kind = detail::find_solver(step.name);
-                if (!kind) describe("solver", step.name);  // throws, listing the solvers
-                SolverOptions options = step.options;
-                detail::set_threads(options, threads);
-                if (step.kind == StepSpec::Kind::Untangle) {
-                    auto* global = std::get_if<GlobalSolverOptions>(&options);
-                    if (!global || step.name != "global")
-                        throw OptionError("an untangle step runs the global solver (got '" + step.name + "')");
-                    global->untangle = true;
-                    global->improve_shape = false;
-                }
-                b.queue.improve(step.label, kind->make(options));
-                b.targets.push_back(kind->target(options));
-                break;
-            }
-            case StepSpec::Kind::Wrapper: {
-                const auto* kind = detail::find_wrapper(step.name);
-                if (!kind) describe("wrapper", step.name);
-                SolverOptions options = step.options;
-                detail::set_threads(options, threads);
-                b.queue.append(kind->make(options));
-                for (const auto& t : kind->targets(options)) b.targets.push_back(t);
-                break;
-            }
-        }
+BuiltSolver build_solver(const StepSpec& step, int threads) {
+    const auto* kind = find_solver(step.name);
+    if (!kind) describe("solver", step.name);  // throws, listing the solvers
+    SolverOptions options = step.options;
+    set_threads(options, threads);
+    if (step.kind == StepSpec::Kind::Untangle) {
+        auto* global = std::get_if<GlobalSolverOptions>(&options);
+        if (!global || step.name != "global")
+            throw OptionError("an untangle step runs the global solver (got '" + step.name + "')");
+        global->untangle = true;
+        global->improve_shape = false;
     }
-    return b;
+    return {kind->make(options), kind->target(options)};
 }
 
 std::string origin(const RunSpec& spec, const std::string& key) {
@@ -112,49 +96,31 @@ MeshFile read_input(const RunSpec& spec) {
     return file;
 }
 
-QualityAssessor report_assessor(const std::string& metric) {
-    std::vector<std::string> names = kDefaultMetrics;
-    if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
-    return QualityAssessor(names);
-}
-
-void worst_and_mean(const QualityReport& report, const std::string& metric, double& worst, double& mean) {
-    const MetricReport* m = report.metric(metric);
-    if (!m) return;
-    worst = m->movable.count > 0 ? m->movable.min : m->all.min;
-    mean = m->all.mean;
-}
-
 std::string replace_method(std::string path, const std::string& method) {
     for (std::size_t at = path.find("{method}"); at != std::string::npos; at = path.find("{method}", at + method.size()))
         path.replace(at, 8, method);
     return path;
 }
 
-MethodResult run_method(const MethodSpec& method, SimplexMesh& mesh, const MeshFile& file, const RunSpec& spec,
-                        const RunHooks& hooks) {
-    BuiltQueue built = build(method.queue, spec.threads);
-    if (hooks.on_iteration)
-        built.queue.observe([&](std::string_view step, const IterationRecord& r) { hooks.on_iteration(method.name, step, r); });
-    MethodResult result;
-    result.name = method.name;
-    result.metric = spec.output.metric;
-    const QualityAssessor assessor = report_assessor(spec.output.metric);
-    result.before = assessor.assess(mesh);
-    const auto start = std::chrono::steady_clock::now();
-    result.queue = built.queue.run(mesh);
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.after = assessor.assess(mesh);
+namespace {
+void worst_and_mean(const QualityReport& report, const std::string& metric, double& worst, double& mean) {
+    const MetricReport* m = report.metric(metric);
+    if (!m) return;
+    worst = m->movable.count > 0 ? m->movable.min : m->all.min;
+    mean = m->all.mean;
+}
+}  // namespace
+
+void finish_method(MethodResult& result, const std::vector<std::optional<double>>& targets) {
     worst_and_mean(result.before, result.metric, result.worst_before, result.mean_before);
     worst_and_mean(result.after, result.metric, result.worst_after, result.mean_after);
-
     std::size_t improver = 0;
     for (const auto& step : result.queue.steps) {
         const auto* summary = std::get_if<Summary>(&step.outcome);
         if (!summary) continue;
         result.iterations += summary->iterations;
         result.untangle_iterations += summary->untangle_iterations;
-        const auto target = improver < built.targets.size() ? built.targets[improver] : std::nullopt;
+        const auto target = improver < targets.size() ? targets[improver] : std::nullopt;
         ++improver;
         if (target && result.status == RunStatus::Done && summary->reason != TerminationReason::TargetReached &&
             !(summary->worst_after >= *target)) {
@@ -168,10 +134,73 @@ MethodResult run_method(const MethodSpec& method, SimplexMesh& mesh, const MeshF
     if (!result.queue.success) {
         result.status = RunStatus::Failed;
         result.message = result.queue.message;
+        const auto* last = result.queue.steps.empty() ? nullptr : std::get_if<Summary>(&result.queue.steps.back().outcome);
+        if (last && last->reason == TerminationReason::Interrupted) result.status = RunStatus::Interrupted;
     }
+}
+
+void settle_status(RunResult& result) {
+    for (const auto& m : result.methods) {
+        if (m.status == RunStatus::Interrupted || result.status == RunStatus::Interrupted) result.status = RunStatus::Interrupted;
+        else if (m.status == RunStatus::Failed) result.status = RunStatus::Failed;
+        else if (m.status == RunStatus::TargetNotReached && result.status == RunStatus::Done)
+            result.status = RunStatus::TargetNotReached;
+    }
+}
+
+}  // namespace detail
+
+namespace {
+
+struct BuiltQueue {
+    InstructionQueue queue;
+    std::vector<std::optional<double>> targets;  // per improver, in order
+};
+
+BuiltQueue build(std::span<const StepSpec> steps, int threads) {
+    BuiltQueue b;
+    for (const StepSpec& step : steps) {
+        switch (step.kind) {
+            case StepSpec::Kind::Assess: b.queue.assess(step.label, detail::assessor_of(step.assess)); break;
+            case StepSpec::Kind::Untangle:
+            case StepSpec::Kind::Improve: {
+                auto built = detail::build_solver(step, threads);
+                b.queue.improve(step.label, std::move(built.solver));
+                b.targets.push_back(built.target);
+                break;
+            }
+            case StepSpec::Kind::Wrapper: {
+                const auto* kind = detail::find_wrapper(step.name);
+                if (!kind) describe("wrapper", step.name);
+                SolverOptions options = step.options;
+                detail::set_threads(options, threads);
+                b.queue.append(kind->make(options));
+                for (const auto& t : kind->targets(options)) b.targets.push_back(t);
+                break;
+            }
+        }
+    }
+    return b;
+}
+
+MethodResult run_method(const MethodSpec& method, SimplexMesh& mesh, const MeshFile& file, const RunSpec& spec,
+                        const RunHooks& hooks) {
+    BuiltQueue built = build(method.queue, spec.threads);
+    if (hooks.on_iteration)
+        built.queue.observe([&](std::string_view step, const IterationRecord& r) { hooks.on_iteration(method.name, step, r); });
+    MethodResult result;
+    result.name = method.name;
+    result.metric = spec.output.metric;
+    const QualityAssessor assessor = detail::report_assessor(spec.output.metric);
+    result.before = assessor.assess(mesh);
+    const auto start = std::chrono::steady_clock::now();
+    result.queue = built.queue.run(mesh);
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.after = assessor.assess(mesh);
+    detail::finish_method(result, built.targets);
 
     if (!spec.output.mesh.empty()) {
-        result.mesh_written = replace_method(spec.output.mesh, method.name);
+        result.mesh_written = detail::replace_method(spec.output.mesh, method.name);
         WriteOptions write;
         write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
         write_mesh(result.mesh_written, mesh, write, file.point_fields, file.cell_fields);
@@ -215,7 +244,7 @@ nlohmann::json method_json(const MethodResult& m) {
             {"status", std::string(to_string(m.status))},
             {"exit_code", static_cast<int>(m.status)},
             {"message", m.message},
-            {"success", m.status != RunStatus::Failed},
+            {"success", m.status == RunStatus::Done || m.status == RunStatus::TargetNotReached},
             {"valid", m.after.inverted == 0},
             {"solver", solver_names(m)},
             {"termination", last_termination(m)},
@@ -258,11 +287,12 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) { ret
 
 RunResult run(const RunSpec& spec, const RunHooks& hooks) {
     spec.check_runnable();
-    if (spec.partitioned()) return detail::run_partitioned(spec, hooks);
+    // Under mpirun every rank runs this: a serial run on each would write the same files at once.
+    if (spec.partitioned() || detail::world_size() > 1) return detail::run_partitioned(spec, hooks);
     const auto methods = spec.methods();
     for (const auto& m : methods) build(m.queue, spec.threads);  // every option checked before the mesh is read
 
-    MeshFile file = read_input(spec);
+    MeshFile file = detail::read_input(spec);
     RunResult result;
     result.input = spec.input.mesh;
     for (std::size_t i = 0; i < methods.size(); ++i) {
@@ -273,13 +303,14 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
         SimplexMesh& mesh = last ? file.mesh : copy;
         result.methods.push_back(run_method(methods[i], mesh, file, spec, hooks));
         if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
+        if (stop_requested()) break;  // interrupted: the methods not yet run are skipped
     }
-    for (const auto& m : result.methods) {
-        if (m.status == RunStatus::Failed) result.status = RunStatus::Failed;
-        else if (m.status == RunStatus::TargetNotReached && result.status == RunStatus::Done)
-            result.status = RunStatus::TargetNotReached;
-    }
+    detail::settle_status(result);
+    detail::write_reports(spec, result);
+    return result;
+}
 
+void detail::write_reports(const RunSpec& spec, const RunResult& result) {
     const OutputSpec& out = spec.output;
     if (!out.history.empty()) write_text_file(out.history, result.history_csv());
     if (!out.table.empty()) write_text_file(out.table, result.table_csv());
@@ -291,7 +322,6 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
                                                             "worst quality (untangling: hybrid metric)",
                                                             "iteration", "seconds"}));
     }
-    return result;
 }
 
 std::string RunResult::report() const {
@@ -329,6 +359,17 @@ std::string RunResult::report() const {
                 << std::setw(10) << m.after.inverted << std::setw(12) << m.iterations << std::setprecision(2)
                 << std::setw(10) << m.seconds << "\n";
     }
+    if (parallel) {
+        const ParallelReport& p = *parallel;
+        out << std::defaultfloat << std::setprecision(3) << "parallel: " << p.ranks << (p.ranks == 1 ? " rank" : " ranks")
+            << ", " << p.vertices << " vertices, " << p.elements << " elements, "
+            << (p.from_pieces ? "read from pieces" : "split by rank 0") << ", " << p.exchange << " exchange\n"
+            << "  seconds: read " << p.read_seconds << ", partition " << p.partition_seconds << ", distribute "
+            << p.distribute_seconds << ", schedule " << p.schedule_seconds << ", solve " << p.solve_seconds << ", write "
+            << p.write_seconds << "\n"
+            << "  per exchange: " << p.ghost_copies << " ghost copies, " << p.messages << " messages, " << p.colors
+            << (p.colors == 1 ? " color" : " colors") << "\n";
+    }
     return out.str();
 }
 
@@ -341,6 +382,24 @@ std::string RunResult::to_json() const {
         for (const auto& [key, value] : list[0].items())
             if (!j.contains(key)) j[key] = value;
     j["methods"] = std::move(list);
+    if (parallel) {
+        const ParallelReport& p = *parallel;
+        j["parallel"] = {{"ranks", p.ranks},
+                         {"exchange", p.exchange},
+                         {"from_pieces", p.from_pieces},
+                         {"vertices", p.vertices},
+                         {"elements", p.elements},
+                         {"colors", p.colors},
+                         {"ghost_copies", p.ghost_copies},
+                         {"messages_per_exchange", p.messages},
+                         {"seconds",
+                          {{"read", p.read_seconds},
+                           {"partition", p.partition_seconds},
+                           {"distribute", p.distribute_seconds},
+                           {"schedule", p.schedule_seconds},
+                           {"solve", p.solve_seconds},
+                           {"write", p.write_seconds}}}};
+    }
     return j.dump(2);
 }
 

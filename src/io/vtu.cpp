@@ -483,21 +483,6 @@ RawMesh VtuReader::read() {
 
 // Writing ---------------------------------------------------------------------------------
 
-std::string xml_escaped(std::string_view text) {
-    std::string out;
-    for (char c : text) {
-        switch (c) {
-            case '&': out += "&amp;"; break;
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '"': out += "&quot;"; break;
-            case '\n': out += "&#10;"; break;
-            case '\t': out += "&#9;"; break;
-            default: out += c;
-        }
-    }
-    return out;
-}
 
 enum class Content { Field, Points, Connectivity, Offsets, Types };
 

@@ -43,4 +43,7 @@ struct XmlDocument {
 // element whose content is raw data introduced by '_'.
 XmlDocument parse_xml(std::string_view text, const std::string& path, std::string_view opaque_element);
 
+// Text with XML's special characters (and newlines and tabs) as entities, for attribute values.
+std::string xml_escaped(std::string_view text);
+
 }  // namespace paloverde::io

@@ -11,6 +11,12 @@
 namespace paloverde {
 
 namespace {
+void check_state_size(std::string_view objective, std::span<const double> state, std::size_t size) {
+    if (state.size() != size)
+        throw Error("the " + std::string(objective) + " objective's state has " + std::to_string(size) + " numbers, got " +
+                    std::to_string(state.size()));
+}
+
 double local_min(std::span<const double> q) {
     double m = std::numeric_limits<double>::infinity();
     for (double v : q) m = std::min(m, v);
@@ -92,6 +98,25 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
 }
 
 void LogBarrier::advance() { mu_ *= shrink_; }
+
+void ObjectiveFunction::restore_state(std::span<const double> state) { check_state_size(name(), state, 0); }
+
+void LogBarrier::restore_state(std::span<const double> state) {
+    check_state_size(name(), state, 2);
+    mu_ = state[0];
+    t_ = state[1];
+}
+
+void PMean::restore_state(std::span<const double> state) {
+    check_state_size(name(), state, 2);
+    mean_ = state[0];
+    count_ = state[1];
+}
+
+void MinQuality::restore_state(std::span<const double> state) {
+    check_state_size(name(), state, 1);
+    worst_ = state[0];
+}
 
 double LogBarrier::value(std::span<const double> q, const Reducer& reducer) const {
     // log(q - t) is monotone in q: the extreme qualities bound its terms.

@@ -5,11 +5,14 @@
 #include <limits>
 #include <functional>
 #include <numeric>
+#include <optional>
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/solvers/stop.hpp"
+#include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
 #include "workspace.hpp"
@@ -30,6 +33,7 @@ void GlobalSolverOptions::validate() const {
     if (steps_per_mu < 1) throw OptionError("steps_per_mu must be >= 1");
     if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
+    checkpoint.validate();
 }
 
 namespace {
@@ -42,6 +46,26 @@ struct PhaseResult {
     std::string message;
 };
 
+// Where solve() stands, for checkpoints: the phase and, while untangling, the round.
+struct Stage {
+    bool untangling = false;
+    int round = 0;
+};
+
+// Everything that changes the result, for the checkpoint's fingerprint.
+std::string options_text(const GlobalSolverOptions& o) {
+    detail::OptionsText t;
+    t("direction", o.direction == GlobalSolverOptions::Direction::SteepestAscent ? "steepest_ascent" : "conjugate_gradient")
+        ("objective", o.objective)("barrier_shrink", o.objective_options.barrier_shrink)
+        ("initial_mu", o.objective_options.initial_mu)("barrier_initial_active", o.objective_options.barrier_initial_active)
+        ("p", o.objective_options.p)("shape_metric", o.shape_metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)
+        ("untangle", o.untangle)("improve_shape", o.improve_shape)("termination", o.termination)
+        ("untangle_termination", o.untangle_termination)("precondition_untangling", o.precondition_untangling)
+        ("local_untangle_rounds", o.local_untangle_rounds)("steps_per_mu", o.steps_per_mu)
+        ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
+    return t.text();
+}
+
 // One phase (untangle or shape) of the barrier ascent over the workspace's movable elements.
 // Steps are accepted when they raise the objective (Armijo), stay in its domain and do not add
 // non-positive elements; the worst quality of an iterate may dip while the barrier rebalances,
@@ -49,17 +73,20 @@ struct PhaseResult {
 class Phase {
 public:
     Phase(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& metric, ObjectiveFunction& objective,
-          const TerminationCriterion& stop, const GlobalSolverOptions& options, bool untangling, Summary& summary,
-          const IterationObserver& observer, Clock::time_point start)
+          const TerminationCriterion& stop, const GlobalSolverOptions& options, Stage stage, Summary& summary,
+          const IterationObserver& observer, Clock::time_point start, detail::Checkpointer& checkpointer)
         : work_(work), x_(xyz), metric_(metric), objective_(objective), stop_(stop), options_(options),
-          untangling_(untangling), summary_(summary), observer_(observer), start_(start) {}
+          untangling_(stage.untangling), stage_(stage), summary_(summary), observer_(observer), start_(start),
+          checkpointer_(checkpointer) {}
 
-    PhaseResult run();
+    // From the phase's start, or from a checkpoint's state at an iteration boundary.
+    PhaseResult run(const detail::SolverState* resume = nullptr);
 
 private:
     struct Stats {
         double worst, mean;
         long bad;  // non-positive qualities
+        long nan;  // qualities that are not numbers
     };
     Stats stats(std::span<const double> q);
     // Exact sums of term(v, acc) over the owned vertices of all processes.
@@ -72,6 +99,10 @@ private:
     bool untangled() const;
     void record(const Stats& s, double objective, double step, double gain);
     PhaseResult end(TerminationReason reason, std::string message);
+    // Every number the next iteration needs is finite (a NaN ends the phase on its best iterate).
+    bool sound(const Stats& s, double objective) const;
+    void save_checkpoint(int iteration);
+    int restore(const detail::SolverState& state, double& objective);
 
     detail::Workspace& work_;
     std::vector<double>& x_;
@@ -80,9 +111,11 @@ private:
     const TerminationCriterion& stop_;
     const GlobalSolverOptions& options_;
     bool untangling_;
+    Stage stage_;
     Summary& summary_;
     const IterationObserver& observer_;
     Clock::time_point start_;
+    detail::Checkpointer& checkpointer_;
     const Reducer& reducer_ = work_.reducer();
 
     std::vector<double> q_, trial_q_, weight_, trial_x_, gradient_, direction_, previous_gradient_, best_x_;
@@ -97,23 +130,37 @@ private:
     long best_bad_ = 0;
     double step_ = 0.05;  // largest vertex displacement of the next trial step, in reference lengths
     double gain_ = 0.0;   // objective increase of the last accepted step (at its mu and t)
+    // What the iterations carry over (saved in checkpoints).
+    double first_gradient_norm_ = -1.0;
+    bool restart_ = true;  // next direction is steepest ascent
+    int failures_ = 0;     // line searches in a row that found no step
+    int steps_at_mu_ = 0;
+    std::vector<double> best_history_, measure_history_, bad_history_;
 };
 
 Phase::Stats Phase::stats(std::span<const double> all) {
     const auto q = work_.counted(all, counted_);
-    Stats s{std::numeric_limits<double>::infinity(), 0.0, 0};
+    Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
     double largest = 0.0;
     for (double v : q) {
+        if (std::isnan(v)) {
+            ++s.nan;
+            continue;
+        }
         s.worst = std::min(s.worst, v);
         largest = std::max(largest, std::abs(v));
         s.bad += v <= 0.0;
     }
     largest = reducer_.max(largest);
-    auto sums = detail::bounded_sums<2>(q.size(), {largest, 0.0}, [&](std::size_t i, auto& acc) { acc[0].add(q[i]); });
+    auto sums = detail::bounded_sums<3>(q.size(), {largest, 0.0, 0.0}, [&](std::size_t i, auto& acc) {
+        if (!std::isnan(q[i])) acc[0].add(q[i]);
+    });
     sums[1].add(static_cast<double>(s.bad));
+    sums[2].add(static_cast<double>(s.nan));
     reducer_.sum(sums);
     s.worst = reducer_.min(s.worst);
     s.bad = static_cast<long>(sums[1].value());
+    s.nan = static_cast<long>(sums[2].value());
     s.mean = sums[0].value() / std::max(1.0, work_.global_movable());
     return s;
 }
@@ -277,7 +324,66 @@ PhaseResult Phase::end(TerminationReason reason, std::string message) {
     return {reason, std::move(message)};
 }
 
-PhaseResult Phase::run() {
+bool Phase::sound(const Stats& s, double objective) const {
+    // -inf is a value the log-barrier gives on purpose (for a log sum it cannot take, so that the
+    // line search rejects such a trial); NaN, +inf or a NaN t mean the arithmetic broke down.
+    return s.nan == 0 && !std::isnan(objective) && objective != std::numeric_limits<double>::infinity() &&
+           !std::isnan(objective_.progress_measure());
+}
+
+void Phase::save_checkpoint(int iteration) {
+    detail::SolverState state;
+    state.numbers = {{"untangling", untangling_ ? 1.0 : 0.0},
+                     {"round", stage_.round},
+                     {"budget", stop_.max_iterations},
+                     {"iteration", iteration},
+                     {"best_worst", best_worst_},
+                     {"best_bad", static_cast<double>(best_bad_)},
+                     {"step", step_},
+                     {"first_gradient_norm", first_gradient_norm_},
+                     {"restart", restart_ ? 1.0 : 0.0},
+                     {"failures", failures_},
+                     {"steps_at_mu", steps_at_mu_}};
+    state.lists = {{"objective", objective_.state()},
+                   {"best_history", best_history_},
+                   {"measure_history", measure_history_},
+                   {"bad_history", bad_history_}};
+    state.vertex_fields = {{"x", x_},
+                           {"best_x", best_x_},
+                           {"direction", direction_},
+                           {"previous_gradient", previous_gradient_},
+                           {"previous_preconditioned", previous_preconditioned_}};
+    checkpointer_.save(summary_, state, seconds_since(start_));
+}
+
+// The state saved at the top of an iteration; returns that iteration. The qualities, the
+// objective and its weights are recomputed from the coordinates (each element's quality is a
+// function of its corners alone, so they come out bit for bit as they were).
+int Phase::restore(const detail::SolverState& state, double& objective) {
+    const std::size_t n = x_.size() / 3;
+    x_ = state.vertex_field("x", n);
+    best_x_ = state.vertex_field("best_x", n);
+    direction_ = state.vertex_field("direction", n);
+    previous_gradient_ = state.vertex_field("previous_gradient", n);
+    previous_preconditioned_ = state.vertex_field("previous_preconditioned", n);
+    best_worst_ = state.number("best_worst");
+    best_bad_ = static_cast<long>(state.number("best_bad"));
+    step_ = state.number("step");
+    first_gradient_norm_ = state.number("first_gradient_norm");
+    restart_ = state.number("restart") != 0.0;
+    failures_ = static_cast<int>(state.number("failures"));
+    steps_at_mu_ = static_cast<int>(state.number("steps_at_mu"));
+    objective_.restore_state(state.list("objective"));
+    best_history_ = state.list("best_history");
+    measure_history_ = state.list("measure_history");
+    bad_history_ = state.list("bad_history");
+    work_.evaluate(metric_, x_, q_);
+    objective = objective_value(q_);
+    objective_.weights(q_, weight_);
+    return static_cast<int>(state.number("iteration"));
+}
+
+PhaseResult Phase::run(const detail::SolverState* resume) {
     const std::size_t m = static_cast<std::size_t>(work_.movable_elements());
     const std::size_t n3 = x_.size();
     q_.resize(m);
@@ -297,27 +403,41 @@ PhaseResult Phase::run() {
     mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
     element_stamp_.assign(m, 0);
 
-    work_.evaluate(metric_, x_, q_);
-    ++summary_.quality_passes;
-    objective_.update(work_.counted(q_, counted_), reducer_);
-    Stats s = stats(q_);
-    best_worst_ = s.worst;
-    best_bad_ = s.bad;
-    std::vector<double> best_history{best_worst_};
-    std::vector<double> measure_history{objective_.progress_measure()};
-    std::vector<long> bad_history{s.bad};
     // The objective and its weights at the current iterate, for the history and the next step.
-    double objective = objective_value(q_);
-    objective_.weights(q_, weight_);
-    record(s, objective, 0.0, 0.0);
-    if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
+    double objective = 0.0;
+    int first_iteration = 1;
+    if (resume) {
+        first_iteration = restore(*resume, objective);
+    } else {
+        work_.evaluate(metric_, x_, q_);
+        ++summary_.quality_passes;
+        objective_.update(work_.counted(q_, counted_), reducer_);
+        const Stats s = stats(q_);
+        best_worst_ = s.worst;
+        best_bad_ = s.bad;
+        best_history_ = {best_worst_};
+        measure_history_ = {objective_.progress_measure()};
+        bad_history_ = {static_cast<double>(s.bad)};
+        objective = objective_value(q_);
+        objective_.weights(q_, weight_);
+        record(s, objective, 0.0, 0.0);
+        if (!sound(s, objective))
+            return end(TerminationReason::NumericalFailure, "the qualities or the objective are not finite numbers at the "
+                                                            "start of the phase");
+        if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
+    }
 
     const bool precondition = untangling_ && options_.precondition_untangling;
-    double first_gradient_norm = -1.0;
-    bool restart = true;  // next direction is steepest ascent
-    int failures = 0;     // line searches in a row that found no step
-    int steps_at_mu = 0;
-    for (int iteration = 1;; ++iteration) {
+    for (int iteration = first_iteration;; ++iteration) {
+        // Checkpoints and stops at the top of an iteration, where the state is complete. Every
+        // process stops at the same iteration: a stop requested on any of them counts.
+        if (reducer_.max(stop_requested() ? 1.0 : 0.0) > 0.0) {
+            if (checkpointer_.writes()) save_checkpoint(iteration);
+            return end(TerminationReason::Interrupted,
+                       "interrupted (a stop was requested) after " + std::to_string(summary_.iterations) +
+                           " iterations; the best iterate is handed back");
+        }
+        if (checkpointer_.due(summary_.iterations)) save_checkpoint(iteration);
         if (iteration > stop_.max_iterations)
             return end(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop_.max_iterations) + " iterations");
         // Every process must stop at the same iteration: the slowest clock decides.
@@ -335,9 +455,13 @@ PhaseResult Phase::run() {
             acc[0].add(gradient_[3 * v] * gradient_[3 * v] + gradient_[3 * v + 1] * gradient_[3 * v + 1] +
                        gradient_[3 * v + 2] * gradient_[3 * v + 2]);
         })[0];
+        if (!std::isfinite(g2))
+            return end(TerminationReason::NumericalFailure, "the objective's gradient is not a finite number (iteration " +
+                                                                std::to_string(summary_.iterations + 1) +
+                                                                "); the best iterate is handed back");
         const double gradient_norm = std::sqrt(g2);
-        if (first_gradient_norm < 0.0) first_gradient_norm = gradient_norm;
-        if (!(gradient_norm > stop_.gradient_tolerance * first_gradient_norm))
+        if (first_gradient_norm_ < 0.0) first_gradient_norm_ = gradient_norm;
+        if (!(gradient_norm > stop_.gradient_tolerance * first_gradient_norm_))
             return end(TerminationReason::GradientVanished, "the objective's gradient vanished");
         if (precondition) apply_preconditioner();
         else preconditioned_ = gradient_;
@@ -345,7 +469,7 @@ PhaseResult Phase::run() {
         // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
         // changes (mu) or the direction stops ascending.
         double beta = 0.0;
-        if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart) {
+        if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart_) {
             const auto sums = vertex_sums<2>([&](std::size_t v, auto& acc) {
                 double a = 0.0, b = 0.0;
                 for (std::size_t i = 3 * v; i < 3 * v + 3; ++i) {
@@ -380,31 +504,37 @@ PhaseResult Phase::run() {
         if (untangling_) ++summary_.untangle_iterations;
         // mu stays fixed for a few steps, so that conjugate directions make sense, and shrinks
         // once they are taken or when no step was found (weighting the worst elements more).
-        failures = accepted ? 0 : failures + 1;
-        restart = !accepted;
+        failures_ = accepted ? 0 : failures_ + 1;
+        restart_ = !accepted;
         // Steps may grow far beyond the mesh's size: an untangled vertex can have been thrown far
         // out (two_tets.vtk) and must be able to come back.
         if (accepted) step_ = std::min(2.0 * step_, 1e6);
         else step_ = 0.05;
-        if (!accepted || ++steps_at_mu >= options_.steps_per_mu) {
+        if (!accepted || ++steps_at_mu_ >= options_.steps_per_mu) {
             objective_.advance();
-            steps_at_mu = 0;
-            restart = true;
+            steps_at_mu_ = 0;
+            restart_ = true;
         }
         objective_.update(work_.counted(q_, counted_), reducer_);
-        s = stats(q_);
+        const Stats s = stats(q_);
+        objective = objective_value(q_);
+        if (!sound(s, objective)) {
+            record(s, objective, step, accepted ? gain_ : 0.0);
+            return end(TerminationReason::NumericalFailure,
+                       "the qualities, the objective or the barrier's t are not finite numbers (iteration " +
+                           std::to_string(summary_.iterations) + "); the best iterate is handed back");
+        }
         // Better: fewer non-positive elements, then a higher worst quality.
         if (s.bad < best_bad_ || (s.bad == best_bad_ && s.worst > best_worst_)) {
             best_bad_ = s.bad;
             best_worst_ = s.worst;
             best_x_ = x_;
         }
-        objective = objective_value(q_);
         objective_.weights(q_, weight_);
         record(s, objective, step, accepted ? gain_ : 0.0);
-        best_history.push_back(best_worst_);
-        measure_history.push_back(objective_.progress_measure());
-        bad_history.push_back(s.bad);
+        best_history_.push_back(best_worst_);
+        measure_history_.push_back(objective_.progress_measure());
+        bad_history_.push_back(static_cast<double>(s.bad));
 
         if (untangling_ && s.bad == 0 && untangled()) {
             best_x_ = x_;
@@ -412,16 +542,16 @@ PhaseResult Phase::run() {
         }
         if (!untangling_ && stop_.target_worst_quality && best_worst_ >= *stop_.target_worst_quality)
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
-        bool stalled = failures >= options_.max_failed_searches;
+        bool stalled = failures_ >= options_.max_failed_searches;
         const auto window = static_cast<std::size_t>(stop_.progress_window);
-        if (!stalled && best_history.size() > window) {
+        if (!stalled && best_history_.size() > window) {
             const double tolerance = stop_.min_progress * std::max(std::abs(best_worst_), 1e-3);
-            const std::size_t then = best_history.size() - 1 - window;
-            stalled = best_worst_ - best_history[then] <= tolerance &&
-                      measure_history.back() - measure_history[then] <= tolerance &&
-                      bad_history.back() >= bad_history[then];
+            const std::size_t then = best_history_.size() - 1 - window;
+            stalled = best_worst_ - best_history_[then] <= tolerance &&
+                      measure_history_.back() - measure_history_[then] <= tolerance &&
+                      bad_history_.back() >= bad_history_[then];
         }
-        if (failures >= options_.max_failed_searches)
+        if (failures_ >= options_.max_failed_searches)
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         if (stalled) return end(TerminationReason::Converged, "the worst quality stopped improving");
     }
@@ -473,8 +603,13 @@ namespace {
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
-              detail::Workspace& work, const std::function<void(std::span<const double>)>& copy_back) {
+              detail::Workspace& work, const std::function<void(std::span<const double>)>& copy_back,
+              detail::Checkpointer& checkpointer) {
     Summary& summary = run.summary;
+    // A resumed run enters the phase (and untangling round) it was checkpointed in.
+    std::optional<detail::SolverState> resume;
+    if (checkpointer.resumes()) resume = checkpointer.resume(summary, run);
+    const bool resume_untangling = resume && resume->number("untangling") != 0.0;
     const auto start = run.start();
     auto finish = [&](TerminationReason reason, std::string message) { return run.finish(reason, std::move(message)); };
     std::vector<double> xyz(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
@@ -482,7 +617,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     PhaseResult result{TerminationReason::TargetReached, ""};
     const bool tangled = summary.before.inverted - summary.before.inverted_frozen > 0 ||
                          summary.before.degenerate > 0;
-    if (tangled && options.untangle) {
+    if (tangled && options.untangle && (!resume || resume_untangling)) {
         auto hybrid = make_metric("untangle_hybrid", options.metric_options);
         // Volumes measured against the size of each element's neighbourhood, so that a graded
         // mesh's small inverted elements weigh as much as its large ones.
@@ -494,13 +629,22 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         // (a local maximum of the worst quality), local steps move single vertices to where
         // their elements' smallest volume is largest, and the barrier ascent resumes. (Serial
         // runs only: the local steps go vertex by vertex.)
-        for (int round = 0;; ++round) {
+        const int first_round = resume ? static_cast<int>(resume->number("round")) : 0;
+        for (int round = first_round;; ++round) {
+            const detail::SolverState* here = resume && round == first_round ? &*resume : nullptr;
             TerminationCriterion stop = options.untangle_termination;
-            stop.max_iterations = std::max(0, stop.max_iterations - summary.untangle_iterations);
+            stop.max_iterations = here ? static_cast<int>(here->number("budget"))
+                                       : std::max(0, stop.max_iterations - summary.untangle_iterations);
             // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
             auto objective = make_objective("log_barrier", options.objective_options);
-            result = Phase(work, xyz, *hybrid, *objective, stop, options, true, summary, observer, start).run();
+            result = Phase(work, xyz, *hybrid, *objective, stop, options, Stage{true, round}, summary, observer, start,
+                           checkpointer)
+                         .run(here);
             if (result.reason == TerminationReason::TargetReached) break;
+            if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure) {
+                copy_back(xyz);
+                return finish(result.reason, "while untangling: " + result.message);
+            }
             const bool out_of_budget =
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
             if (out_of_budget || round == options.local_untangle_rounds || work.distributed() ||
@@ -510,15 +654,24 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                               "untangling stopped (" + result.message + ") with elements still inverted");
             }
         }
+        resume.reset();
     }
+    if (resume && resume_untangling)
+        throw FileError(resume->source, 0, "this checkpoint is of an untangling phase, but the mesh needs none");
     const bool still_tangled = !options.untangle && tangled;
     if (options.improve_shape && !still_tangled) {
         auto metric = make_metric(options.shape_metric, options.metric_options);
         metric->set_scale(work.scale());
         auto objective = make_objective(options.objective, options.objective_options);
-        result = Phase(work, xyz, *metric, *objective, options.termination, options, false, summary, observer, start).run();
+        result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0}, summary, observer,
+                       start, checkpointer)
+                     .run(resume ? &*resume : nullptr);
+    } else if (resume) {
+        throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
     }
     copy_back(xyz);
+    if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
+        return finish(result.reason, result.message);
     if (summary.before.inverted_frozen > 0)
         return finish(TerminationReason::CannotUntangle,
                       std::to_string(summary.before.inverted_frozen) +
@@ -534,16 +687,20 @@ Summary GlobalSolver::improve(SimplexMesh& mesh) {
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
     if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
     detail::Workspace work(mesh, options_.renumber);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, mesh); });
+    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, mesh); },
+                 checkpointer);
 }
 
 Summary GlobalSolver::improve(DistributedMesh& part) {
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(part, std::string(name()), options_.shape_metric);
     if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
     detail::Workspace work(part);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, part); });
+    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, part); },
+                 checkpointer);
 }
 
 }  // namespace paloverde

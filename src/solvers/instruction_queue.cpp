@@ -52,11 +52,12 @@ QueueResult InstructionQueue::run(SimplexMesh& mesh) const {
         }
         Summary summary = step.solver->improve(mesh);
         const bool ok = summary.success();
+        const bool interrupted = summary.reason == TerminationReason::Interrupted;
         const std::string why = summary.message;
         result.steps.push_back({step.label, std::move(summary)});
         if (!ok) {
             result.success = false;
-            result.message = "'" + step.label + "' failed: " + why;
+            result.message = "'" + step.label + (interrupted ? "' was interrupted: " : "' failed: ") + why;
             break;
         }
     }

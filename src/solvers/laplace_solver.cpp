@@ -7,6 +7,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
+#include "paloverde/solvers/stop.hpp"
 #include "run_support.hpp"
 
 namespace paloverde {
@@ -60,11 +61,13 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
 
     auto done = [&](TerminationReason reason, std::string message) {
         std::copy(xyz.begin(), xyz.end(), mesh.coordinates().begin());
-        if (summary.before.inverted_frozen > 0) {
+        // An interrupted run says so, whatever the mesh (smart Laplace never makes it worse).
+        const bool interrupted = reason == TerminationReason::Interrupted;
+        if (!interrupted && summary.before.inverted_frozen > 0) {
             reason = TerminationReason::CannotUntangle;
             message = std::to_string(summary.before.inverted_frozen) +
                       " inverted elements have all their vertices fixed; no smoother can move them";
-        } else if (summary.before.inverted > 0) {
+        } else if (!interrupted && summary.before.inverted > 0) {
             reason = TerminationReason::CannotUntangle;
             message = "the mesh is tangled and Laplace smoothing does not untangle; use the local or global solver";
         }
@@ -96,6 +99,9 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
     const TerminationCriterion& stop = options_.termination;
     double best = record(0, -1e300).worst;
     for (int s = 1;; ++s) {
+        if (stop_requested())
+            return done(TerminationReason::Interrupted,
+                        "interrupted (a stop was requested) after " + std::to_string(summary.iterations) + " sweeps");
         if (stop.target_worst_quality && best >= *stop.target_worst_quality)
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
         if (s > stop.max_iterations)

@@ -4,11 +4,14 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <vector>
 
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/solvers/stop.hpp"
+#include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
 
@@ -26,6 +29,7 @@ void LocalSolverOptions::validate() const {
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
     if (!(improve_below > 0.0)) throw OptionError("improve_below must be > 0 (1 or more: every vertex moves)");
+    checkpoint.validate();
 }
 
 namespace {
@@ -34,6 +38,16 @@ using detail::Clock;
 using detail::seconds_since;
 
 double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+
+// Everything that changes the result, for the checkpoint's fingerprint.
+std::string options_text(const LocalSolverOptions& o) {
+    detail::OptionsText t;
+    t("metric", o.metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)("untangle", o.untangle)
+        ("termination", o.termination)("untangle_termination", o.untangle_termination)
+        ("coloring", o.coloring == ColoringOrder::SmallestLast ? "smallest_last" : "greedy")
+        ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below);
+    return t.text();
+}
 
 // The point of smallest norm in the convex hull of `points` (Gilbert's algorithm: Frank-Wolfe
 // with exact line search). It stops once every point p has <x, p> >= (1 - 1e-3) |x|^2, which is
@@ -173,7 +187,8 @@ Summary LocalSolver::improve(SimplexMesh& mesh) {
     const Halo no_ghosts;
     Domain domain{mesh, detail::movable_elements(mesh), serial_reducer, no_ghosts,
                   color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
-    return sweep_colors(run, domain);
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
+    return sweep_colors(run, domain, checkpointer);
 }
 
 Summary LocalSolver::improve(DistributedMesh& part) {
@@ -208,13 +223,17 @@ Summary LocalSolver::improve(DistributedMesh& part) {
         scale.plane_normal = part.plane_normal;
     }
     Domain domain{part.mesh, std::move(counted), part.reducer(), part.halo(), std::move(coloring), scale};
-    return sweep_colors(run, domain);
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
+    return sweep_colors(run, domain, checkpointer);
 }
 
-Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) {
+Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer) {
     const SimplexMesh& mesh = domain.mesh;
     const Reducer& reducer = domain.reducer;
     Summary& summary = run.summary;
+    // A resumed run continues at the sweep boundary it was checkpointed at.
+    std::optional<detail::SolverState> resume;
+    if (checkpointer.resumes()) resume = checkpointer.resume(summary, run);
     const auto start = run.start();
     const std::vector<ElementId>& movable = domain.counted_movable;
     const VertexColoring& coloring = domain.coloring;
@@ -232,8 +251,25 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) 
     };
     auto elapsed = [&] { return reducer.max(seconds_since(start)); };
 
+    const std::size_t n = static_cast<std::size_t>(mesh.num_vertices());
     std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
     std::vector<double> scratch;
+    // The best sweep of the current phase by the rule "fewer inverted elements, then a higher worst
+    // quality" (of the phase's metric), and the latest one. A move never lowers the smallest
+    // quality of its vertex's elements nor inverts one, so the latest is the best; should rounding
+    // ever disagree, the run still ends on the best.
+    std::vector<double> best_xyz;  // empty until the phase's first record
+    long best_inverted = 0, now_inverted = 0;
+    double best_worst = -std::numeric_limits<double>::infinity(), now_worst = best_worst;
+    auto keep_best = [&](long inverted, double worst) {
+        now_inverted = inverted;
+        now_worst = worst;
+        if (best_xyz.empty() || inverted < best_inverted || (inverted == best_inverted && worst > best_worst)) {
+            best_inverted = inverted;
+            best_worst = worst;
+            best_xyz = xyz;
+        }
+    };
     auto record = [&](const char* phase, const QualityMetric& m, long inverted, int moved, double best) {
         detail::SweepStats s = detail::sweep_stats(m, mesh, xyz, movable, scratch);
         ExactSum sums[2];
@@ -253,11 +289,17 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) 
         r.moved = moved;
         r.seconds = seconds_since(start);
         add_record(summary, std::move(r));
+        keep_best(inverted, s.worst);
         return s;
     };
     auto done = [&](TerminationReason reason, std::string message) {
+        if (now_inverted > best_inverted || (now_inverted == best_inverted && now_worst < best_worst)) {
+            xyz = best_xyz;
+            message += "; the best sweep is handed back";
+        }
         std::copy(xyz.begin(), xyz.end(), run.coordinates().begin());
-        if (summary.before.inverted_frozen > 0 && reason != TerminationReason::CannotUntangle)
+        if (summary.before.inverted_frozen > 0 && reason != TerminationReason::CannotUntangle &&
+            reason != TerminationReason::Interrupted)
             return run.finish(TerminationReason::CannotUntangle,
                               std::to_string(summary.before.inverted_frozen) +
                                   " inverted elements have all their vertices fixed; no smoother can move them" + colors);
@@ -284,14 +326,60 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) 
         return static_cast<int>(reducer.total(static_cast<double>(moved)));
     };
 
-    long inverted = count_inverted(xyz);
-    if (inverted > 0 && !options_.untangle)
+    // What the sweeps carry over, saved in checkpoints at sweep boundaries.
+    long inverted = 0;
+    std::vector<double> inverted_history, worst_history;  // untangling
+    double best = -1e300;                                 // shape: best worst quality so far
+    std::vector<double> best_history;
+    auto save = [&](bool untangling, int next_sweep) {
+        detail::SolverState state;
+        state.numbers = {{"untangling", untangling ? 1.0 : 0.0}, {"sweep", next_sweep},
+                         {"inverted", static_cast<double>(inverted)}, {"best", best},
+                         {"best_inverted", static_cast<double>(best_inverted)}, {"best_worst", best_worst},
+                         {"now_inverted", static_cast<double>(now_inverted)}, {"now_worst", now_worst}};
+        state.lists = {{"inverted_history", inverted_history}, {"worst_history", worst_history}, {"best_history", best_history}};
+        state.vertex_fields = {{"x", xyz}, {"best_x", best_xyz}};
+        checkpointer.save(summary, state, seconds_since(start));
+    };
+    // At the top of each sweep: a stop request (any process's) ends the run, a due checkpoint is written.
+    auto stopping = [&](bool untangling, int next_sweep) {
+        const bool stop = reducer.max(stop_requested() ? 1.0 : 0.0) > 0.0;
+        if (stop ? checkpointer.writes() : checkpointer.due(summary.iterations)) save(untangling, next_sweep);
+        return stop;
+    };
+    const std::string interrupted = "interrupted (a stop was requested) after ";
+    int first_sweep = 1;
+    bool resume_untangling = false;
+    if (resume) {
+        xyz = resume->vertex_field("x", n);
+        best_xyz = resume->vertex_field("best_x", n);
+        resume_untangling = resume->number("untangling") != 0.0;
+        first_sweep = static_cast<int>(resume->number("sweep"));
+        inverted = static_cast<long>(resume->number("inverted"));
+        best = resume->number("best");
+        best_inverted = static_cast<long>(resume->number("best_inverted"));
+        best_worst = resume->number("best_worst");
+        now_inverted = static_cast<long>(resume->number("now_inverted"));
+        now_worst = resume->number("now_worst");
+        inverted_history = resume->list("inverted_history");
+        worst_history = resume->list("worst_history");
+        best_history = resume->list("best_history");
+    } else {
+        inverted = count_inverted(xyz);
+    }
+
+    if (!resume && inverted > 0 && !options_.untangle)
         return done(TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off");
-    if (inverted > 0) {
+    if (resume ? resume_untangling : inverted > 0) {
         const TerminationCriterion& stop = options_.untangle_termination;
-        std::vector<long> inverted_history{inverted};
-        std::vector<double> worst_history{record("untangle", *volume, inverted, 0, -1e300).worst};
-        for (int s = 1; inverted > 0; ++s) {
+        if (!resume) {
+            inverted_history = {static_cast<double>(inverted)};
+            worst_history = {record("untangle", *volume, inverted, 0, -1e300).worst};
+        }
+        for (int s = resume ? first_sweep : 1; inverted > 0; ++s) {
+            if (stopping(true, s))
+                return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) +
+                                                                " sweeps, while untangling");
             if (s > stop.max_iterations)
                 return done(TerminationReason::CannotUntangle, "untangling stopped after " +
                                                                    std::to_string(stop.max_iterations) +
@@ -312,7 +400,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) 
             ++summary.untangle_iterations;
             inverted = count_inverted(xyz);
             const double worst = record("untangle", *volume, inverted, moved, worst_history.back()).worst;
-            inverted_history.push_back(inverted);
+            inverted_history.push_back(static_cast<double>(inverted));
             worst_history.push_back(std::max(worst, worst_history.back()));
             if (inverted == 0) break;
             const auto window = static_cast<std::size_t>(stop.progress_window);
@@ -327,12 +415,19 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain) 
                 return done(TerminationReason::CannotUntangle,
                             std::to_string(inverted) + " elements are still inverted and local moves no longer help");
         }
+        resume.reset();
     }
 
     const TerminationCriterion& stop = options_.termination;
-    double best = record("shape", *metric, 0, 0, -1e300).worst;
-    std::vector<double> best_history{best};
-    for (int s = 1;; ++s) {
+    if (!resume) {
+        // A new phase, with a new metric: its best starts here.
+        best_xyz.clear();
+        best = record("shape", *metric, 0, 0, -1e300).worst;
+        best_history = {best};
+    }
+    for (int s = resume ? first_sweep : 1;; ++s) {
+        if (stopping(false, s))
+            return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
         if (stop.target_worst_quality && best >= *stop.target_worst_quality)
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
         if (s > stop.max_iterations)

@@ -70,6 +70,11 @@ public:
     SolverRun& operator=(const SolverRun&) = delete;
 
     Clock::time_point start() const { return start_; }
+    // A resumed run: its clock goes on from the checkpointed run's elapsed seconds (time limits
+    // count the whole run).
+    void add_elapsed(double seconds) {
+        start_ -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    }
     // The mesh's coordinates, at unit scale until finish().
     std::span<double> coordinates() { return mesh_.coordinates(); }
 

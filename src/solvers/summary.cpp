@@ -20,12 +20,15 @@ std::string_view to_string(TerminationReason reason) {
         case TerminationReason::TimeLimit: return "time_limit";
         case TerminationReason::CannotUntangle: return "cannot_untangle";
         case TerminationReason::NothingToMove: return "nothing_to_move";
+        case TerminationReason::Interrupted: return "interrupted";
+        case TerminationReason::NumericalFailure: return "numerical_failure";
     }
     return "unknown";
 }
 
 bool Summary::success() const {
-    return valid() && reason != TerminationReason::CannotUntangle && reason != TerminationReason::NothingToMove;
+    return valid() && reason != TerminationReason::CannotUntangle && reason != TerminationReason::NothingToMove &&
+           reason != TerminationReason::Interrupted && reason != TerminationReason::NumericalFailure;
 }
 
 std::string Summary::brief_report() const {

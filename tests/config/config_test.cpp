@@ -368,24 +368,7 @@ BOOST_AUTO_TEST_CASE(which_vertices_are_fixed) {
     BOOST_TEST(extra.methods[0].before.free_vertices <= file.mesh.num_free_vertices());
 }
 
-BOOST_AUTO_TEST_CASE(partitioned_keys_stop_before_anything_is_read) {
-    // Until the MPI run is wired (src/config/partitioned_run.cpp), these say so, naming key and line.
-    for (const std::string& yaml : {std::string("input: {mesh: missing.vtk}\npartition:\n  parts: 4\n"),
-                                   std::string("input:\n  pieces: [a.vtu, b.vtu]\n"),
-                                   std::string("input: {mesh: missing.vtk}\noutput:\n  pieces: out.pvtu\n")}) {
-        const auto spec = cfg::parse_config(yaml, "run.yaml");
-        BOOST_TEST(spec.partitioned());
-        try {
-            cfg::run(spec);
-            BOOST_FAIL("ran " << yaml);
-        } catch (const cfg::ConfigError& e) {
-            BOOST_TEST_CONTEXT(e.what()) {
-                BOOST_TEST(has(e.what(), "not available in this build yet"));
-                BOOST_TEST(has(e.what(), "run.yaml:"));
-            }
-        }
-    }
-}
+// Partitioned runs (which start MPI) are tested in partitioned_run_test.cpp, in suites of their own.
 
 BOOST_AUTO_TEST_CASE(every_key_of_the_registry_is_documented) {
     const std::string docs = pv::test::read_text(std::filesystem::path(PALOVERDE_SOURCE_DIR) / "docs/config.md");
@@ -486,7 +469,7 @@ BOOST_AUTO_TEST_CASE(print_config_and_describe_need_no_mesh) {
     BOOST_TEST(r.exit_code == 0);
     BOOST_TEST(has(r.output, "| `untangle_then_improve` |"));
     const auto examples = std::filesystem::path(PALOVERDE_SOURCE_DIR) / "examples";
-    for (const char* name : {"untangle_then_improve.yaml", "global_vs_local.yaml"}) {
+    for (const char* name : {"untangle_then_improve.yaml", "global_vs_local.yaml", "parallel_run.yaml"}) {
         r = run_cli("run --print-config " + quoted(examples / name));
         BOOST_TEST(r.exit_code == 0, name << ": " << r.output);
     }

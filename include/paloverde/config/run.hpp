@@ -1,7 +1,9 @@
 #pragma once
 // Runs a RunSpec: reads the input, runs each method's queue on its own copy of the mesh, writes
 // the outputs (each through a temporary file and a rename) and says how it went.
+#include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -16,7 +18,8 @@ namespace paloverde::config {
 enum class RunStatus {
     Done = 0,             // every improver succeeded and every target was reached
     Failed = 1,           // an improver failed (could not untangle, nothing to move)
-    TargetNotReached = 3  // finished with a valid mesh, but a target_worst_quality was not reached
+    TargetNotReached = 3, // finished with a valid mesh, but a target_worst_quality was not reached
+    Interrupted = 4       // a stop was requested (SIGINT, SIGTERM); the best mesh so far was written
 };
 std::string_view to_string(RunStatus status);
 
@@ -34,14 +37,37 @@ struct MethodResult {
     std::string mesh_written;  // "" if output.mesh is not set
 };
 
+// How a partitioned run got its mesh onto the ranks and what the exchange moves: the numbers of
+// DistributedRunReport (docs/parallel.md), the same on every rank. Seconds are those of rank 0
+// or, for solve and write, of the slowest rank.
+struct ParallelReport {
+    int ranks = 1;
+    std::string exchange;          // "colored" or "root_relayed"
+    bool from_pieces = false;      // the ranks read pieces (else rank 0 read and split input.mesh)
+    double read_seconds = 0.0;     // rank 0 reading input.mesh; from pieces: reading, checking and building the parts
+    double partition_seconds = 0.0;   // canonical order and METIS (0 from pieces)
+    double distribute_seconds = 0.0;  // sending each rank its part and building it there (0 from pieces)
+    double schedule_seconds = 0.0;    // process graph, edge coloring, send and receive lists
+    double solve_seconds = 0.0;    // every method's queue, with its reports before and after
+    double write_seconds = 0.0;    // output.mesh (gathered or pieces) and output.pieces
+    std::int64_t vertices = 0, elements = 0;  // of the whole mesh
+    std::int64_t ghost_copies = 0;  // ghost values received per exchange, summed over ranks
+    std::int64_t messages = 0;      // point-to-point messages per exchange, summed over ranks
+    int colors = 0;                 // rounds of the colored exchange
+};
+
 struct RunResult {
     std::string input;
     std::vector<MethodResult> methods;
-    RunStatus status = RunStatus::Done;  // the worst over methods: Failed, then TargetNotReached
+    RunStatus status = RunStatus::Done;  // the worst over methods: Interrupted, Failed, then TargetNotReached
+    std::optional<ParallelReport> parallel;  // set by a partitioned run
 
     int exit_code() const { return static_cast<int>(status); }
     std::string report() const;       // text: per method its steps, then a comparison for a study
-    std::string to_json() const;      // run keys, "methods": [...]; one method's keys also at the top
+    // Run keys, "methods": [...]; one method's keys also at the top; a partitioned run adds
+    // "parallel" (ranks, exchange, colors, ghost_copies, messages_per_exchange, seconds: read,
+    // partition, distribute, schedule, solve, write), as DistributedRunReport::to_json does.
+    std::string to_json() const;
     std::string table_csv() const;    // one row per method
     std::string history_csv() const;  // method, improver (its label), then Summary::history_csv's columns
 };
@@ -58,6 +84,12 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);
 
 // Checks the spec (check_runnable), runs every method and writes the outputs. Throws ConfigError
 // for a config that cannot run, FileError / MeshError for unreadable input or unwritable output.
+//
+// A partitioned spec (RunSpec::partitioned()), or any spec while MPI_COMM_WORLD has more than
+// one rank, runs over MPI_COMM_WORLD: it is collective, MPI must be initialized, every rank
+// passes the same spec and gets the same result (but for the solvers' own clocks) and the same
+// exceptions, and rank 0 writes the files other than pieces. Hooks are called on every rank
+// that passes them.
 RunResult run(const RunSpec& spec, const RunHooks& hooks = {});
 
 }  // namespace paloverde::config

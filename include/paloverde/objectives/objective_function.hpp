@@ -6,6 +6,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "paloverde/parallel/reducer.hpp"
 
@@ -38,6 +39,12 @@ public:
     // -d2(value)/d(quality[i])2 of the part of the objective that is a sum over elements: how
     // sharply each element's term bends. Solvers build a preconditioner from it; 0 means none.
     virtual void curvature_weights(std::span<const double> quality, std::span<double> curvature) const;
+
+    // What update() and advance() leave behind (the barrier's mu and t, which also seeds the next
+    // t solve), for checkpoints: restore_state(state()) on a new objective of the same kind and
+    // options continues bit for bit. Throws Error for a state of the wrong size.
+    virtual std::vector<double> state() const { return {}; }
+    virtual void restore_state(std::span<const double> state);
 };
 
 // The log-barrier of Sastry & Shontz:  F(mu, t) = t + mu * sum_i log(q_i - t),  t < min q.
@@ -58,6 +65,8 @@ public:
     double value(std::span<const double> counted, const Reducer& reducer) const override;
     void weights(std::span<const double> quality, std::span<double> weight) const override;
     void curvature_weights(std::span<const double> quality, std::span<double> curvature) const override;
+    std::vector<double> state() const override { return {mu_, t_}; }
+    void restore_state(std::span<const double> state) override;
 
     double mu() const { return mu_; }
     double t() const { return t_; }
@@ -79,6 +88,8 @@ public:
     void update(std::span<const double> counted, const Reducer& reducer) override;
     double value(std::span<const double> counted, const Reducer& reducer) const override;
     void weights(std::span<const double> quality, std::span<double> weight) const override;
+    std::vector<double> state() const override { return {mean_, count_}; }
+    void restore_state(std::span<const double> state) override;
 
 private:
     double p_;
@@ -93,6 +104,8 @@ public:
     void update(std::span<const double> counted, const Reducer& reducer) override;
     double value(std::span<const double> counted, const Reducer& reducer) const override;
     void weights(std::span<const double> quality, std::span<double> weight) const override;
+    std::vector<double> state() const override { return {worst_}; }
+    void restore_state(std::span<const double> state) override;
 
 private:
     double worst_ = 0.0;  // at the last update()

@@ -2,12 +2,14 @@
 // The global solver: all free vertices move together along one search direction of an
 // objective over the whole mesh (by default the log-barrier of Sastry & Shontz). A tangled mesh
 // is first untangled with the hybrid volume/shape metric; once every element is valid the
-// shape metric takes over and no element is ever allowed to invert again.
+// shape metric takes over and no element is ever allowed to invert again. A stop request
+// (stop.hpp) or a NaN ends the run on its best iterate.
 #include <string>
 
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
 
@@ -35,6 +37,7 @@ struct GlobalSolverOptions {
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it
+    CheckpointOptions checkpoint;     // periodic checkpoints, resuming (checkpoint.hpp)
 
     void validate() const;  // throws OptionError
 };

@@ -1,7 +1,7 @@
 #pragma once
 // An ordered list of instructions run over one mesh: quality assessments and improvers
 // (solvers), in Mesquite's sense. A queue stops at the first improver that fails (it could not
-// untangle, or had nothing to move), so later steps never work on a mesh in an unexpected state;
+// untangle, had nothing to move, hit a NaN) or is interrupted (stop.hpp), so later steps never work on a mesh in an unexpected state;
 // the result says which step stopped it and why.
 #include <functional>
 #include <memory>

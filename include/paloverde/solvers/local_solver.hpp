@@ -8,6 +8,7 @@
 #include <string>
 
 #include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
@@ -17,6 +18,7 @@ namespace paloverde {
 
 namespace detail {
 class SolverRun;
+class Checkpointer;
 }
 
 struct LocalSolverOptions {
@@ -36,6 +38,7 @@ struct LocalSolverOptions {
     // mean quality (by ~10% on tire) for no gain in the worst; 1 or more moves them all.
     double improve_below = 0.1;
     int threads = 0;                 // 0: OpenMP's default; results do not depend on it
+    CheckpointOptions checkpoint;    // periodic checkpoints (at sweep boundaries), resuming
 
     void validate() const;  // throws OptionError naming the field
 };
@@ -62,7 +65,7 @@ private:
         VertexColoring coloring;
         MetricScale scale;
     };
-    Summary sweep_colors(detail::SolverRun& run, const Domain& domain);
+    Summary sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer);
 
     LocalSolverOptions options_;
 };

@@ -17,6 +17,8 @@ enum class TerminationReason {
     TimeLimit,
     CannotUntangle,      // inverted elements remain that moving the free vertices did not fix
     NothingToMove,       // no free vertex, or no element with one
+    Interrupted,         // a stop was requested (stop.hpp: Ctrl-C, SIGTERM); ended on the best iterate
+    NumericalFailure,    // the objective, its gradient or a quality became NaN or infinite; ended on the best iterate
 };
 
 std::string_view to_string(TerminationReason reason);
@@ -52,7 +54,7 @@ struct Summary {
 
     // The mesh handed back has no inverted element (decided exactly).
     bool valid() const { return after.inverted == 0; }
-    // Valid, and stopped for a reason that is not a failure.
+    // Valid, and stopped for a reason that is not a failure (nor an interruption).
     bool success() const;
 
     std::string brief_report() const;

@@ -1,0 +1,63 @@
+#include "mpi_session.hpp"
+
+#include <mpi.h>
+
+#include <cstdlib>
+
+namespace paloverde::cli {
+
+namespace {
+bool running() {
+    int initialized = 0, finalized = 0;
+    MPI_Initialized(&initialized);
+    if (!initialized) return false;
+    MPI_Finalized(&finalized);
+    return !finalized;
+}
+}  // namespace
+
+MpiSession::MpiSession() {
+    if (launched()) ensure();
+}
+
+MpiSession::~MpiSession() {
+    if (running()) MPI_Finalize();
+}
+
+bool MpiSession::launched() {
+    // Open MPI's mpirun, PMIx launchers, and MPICH's hydra (PMI) set these in every process.
+    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
+        if (std::getenv(name)) return true;
+    return false;
+}
+
+void MpiSession::ensure() {
+    int initialized = 0;
+    MPI_Initialized(&initialized);
+    if (initialized) return;
+    // Solvers use OpenMP threads inside a rank; only the main thread calls MPI.
+    int provided = 0;
+    MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+}
+
+int MpiSession::rank() {
+    if (!running()) return 0;
+    int rank = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    return rank;
+}
+
+int MpiSession::size() {
+    if (!running()) return 1;
+    int size = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    return size;
+}
+
+int MpiSession::agree(int exit_code) {
+    if (size() <= 1) return exit_code;
+    MPI_Allreduce(MPI_IN_PLACE, &exit_code, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return exit_code;
+}
+
+}  // namespace paloverde::cli

@@ -1,0 +1,463 @@
+#include "checkpointer.hpp"
+
+#include <mpi.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <limits>
+#include <numeric>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/atomic_file.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+
+namespace paloverde {
+
+void CheckpointOptions::validate() const {
+    if (every_iterations < 0)
+        throw OptionError("checkpoint.every_iterations must be >= 0 (0: not by iterations), got " +
+                          std::to_string(every_iterations));
+    if (!(every_seconds >= 0.0) || !std::isfinite(every_seconds))
+        throw OptionError("checkpoint.every_seconds must be >= 0 (0: not by time)");
+}
+
+namespace detail {
+
+namespace {
+
+constexpr char kMagic[8] = {'P', 'A', 'L', 'O', 'V', 'C', 'K', 'P'};
+constexpr std::uint64_t kVersion = 1;
+constexpr std::size_t kHeaderBytes = 32;
+
+std::uint64_t fnv1a(std::string_view bytes) {
+    std::uint64_t h = 14695981039346656037ull;
+    for (unsigned char c : bytes) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+// splitmix64's finalizer: every input bit affects every output bit.
+std::uint64_t mix(std::uint64_t h, std::uint64_t value) {
+    std::uint64_t z = h ^ (value + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2));
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+void put_u64(std::string& out, std::uint64_t v) {
+    for (int i = 0; i < 8; ++i) out.push_back(static_cast<char>((v >> (8 * i)) & 0xff));
+}
+
+}  // namespace
+
+// Little-endian 64-bit numbers, appended.
+class CheckpointWriter {
+public:
+    void u64(std::uint64_t v) { put_u64(bytes_, v); }
+    void i64(std::int64_t v) { u64(static_cast<std::uint64_t>(v)); }
+    void f64(double v) { u64(std::bit_cast<std::uint64_t>(v)); }
+    void text(const std::string& s) {
+        u64(s.size());
+        bytes_ += s;
+    }
+    void f64s(std::span<const double> values) {
+        if constexpr (std::endian::native == std::endian::little) {
+            if (!values.empty()) bytes_.append(reinterpret_cast<const char*>(values.data()), 8 * values.size());
+        } else {
+            for (double v : values) f64(v);
+        }
+    }
+    void reserve(std::size_t n) { bytes_.reserve(n); }
+    std::string& bytes() { return bytes_; }
+
+private:
+    std::string bytes_;
+};
+
+namespace {
+
+// Reads the content; every count is checked against the bytes left before anything is
+// allocated, so a damaged file cannot ask for more memory than its size.
+class Reader {
+public:
+    Reader(std::string_view bytes, std::string path) : bytes_(bytes), path_(std::move(path)) {}
+
+    std::uint64_t u64() {
+        need(8, "a number");
+        std::uint64_t v = 0;
+        for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(static_cast<unsigned char>(bytes_[at_ + i])) << (8 * i);
+        at_ += 8;
+        return v;
+    }
+    std::int64_t i64() { return static_cast<std::int64_t>(u64()); }
+    double f64() { return std::bit_cast<double>(u64()); }
+    // A count of items of `item_bytes` each that must fit in what is left.
+    std::size_t count(std::size_t item_bytes, const char* what) {
+        const std::uint64_t n = u64();
+        if (item_bytes > 0 && n > (bytes_.size() - at_) / item_bytes)
+            fail(std::string("a count of ") + std::to_string(n) + " " + what + " does not fit in the rest of the file");
+        return static_cast<std::size_t>(n);
+    }
+    std::string text() {
+        const std::size_t n = count(1, "characters");
+        std::string s(bytes_.substr(at_, n));
+        at_ += n;
+        return s;
+    }
+    std::vector<double> f64s(std::size_t n) {
+        need(8 * n, "numbers");
+        std::vector<double> v(n);
+        if constexpr (std::endian::native == std::endian::little) {
+            if (n > 0) std::memcpy(v.data(), bytes_.data() + at_, 8 * n);
+            at_ += 8 * n;
+        } else {
+            for (double& x : v) x = f64();
+        }
+        return v;
+    }
+    bool done() const { return at_ == bytes_.size(); }
+    [[noreturn]] void fail(const std::string& message) const {
+        throw FileError::at_byte(path_, kHeaderBytes + at_, "corrupt checkpoint: " + message);
+    }
+
+private:
+    void need(std::size_t n, const char* what) const {
+        if (n > bytes_.size() - at_) fail(std::string("it ends in the middle of ") + what);
+    }
+    std::string_view bytes_;
+    std::string path_;
+    std::size_t at_ = 0;
+};
+
+// The whole file, checked: header, version, length and checksum. Returns the content.
+std::string read_checked(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw FileError(path, 0, "cannot open the checkpoint to resume from (does it exist?)");
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (bytes.size() < kHeaderBytes || std::memcmp(bytes.data(), kMagic, 8) != 0)
+        throw FileError(path, 0, "not a Paloverde checkpoint (it does not start with PALOVCKP)");
+    Reader header(std::string_view(bytes).substr(8, kHeaderBytes - 8), path);
+    const std::uint64_t version = header.u64(), length = header.u64(), checksum = header.u64();
+    if (version != kVersion)
+        throw FileError(path, 0, "checkpoint format version " + std::to_string(version) + "; this build reads version " +
+                                     std::to_string(kVersion));
+    if (length != bytes.size() - kHeaderBytes)
+        throw FileError(path, 0, "truncated or damaged checkpoint: its header announces " + std::to_string(length) +
+                                     " bytes of content, the file holds " + std::to_string(bytes.size() - kHeaderBytes));
+    std::string content = bytes.substr(kHeaderBytes);
+    if (fnv1a(content) != checksum) throw FileError(path, 0, "corrupt checkpoint: the checksum does not match its content");
+    return content;
+}
+
+void put_record(CheckpointWriter& w, const IterationRecord& r) {
+    w.i64(r.iteration);
+    w.text(r.phase);
+    for (double v : {r.worst_quality, r.best_worst_quality, r.mean_quality, r.mu, r.t, r.objective, r.step, r.gain, r.seconds})
+        w.f64(v);
+    w.i64(r.inverted);
+    w.i64(r.moved);
+}
+
+IterationRecord get_record(Reader& r) {
+    IterationRecord out;
+    out.iteration = static_cast<int>(r.i64());
+    out.phase = r.text();
+    for (double* v : {&out.worst_quality, &out.best_worst_quality, &out.mean_quality, &out.mu, &out.t, &out.objective,
+                      &out.step, &out.gain, &out.seconds})
+        *v = r.f64();
+    out.inverted = static_cast<long>(r.i64());
+    out.moved = static_cast<long>(r.i64());
+    return out;
+}
+
+// Runs `work` on rank 0 of a distributed run (or serially); a failure there is thrown on every rank.
+template <class Work>
+void on_root(const DistributedMesh* part, Work&& work) {
+    if (!part) return work();
+    std::string failure;
+    if (part->rank == 0) {
+        try {
+            work();
+        } catch (const std::exception& e) {
+            failure = e.what();
+            if (failure.empty()) failure = "failed";
+        }
+    }
+    std::uint64_t size = failure.size();
+    MPI_Bcast(&size, 1, MPI_UINT64_T, 0, part->comm);
+    failure.resize(size);
+    MPI_Bcast(failure.data(), static_cast<int>(size), MPI_CHAR, 0, part->comm);
+    if (!failure.empty()) throw Error(failure);
+}
+
+}  // namespace
+
+double SolverState::number(const std::string& name) const {
+    const auto it = numbers.find(name);
+    if (it == numbers.end()) throw FileError(source, 0, "the checkpoint has no '" + name + "' (written by another version?)");
+    return it->second;
+}
+
+const std::vector<double>& SolverState::list(const std::string& name) const {
+    const auto it = lists.find(name);
+    if (it == lists.end()) throw FileError(source, 0, "the checkpoint has no list '" + name + "' (written by another version?)");
+    return it->second;
+}
+
+const std::vector<double>& SolverState::vertex_field(const std::string& name, std::size_t local_vertices) const {
+    const auto it = vertex_fields.find(name);
+    if (it == vertex_fields.end())
+        throw FileError(source, 0, "the checkpoint has no vertex field '" + name + "' (written by another version?)");
+    if (it->second.size() != 3 * local_vertices)
+        throw FileError(source, 0, "the checkpoint's vertex field '" + name + "' does not fit this mesh");
+    return it->second;
+}
+
+OptionsText& OptionsText::operator()(const char* key, double value) {
+    // Hexadecimal floating point: every bit counts.
+    char buffer[64];
+    std::snprintf(buffer, sizeof buffer, "%a", value);
+    text_ += std::string(key) + "=" + buffer + "\n";
+    return *this;
+}
+
+OptionsText& OptionsText::operator()(const char* key, const std::string& value) {
+    text_ += std::string(key) + "=" + value + "\n";
+    return *this;
+}
+
+OptionsText& OptionsText::operator()(const char* key, const TerminationCriterion& t) {
+    const std::string k(key);
+    (*this)((k + ".max_iterations").c_str(), t.max_iterations);
+    if (t.target_worst_quality) (*this)((k + ".target_worst_quality").c_str(), *t.target_worst_quality);
+    else (*this)((k + ".target_worst_quality").c_str(), "none");
+    (*this)((k + ".min_progress").c_str(), t.min_progress);
+    (*this)((k + ".progress_window").c_str(), t.progress_window);
+    return (*this)((k + ".gradient_tolerance").c_str(), t.gradient_tolerance);
+}
+
+Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
+                           const SimplexMesh& mesh, const DistributedMesh* part)
+    : options_(options), solver_(std::move(solver)), part_(part), saved_at_(Clock::now()) {
+    options_.validate();
+    if (!writes() && !resumes()) return;
+    const VertexId n = mesh.num_vertices();
+    keys_.resize(static_cast<std::size_t>(n));
+    owned_.assign(static_cast<std::size_t>(n), 1);
+    if (part) {
+        ranks_ = part->ranks;
+        rank_ = part->rank;
+        vertices_ = static_cast<std::uint64_t>(part->global_vertices);
+        for (VertexId v = 0; v < n; ++v) {
+            keys_[v] = mesh.global_ids()[v];
+            owned_[v] = part->vertex_owner[v] == part->rank;
+        }
+    } else {
+        std::iota(keys_.begin(), keys_.end(), GlobalId{0});
+        vertices_ = static_cast<std::uint64_t>(n);
+    }
+
+    options_hash_ = fnv1a(solver_ + "\n" + options_text);
+    // The mesh's fingerprint: a sum of one hash per element (its sorted vertex keys) and one per
+    // vertex (key, fixed flag, coordinates' bits), each counted by one process, so it does not
+    // depend on the order of the elements or on the split of the mesh.
+    std::array<std::uint64_t, 2> sums{0, 0};
+    const int corners = mesh.corners();
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        if (part && !part->counted[e]) continue;
+        std::array<GlobalId, 4> key{};
+        // Sorted by insertion: at most 4 keys.
+        for (int i = 0; i < corners; ++i) {
+            const GlobalId k = keys_[mesh.element(e)[i]];
+            int j = i;
+            for (; j > 0 && key[j - 1] > k; --j) key[j] = key[j - 1];
+            key[j] = k;
+        }
+        std::uint64_t h = static_cast<std::uint64_t>(corners);
+        for (int i = 0; i < corners; ++i) h = mix(h, static_cast<std::uint64_t>(key[i]));
+        sums[0] += h;
+    }
+    const auto xyz = mesh.coordinates();
+    for (VertexId v = 0; v < n; ++v) {
+        if (!owned_[v]) continue;
+        std::uint64_t h = mix(static_cast<std::uint64_t>(keys_[v]), mesh.fixed()[v]);
+        for (int c = 0; c < 3; ++c) h = mix(h, std::bit_cast<std::uint64_t>(xyz[3 * static_cast<std::size_t>(v) + c]));
+        sums[1] += h;
+    }
+    if (part) MPI_Allreduce(MPI_IN_PLACE, sums.data(), 2, MPI_UINT64_T, MPI_SUM, part->comm);
+    mesh_hash_ = mix(mix(sums[0], sums[1]), vertices_);
+}
+
+const Reducer& Checkpointer::reducer() const { return part_ ? part_->reducer() : serial_reducer_; }
+
+bool Checkpointer::due(int iterations) {
+    if (!writes()) return false;
+    const bool by_count = options_.every_iterations > 0 && iterations - saved_iterations_ >= options_.every_iterations;
+    // Clocks differ between ranks: the slowest decides, as for time limits.
+    const bool by_time = options_.every_seconds > 0.0 && reducer().max(seconds_since(saved_at_)) >= options_.every_seconds;
+    return by_count || by_time;
+}
+
+// Rank 0 gets every vertex's 3 values, indexed by key; the other ranks get nothing.
+std::vector<double> Checkpointer::gather(const std::vector<double>& field) const {
+    std::vector<double> out;
+    if (!part_) {
+        out = field;
+        return out;
+    }
+    std::vector<double> mine;
+    std::vector<std::int64_t> keys;
+    for (std::size_t v = 0; v < owned_.size(); ++v)
+        if (owned_[v]) {
+            keys.push_back(keys_[v]);
+            for (int c = 0; c < 3; ++c) mine.push_back(field[3 * v + c]);
+        }
+    const int count = static_cast<int>(keys.size());
+    std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, part_->comm);
+    std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
+    const int total = rank_ == 0 ? offsets.back() + counts.back() : 0;
+    std::vector<std::int64_t> all_keys(static_cast<std::size_t>(total));
+    MPI_Gatherv(keys.data(), count, MPI_INT64_T, all_keys.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, part_->comm);
+    for (int r = 0; r < ranks_; ++r) counts[r] *= 3, offsets[r] *= 3;
+    std::vector<double> values(static_cast<std::size_t>(3 * total));
+    MPI_Gatherv(mine.data(), 3 * count, MPI_DOUBLE, values.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, part_->comm);
+    if (rank_ != 0) return out;
+    out.assign(3 * vertices_, 0.0);
+    for (std::size_t i = 0; i < all_keys.size(); ++i)
+        for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(all_keys[i]) + c] = values[3 * i + c];
+    return out;
+}
+
+void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const {
+    w.text(solver_);
+    w.u64(mesh_hash_);
+    w.u64(options_hash_);
+    w.u64(static_cast<std::uint64_t>(ranks_));
+    w.u64(vertices_);
+    w.f64(elapsed);
+    w.i64(summary.iterations);
+    w.i64(summary.untangle_iterations);
+    w.i64(summary.quality_passes);
+    w.i64(summary.gradient_passes);
+    w.u64(summary.history.size());
+    for (const auto& r : summary.history) put_record(w, r);
+    w.u64(state.numbers.size());
+    for (const auto& [name, value] : state.numbers) {
+        w.text(name);
+        w.f64(value);
+    }
+    w.u64(state.lists.size());
+    for (const auto& [name, values] : state.lists) {
+        w.text(name);
+        w.u64(values.size());
+        w.f64s(values);
+    }
+}
+
+void Checkpointer::save(const Summary& summary, const SolverState& state, double elapsed) {
+    CheckpointWriter w;
+    if (rank_ == 0) w.reserve(4096 + 24 * vertices_ * state.vertex_fields.size() + 128 * summary.history.size());
+    encode(w, summary, state, elapsed);
+    // Vertex fields are gathered (collectively) one at a time and appended on rank 0.
+    w.u64(state.vertex_fields.size());
+    for (const auto& [name, values] : state.vertex_fields) {
+        const std::vector<double> all = gather(values);
+        if (rank_ != 0) continue;
+        w.text(name);
+        w.f64s(all);
+    }
+    on_root(part_, [&] {
+        const std::string& content = w.bytes();
+        std::string header(kMagic, 8);
+        put_u64(header, kVersion);
+        put_u64(header, content.size());
+        put_u64(header, fnv1a(content));
+        AtomicFile file(options_.file);
+        file.stream().write(header.data(), static_cast<std::streamsize>(header.size()));
+        file.stream().write(content.data(), static_cast<std::streamsize>(content.size()));
+        file.commit();
+    });
+    saved_iterations_ = summary.iterations;
+    saved_at_ = Clock::now();
+}
+
+SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
+    const std::string& path = options_.resume;
+    std::string content;
+    on_root(part_, [&] { content = read_checked(path); });
+    if (part_) {
+        std::uint64_t size = content.size();
+        MPI_Bcast(&size, 1, MPI_UINT64_T, 0, part_->comm);
+        content.resize(size);
+        // Counts of MPI calls are ints: send in pieces.
+        for (std::uint64_t at = 0; at < size; at += 1u << 30)
+            MPI_Bcast(content.data() + at, static_cast<int>(std::min<std::uint64_t>(size - at, 1u << 30)), MPI_CHAR, 0,
+                      part_->comm);
+    }
+    // Every rank parses the same bytes, so every rank fails alike.
+    Reader r(content, path);
+    const std::string solver = r.text();
+    if (solver != solver_)
+        throw FileError(path, 0, "this checkpoint was written by the " + solver + " solver, not the " + solver_ + " solver");
+    const std::uint64_t mesh_hash = r.u64(), options_hash = r.u64(), ranks = r.u64(), vertices = r.u64();
+    if (ranks != static_cast<std::uint64_t>(ranks_))
+        throw FileError(path, 0, "this checkpoint was written by a run on " + std::to_string(ranks) +
+                                     " rank(s); resume it on as many (this run has " + std::to_string(ranks_) + ")");
+    if (vertices != vertices_ || mesh_hash != mesh_hash_)
+        throw FileError(path, 0, "this checkpoint belongs to another mesh: the connectivity, the fixed vertices or the "
+                                 "input coordinates differ; resume from the input the checkpointed run started with");
+    if (options_hash != options_hash_)
+        throw FileError(path, 0, "this checkpoint was written with other " + solver_ + " solver options; resume with the "
+                                 "options of the checkpointed run (only threads, time limits and checkpoint settings "
+                                 "may change)");
+    const double elapsed = r.f64();
+    Summary restored;
+    restored.iterations = static_cast<int>(r.i64());
+    restored.untangle_iterations = static_cast<int>(r.i64());
+    restored.quality_passes = r.i64();
+    restored.gradient_passes = r.i64();
+    // An iteration record takes at least 13 numbers of 8 bytes.
+    restored.history.resize(r.count(13 * 8, "history records"));
+    for (auto& record : restored.history) record = get_record(r);
+    SolverState state;
+    state.source = path;
+    for (std::size_t i = 0, n = r.count(16, "numbers"); i < n; ++i) {
+        std::string name = r.text();
+        state.numbers[name] = r.f64();
+    }
+    for (std::size_t i = 0, n = r.count(16, "lists"); i < n; ++i) {
+        std::string name = r.text();
+        state.lists[name] = r.f64s(r.count(8, "list entries"));
+    }
+    const std::size_t local = keys_.size();
+    for (std::size_t i = 0, n = r.count(8 + 24 * vertices_, "vertex fields"); i < n; ++i) {
+        std::string name = r.text();
+        const std::vector<double> all = r.f64s(3 * vertices_);
+        std::vector<double> mine(3 * local);
+        for (std::size_t v = 0; v < local; ++v)
+            for (int c = 0; c < 3; ++c) mine[3 * v + c] = all[3 * static_cast<std::size_t>(keys_[v]) + c];
+        state.vertex_fields[name] = std::move(mine);
+    }
+    if (!r.done()) r.fail("bytes left over after the last field");
+
+    summary.iterations = restored.iterations;
+    summary.untangle_iterations = restored.untangle_iterations;
+    summary.quality_passes = restored.quality_passes;
+    summary.gradient_passes = restored.gradient_passes;
+    summary.history = std::move(restored.history);
+    run.add_elapsed(elapsed);
+    saved_iterations_ = summary.iterations;
+    saved_at_ = Clock::now();
+    return state;
+}
+
+}  // namespace detail
+}  // namespace paloverde

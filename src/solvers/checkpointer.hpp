@@ -1,0 +1,103 @@
+#pragma once
+// Writing and reading the checkpoints of CheckpointOptions (include/paloverde/solvers/checkpoint.hpp).
+//
+// The file: a 32-byte header, then the content.
+//   bytes 0-7    "PALOVCKP"
+//   bytes 8-15   format version (1)
+//   bytes 16-23  length of the content in bytes
+//   bytes 24-31  64-bit FNV-1a hash of the content (a checksum)
+// All numbers are little-endian 64-bit (integers unsigned or two's complement, doubles IEEE).
+// The content: the solver's name, the fingerprints of the mesh and of the options, the number of
+// ranks and of vertices, the elapsed seconds, the Summary's counters and history, then the
+// solver's state by name: numbers, lists, and vertex fields of 3 doubles per vertex indexed by
+// the vertex's key (global id in a distributed run, the solver's own numbering serially).
+#include <cstdint>
+#include <map>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/parallel/reducer.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
+#include "paloverde/solvers/summary.hpp"
+#include "paloverde/solvers/termination.hpp"
+#include "run_support.hpp"
+
+namespace paloverde {
+struct DistributedMesh;
+}
+
+namespace paloverde::detail {
+
+class CheckpointWriter;
+
+// What a solver needs to continue from an iteration boundary, by name. Vertex fields hold 3
+// doubles per local vertex; only the owned vertices' values are written, and on reading every
+// local vertex (ghosts too) gets its owner's.
+struct SolverState {
+    std::map<std::string, double> numbers;
+    std::map<std::string, std::vector<double>> lists;
+    std::map<std::string, std::vector<double>> vertex_fields;
+    std::string source;  // the file it was read from, for messages
+
+    // Each throws a FileError naming the file when the entry is missing or has the wrong size.
+    double number(const std::string& name) const;
+    const std::vector<double>& list(const std::string& name) const;
+    const std::vector<double>& vertex_field(const std::string& name, std::size_t local_vertices) const;
+};
+
+// Options of one solver as text (every field that changes the result), for the fingerprint.
+class OptionsText {
+public:
+    OptionsText& operator()(const char* key, double value);
+    OptionsText& operator()(const char* key, const std::string& value);
+    OptionsText& operator()(const char* key, const char* value) { return (*this)(key, std::string(value)); }
+    // Every field but max_seconds (a time limit may change between a run and its resumption).
+    OptionsText& operator()(const char* key, const TerminationCriterion& t);
+    const std::string& text() const { return text_; }
+
+private:
+    std::string text_;
+};
+
+class Checkpointer {
+public:
+    // `mesh`: the solver's mesh at the start of the run (serially the whole mesh, in a distributed
+    // run this process's part, whose vertices are identified by their global ids). Collective in
+    // a distributed run when checkpoints are written or read.
+    Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
+                 const SimplexMesh& mesh, const DistributedMesh* part);
+
+    bool writes() const { return !options_.file.empty(); }
+    bool resumes() const { return !options_.resume.empty(); }
+
+    // Reads options.resume, checks it belongs to this mesh, solver and options, restores the
+    // summary's counters and history and the clock (elapsed seconds), and returns the state.
+    // Throws FileError for a missing, corrupt or mismatched file (on every rank).
+    SolverState resume(Summary& summary, SolverRun& run);
+
+    // Whether a checkpoint is due after `iterations` (the same answer on every rank).
+    bool due(int iterations);
+    // Writes the checkpoint (collective); `elapsed` is the run's seconds so far.
+    void save(const Summary& summary, const SolverState& state, double elapsed);
+
+private:
+    void encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const;
+    std::vector<double> gather(const std::vector<double>& field) const;
+    const Reducer& reducer() const;
+
+    CheckpointOptions options_;
+    std::string solver_;
+    std::uint64_t mesh_hash_ = 0, options_hash_ = 0;
+    const DistributedMesh* part_;
+    Reducer serial_reducer_;
+    std::vector<GlobalId> keys_;        // per local vertex
+    std::vector<std::uint8_t> owned_;   // per local vertex
+    std::uint64_t vertices_ = 0;        // over all processes
+    int ranks_ = 1, rank_ = 0;
+    int saved_iterations_ = 0;          // at the last checkpoint written or read
+    Clock::time_point saved_at_;
+};
+
+}  // namespace paloverde::detail

@@ -1,0 +1,434 @@
+// Partitioned (MPI) runs from a config. Two suites, both disabled in the plain `config` run so
+// that it never starts MPI (LeakSanitizer cannot run with Open MPI, see tests/CMakeLists.txt):
+//   partitioned          in this process, one rank (CTest `config_partitioned`);
+//   partitioned_mpirun   `paloverde run` under mpirun, compared with the serial run (CTest
+//                        `config_mpirun_np2`, `config_mpirun_np4`), with the ranks and the
+//                        launcher after `--`: test_config --run_test=partitioned_mpirun -- N MPIEXEC ARGS...
+#include <mpi.h>
+
+#include <algorithm>
+#include <array>
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <sys/wait.h>
+
+#include "paloverde/config/config.hpp"
+#include "paloverde/config/run.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+#include "support/io_checks.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace cfg = paloverde::config;
+namespace utf = boost::unit_test;
+using pv::test::run_cli;
+
+namespace {
+
+// MPI is started by the first test that needs it and finalized at the end of the program.
+struct FinalizeMpi {
+    ~FinalizeMpi() {
+        int initialized = 0, finalized = 0;
+        MPI_Initialized(&initialized);
+        MPI_Finalized(&finalized);
+        if (initialized && !finalized) MPI_Finalize();
+    }
+};
+struct StartMpi {
+    StartMpi() {
+        int initialized = 0, provided = 0;
+        MPI_Initialized(&initialized);
+        if (!initialized) MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+    }
+};
+
+bool has(const std::string& text, const std::string& word) { return text.find(word) != std::string::npos; }
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+std::filesystem::path tangled() { return pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk"); }
+
+// The largest coordinate difference, relative to the largest coordinate.
+double relative_difference(const std::filesystem::path& a, const std::filesystem::path& b) {
+    const auto x = pv::read_mesh(a).mesh, y = pv::read_mesh(b).mesh;
+    BOOST_REQUIRE(x.coordinates().size() == y.coordinates().size());
+    double extent = 0.0, difference = 0.0;
+    for (std::size_t i = 0; i < x.coordinates().size(); ++i) {
+        extent = std::max(extent, std::abs(x.coordinates()[i]));
+        difference = std::max(difference, std::abs(x.coordinates()[i] - y.coordinates()[i]));
+    }
+    return difference / extent;
+}
+
+// A queue that untangles and improves with the global solver, and its outputs in `dir`.
+std::string global_config(const std::filesystem::path& mesh, const std::filesystem::path& dir) {
+    return "input: {mesh: " + mesh.string() + "}\nthreads: 1\n"
+           "queue:\n  - assess: before\n  - untangle: global\n"
+           "  - improve: {name: global, termination: {max_iterations: 25}}\n  - assess: after\n"
+           "output:\n  mesh: " + (dir / "out.vtu").string() + "\n  summary: " + (dir / "s.json").string() +
+           "\n  history: " + (dir / "h.csv").string() + "\n";
+}
+
+std::vector<std::string> step_labels(const cfg::MethodResult& m) {
+    std::vector<std::string> labels;
+    for (const auto& s : m.queue.steps)
+        labels.push_back(s.label + (std::holds_alternative<pv::QualityReport>(s.outcome) ? ":assess" : ":improve"));
+    return labels;
+}
+
+std::size_t lines_of(const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); }
+
+}  // namespace
+
+BOOST_TEST_GLOBAL_FIXTURE(FinalizeMpi);
+
+BOOST_AUTO_TEST_SUITE(partitioned, *utf::disabled() * utf::fixture<StartMpi>())
+
+BOOST_AUTO_TEST_CASE(a_partitioned_config_runs_on_one_rank_as_the_serial_run) {
+    const pv::test::ScratchDir serial("partitioned_serial"), split("partitioned_split");
+    const auto serial_result = cfg::run(cfg::parse_config(global_config(tangled(), serial.path()), "run.yaml"));
+    // output.pieces makes it a partitioned run; without mpirun it has one rank.
+    const auto spec = cfg::parse_config(global_config(tangled(), split.path()) + "  pieces: " +
+                                            (split / "p.pvtu").string() + "\n", "run.yaml");
+    BOOST_TEST(spec.partitioned());
+    int iterations_seen = 0, methods_done = 0;
+    cfg::RunHooks hooks;
+    hooks.on_iteration = [&](std::string_view method, std::string_view step, const pv::IterationRecord&) {
+        BOOST_TEST(method == "run");
+        BOOST_TEST((step == "untangle" || step == "global"));
+        ++iterations_seen;
+    };
+    hooks.on_method_done = [&](const cfg::MethodResult&) { ++methods_done; };
+    const auto result = cfg::run(spec, hooks);
+    BOOST_TEST(methods_done == 1);
+    BOOST_TEST(result.exit_code() == 0);
+    BOOST_REQUIRE(result.parallel.has_value());
+    BOOST_TEST(result.parallel->ranks == 1);
+    BOOST_TEST(result.parallel->vertices == 129);
+    BOOST_TEST(result.parallel->elements == 408);
+    BOOST_TEST(result.parallel->ghost_copies == 0);
+    BOOST_TEST(!serial_result.parallel.has_value());
+    BOOST_REQUIRE(result.methods.size() == 1u);
+    const auto& m = result.methods[0];
+    BOOST_TEST(m.before.inverted == 9);
+    BOOST_TEST(m.after.inverted == 0);
+    BOOST_TEST(step_labels(m) == step_labels(serial_result.methods[0]));
+    BOOST_TEST(m.iterations == serial_result.methods[0].iterations);
+    BOOST_TEST(iterations_seen >= m.iterations);
+    BOOST_TEST(m.worst_after == serial_result.methods[0].worst_after, boost::test_tools::tolerance(1e-10));
+    BOOST_TEST(relative_difference(serial / "out.vtu", split / "out.vtu") <= 1e-10);
+    BOOST_TEST(std::filesystem::exists(split / "p.pvtu"));
+    BOOST_TEST(std::filesystem::exists(split / "p" / "p_0.vtu"));
+    // The summary has the serial keys and the distributed numbers; the history the same rows.
+    const auto summary = nlohmann::json::parse(pv::test::read_text(split / "s.json"));
+    BOOST_TEST(summary["inverted_after"].get<int>() == 0);
+    BOOST_TEST(summary["parallel"]["ranks"].get<int>() == 1);
+    BOOST_TEST(summary["parallel"]["exchange"].get<std::string>() == "colored");
+    for (const char* stage : {"read", "partition", "distribute", "schedule", "solve", "write"})
+        BOOST_TEST(summary["parallel"]["seconds"][stage].get<double>() >= 0.0, stage);
+    BOOST_TEST(summary["parallel"]["seconds"]["solve"].get<double>() > 0.0);
+    BOOST_TEST(lines_of(pv::test::read_text(split / "h.csv")) == lines_of(pv::test::read_text(serial / "h.csv")));
+    BOOST_TEST(has(result.report(), "parallel: 1 rank, 129 vertices, 408 elements"));
+}
+
+BOOST_AUTO_TEST_CASE(a_study_runs_every_method_from_the_input) {
+    const pv::test::ScratchDir dir("partitioned_study");
+    const std::string yaml = "input: {mesh: " + tangled().string() + "}\nthreads: 1\nparallel: {exchange: root}\n"
+                             "study:\n  - name: global\n    queue: untangle_then_improve\n"
+                             "  - name: local\n    queue: [improve: {name: local, termination: {max_iterations: 8}}]\n"
+                             "output:\n  mesh: " + (dir / "m_{method}.vtk").string() + "\n  pieces: " +
+                             (dir / "p_{method}.pvtu").string() + "\n  table: " + (dir / "t.csv").string() + "\n";
+    const auto result = cfg::run(cfg::parse_config(yaml, "study.yaml"));
+    BOOST_REQUIRE(result.methods.size() == 2u);
+    BOOST_TEST(result.parallel->exchange == "root_relayed");
+    for (const auto& m : result.methods) {
+        BOOST_TEST(m.before.inverted == 9);
+        BOOST_TEST(m.after.inverted == 0);
+    }
+    for (const char* name : {"m_global.vtk", "m_local.vtk", "p_global.pvtu", "p_local.pvtu"})
+        BOOST_TEST(std::filesystem::exists(dir / name), name);
+    BOOST_TEST(lines_of(pv::test::read_text(dir / "t.csv")) == 3u);
+}
+
+BOOST_AUTO_TEST_CASE(wrappers_run_the_same_steps_on_a_distributed_mesh) {
+    const pv::test::ScratchDir dir("partitioned_wrappers");
+    const auto tire = pv::test::shared_data("mesquite/tets/tire.vtk");
+    for (const std::string name : {"untangle", "shape_improvement", "local_shape_improvement", "untangle_then_improve"}) {
+        BOOST_TEST_CONTEXT(name) {
+            const auto& mesh = name == "shape_improvement" || name == "local_shape_improvement" ? tire : tangled();
+            const std::string limit = name == "untangle" ? "untangle_termination" : "termination";
+            const std::string yaml = "input: {mesh: " + mesh.string() + "}\nthreads: 1\nqueue:\n  - wrapper: {name: " +
+                                     name + ", " + limit + ": {max_iterations: 6}}\noutput: {mesh: " +
+                                     (dir / "serial.vtu").string() + "}\n";
+            const auto serial = cfg::run(cfg::parse_config(yaml, "run.yaml"));
+            const auto split = cfg::run(cfg::parse_config(
+                yaml, "run.yaml",
+                std::vector<cfg::Override>{{"output.mesh=" + (dir / "split.vtu").string()},
+                                           {"output.pieces=" + (dir / "split.pvtu").string()}}));
+            BOOST_REQUIRE(split.parallel.has_value());
+            BOOST_TEST(step_labels(split.methods[0]) == step_labels(serial.methods[0]), boost::test_tools::per_element());
+            BOOST_TEST(split.exit_code() == serial.exit_code());
+            // The local smoother colors differently over MPI (docs/parallel.md); the global solver
+            // gives the serial mesh.
+            if (name != "local_shape_improvement")
+                BOOST_TEST(relative_difference(dir / "serial.vtu", dir / "split.vtu") <= 1e-10);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(a_run_from_pieces) {
+    const pv::test::ScratchDir dir("partitioned_pieces");
+    pv::DistributedMesh::write_partitioned(pv::read_mesh(tangled()).mesh, 1, dir / "in.pvtu");
+    const std::string queue = "threads: 1\nqueue: untangle_then_improve\noutput: {pieces: " + (dir / "out.pvtu").string() + "}\n";
+    const auto reference = cfg::run(cfg::parse_config("input: {mesh: " + tangled().string() + "}\n" + queue, "run.yaml"));
+    for (const std::string& input : {"input: {pieces: [" + (dir / "in.pvtu").string() + "]}\n",
+                                    "input: {mesh: " + (dir / "in.pvtu").string() + "}\n",
+                                    "input: {pieces: [" + (dir / "in" / "in_0.vtu").string() + "]}\n"}) {
+        BOOST_TEST_CONTEXT(input) {
+            const auto result = cfg::run(cfg::parse_config(input + queue, "run.yaml"));
+            BOOST_TEST(result.exit_code() == 0);
+            BOOST_TEST(result.parallel->from_pieces);
+            BOOST_TEST(result.methods[0].after.inverted == 0);
+            BOOST_TEST(result.methods[0].iterations == reference.methods[0].iterations);
+            BOOST_TEST(result.methods[0].worst_after == reference.methods[0].worst_after, boost::test_tools::tolerance(1e-10));
+            BOOST_TEST(pv::read_mesh(dir / "out" / "out_0.vtu").mesh.num_elements() == 408);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(what_a_partitioned_run_cannot_do_is_named_before_reading) {
+    struct Case {
+        std::string yaml, key, where, words;
+    };
+    // input.mesh does not exist: each error must come before anything is read.
+    for (const Case& c :
+         {Case{"input: {mesh: missing.vtk}\npartition:\n  parts: 2\n", "partition.parts", "run.yaml:3:10", "mpirun -n 2"},
+          Case{"input: {mesh: missing.vtk}\noutput: {pieces: p.pvtu}\nqueue:\n  - improve: smart_laplace\n",
+               "queue[0].improve.name", "run.yaml:4:14", "no distributed version"},
+          Case{"input: {mesh: missing.vtk}\noutput: {pieces: p.pvtu}\nqueue: laplace\n", "queue[0].wrapper.name",
+               "run.yaml:3:8", "no distributed version"},
+          Case{"input: {mesh: missing.vtk}\noutput: {pieces: p.pvtu}\nstudy:\n  - name: a\n    queue: [improve: global]\n"
+               "  - name: b\n    queue: [improve: local]\n",
+               "output.pieces", "run.yaml:2:18", "{method}"},
+          Case{"input:\n  pieces: [a.vtu, b.vtu]\n", "input.pieces", "run.yaml:2:11", "mpirun -n 2"},
+          Case{"input:\n  pieces: [a.pvtu, b.vtu]\n", "input.pieces", "run.yaml:2:11", "lists its pieces itself"},
+          Case{"input:\n  pieces: [a.vtu]\n  fixed: boundary\n", "input.fixed", "run.yaml:3:10", "own `fixed` field"},
+          Case{"input:\n  pieces: [a.vtu]\n  fixed_vertices: [3]\n", "input.fixed_vertices", "run.yaml:3:19", "pieces"},
+          Case{"input: {pieces: [a.vtu]}\noutput:\n  mesh: out.vtk\n", "output.mesh", "run.yaml:3:9", ".pvtu"}}) {
+        BOOST_TEST_CONTEXT(c.yaml) {
+            try {
+                cfg::run(cfg::parse_config(c.yaml, "run.yaml"));
+                BOOST_FAIL("no error");
+            } catch (const cfg::ConfigError& e) {
+                BOOST_TEST_CONTEXT(e.what()) {
+                    BOOST_TEST(e.key() == c.key);
+                    BOOST_TEST(e.where() == c.where);
+                    BOOST_TEST(has(e.what(), c.words));
+                }
+            }
+        }
+    }
+    // A piece that is not there is an input error, naming the file.
+    try {
+        cfg::run(cfg::parse_config("input: {pieces: [missing_piece.vtu]}\n", "run.yaml"));
+        BOOST_FAIL("no error");
+    } catch (const cfg::ConfigError& e) {
+        BOOST_FAIL("a usage error for a missing piece: " << e.what());
+    } catch (const pv::Error& e) {
+        BOOST_TEST(has(e.what(), "missing_piece.vtu"), e.what());
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+// ---------------------------------------------------------------------------------------------
+// `paloverde run` under mpirun.
+
+namespace {
+
+struct Launch {
+    int ranks = 0;
+    std::string prefix;  // the launcher with its flags, shell-quoted
+};
+
+// The ranks and the launcher given after `--` (tests/CMakeLists.txt).
+Launch launch() {
+    const auto& suite = utf::framework::master_test_suite();
+    if (suite.argc < 3)
+        BOOST_FAIL("give the ranks and the MPI launcher after --: test_config --run_test=partitioned_mpirun -- 2 "
+                   "mpiexec -n 2 [flags]");
+    Launch l;
+    l.ranks = std::stoi(suite.argv[1]);
+    for (int i = 2; i < suite.argc; ++i) l.prefix += quoted(suite.argv[i]) + " ";
+    return l;
+}
+
+struct RankedRun {
+    std::vector<int> exit_codes;  // one per rank that finished
+    std::string out, err;
+};
+
+// `paloverde ARGUMENTS` on every rank of the launcher; each rank's exit code recorded apart (the
+// launcher reports only one).
+RankedRun mpirun_cli(const pv::test::ScratchDir& dir, const std::string& arguments, const std::filesystem::path& cwd = {}) {
+    const Launch l = launch();
+    const auto codes = dir / "codes";
+    std::filesystem::remove_all(codes);
+    std::filesystem::create_directories(codes);
+    // Each rank's shell records the exit code of its paloverde under the rank's number.
+    const std::string record =
+        "codes=$1; shift; \"$@\"; echo $? > \"$codes/rank_${OMPI_COMM_WORLD_RANK:-${PMIX_RANK:-${PMI_RANK:-x}}}\"";
+    const std::string command = (cwd.empty() ? std::string() : "cd " + quoted(cwd) + " && ") + l.prefix + "sh -c '" + record + "' sh " + quoted(codes) + " " + quoted(PALOVERDE_CLI) +
+                                " " + arguments + " > " + quoted(dir / "out.txt") + " 2> " + quoted(dir / "err.txt");
+    const int status = std::system(command.c_str());
+    BOOST_TEST_INFO(command);
+    BOOST_TEST(WIFEXITED(status));
+    RankedRun r;
+    for (const auto& entry : std::filesystem::directory_iterator(codes))
+        r.exit_codes.push_back(std::stoi(pv::test::read_text(entry.path())));
+    r.out = pv::test::read_text(dir / "out.txt");
+    r.err = pv::test::read_text(dir / "err.txt");
+    return r;
+}
+
+std::size_t count_of(const std::string& text, const std::string& word) {
+    std::size_t n = 0;
+    for (std::size_t at = text.find(word); at != std::string::npos; at = text.find(word, at + 1)) ++n;
+    return n;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(partitioned_mpirun, *utf::disabled())
+
+BOOST_AUTO_TEST_CASE(mpirun_gives_the_serial_mesh) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_same");
+    pv::test::write_file(dir / "run.yaml", global_config(tangled(), dir.path()));
+    // The serial run of the same config (no mpirun, partition.parts: 1).
+    const auto serial = run_cli("run -q " + quoted(dir / "run.yaml") + " --set output.mesh=" + quoted(dir / "serial.vtu"));
+    BOOST_TEST_REQUIRE(serial.exit_code == 0, serial.output);
+    const auto r = mpirun_cli(dir, "run " + quoted(dir / "run.yaml") + " --json --set partition.parts=" +
+                                       std::to_string(ranks) + " --set output.pieces=" + quoted(dir / "p.pvtu"));
+    BOOST_TEST_INFO(r.err);
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(relative_difference(dir / "serial.vtu", dir / "out.vtu") <= 1e-10);
+    // --json from rank 0 alone, with the distributed numbers.
+    const auto printed = nlohmann::json::parse(r.out);
+    BOOST_TEST(printed["parallel"]["ranks"].get<int>() == ranks);
+    BOOST_TEST(printed["parallel"]["ghost_copies"].get<long>() > 0);
+    BOOST_TEST(printed["parallel"]["messages_per_exchange"].get<long>() >= 2);
+    BOOST_TEST(printed["parallel"]["colors"].get<int>() >= 1);
+    BOOST_TEST(printed["inverted_after"].get<int>() == 0);
+    const auto summary = nlohmann::json::parse(pv::test::read_text(dir / "s.json"));
+    BOOST_TEST(summary["parallel"] == printed["parallel"]);
+    for (int p = 0; p < ranks; ++p)
+        BOOST_TEST(std::filesystem::exists(dir / "p" / ("p_" + std::to_string(p) + ".vtu")), p);
+    // The example of docs/config.md, from the repository's root.
+    const auto example = mpirun_cli(dir, "run examples/parallel_run.yaml --json --set partition.parts=" + std::to_string(ranks) +
+                                             " --set output.mesh=" + quoted(dir / "example.vtu") + " --set output.pieces=" +
+                                             quoted(dir / "example.pvtu") + " --set output.summary=~ --set output.history=~",
+                                    PALOVERDE_SOURCE_DIR);
+    BOOST_TEST_INFO(example.err);
+    BOOST_TEST(example.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(nlohmann::json::parse(example.out)["parallel"]["elements"].get<long>() == 11098);
+    // `improve` under mpirun splits the mesh over the ranks too.
+    const auto improved = mpirun_cli(dir, "improve " + quoted(tangled()) + " -q -o " + quoted(dir / "improved.vtu") +
+                                              " --iterations 25 --threads 1");
+    BOOST_TEST_INFO(improved.err);
+    BOOST_TEST(improved.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    const auto improved_serial = run_cli("improve " + quoted(tangled()) + " -q -o " + quoted(dir / "improved_serial.vtu") +
+                                         " --iterations 25 --threads 1");
+    BOOST_TEST_REQUIRE(improved_serial.exit_code == 0);
+    BOOST_TEST(relative_difference(dir / "improved_serial.vtu", dir / "improved.vtu") <= 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(mpirun_local_and_pieces_give_the_one_rank_result) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_local");
+    const auto tire = pv::test::shared_data("mesquite/tets/tire.vtk");
+    pv::test::write_file(dir / "local.yaml", "input: {mesh: " + tire.string() + "}\nthreads: 1\n"
+                                             "queue: [improve: {name: local, termination: {max_iterations: 4}}]\n"
+                                             "output: {mesh: " + (dir / "out.vtu").string() + ", summary: " +
+                                             (dir / "s.json").string() + "}\n");
+    // One rank without mpirun (a partitioned config: output.pieces) against `ranks` under mpirun.
+    const auto one = run_cli("run -q " + quoted(dir / "local.yaml") + " --set output.mesh=" + quoted(dir / "one.vtu") +
+                             " --set output.pieces=" + quoted(dir / "one.pvtu") + " --set output.summary=" +
+                             quoted(dir / "one.json"));
+    BOOST_TEST_REQUIRE(one.exit_code == 0, one.output);
+    const auto many = mpirun_cli(dir, "run -q " + quoted(dir / "local.yaml") + " --set partition.parts=" + std::to_string(ranks));
+    BOOST_TEST_INFO(many.err);
+    BOOST_TEST(many.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(relative_difference(dir / "one.vtu", dir / "out.vtu") <= 1e-10);
+
+    // Pieces written by `paloverde partition`, read one per rank, written back as pieces.
+    const auto split = run_cli("partition " + quoted(tire) + " -n " + std::to_string(ranks) + " -o " + quoted(dir / "in.pvtu"));
+    BOOST_TEST_REQUIRE(split.exit_code == 0, split.output);
+    const auto from_pieces = mpirun_cli(dir, "run -q " + quoted(dir / "local.yaml") + " --set input.mesh=~ --set 'input.pieces=[" +
+                                                 (dir / "in.pvtu").string() + "]' --set output.mesh=" + quoted(dir / "out.pvtu") +
+                                                 " --set output.summary=" + quoted(dir / "pieces.json"));
+    BOOST_TEST_INFO(from_pieces.err);
+    BOOST_TEST(from_pieces.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    const auto a = nlohmann::json::parse(pv::test::read_text(dir / "one.json"));
+    const auto b = nlohmann::json::parse(pv::test::read_text(dir / "pieces.json"));
+    BOOST_TEST(b["parallel"]["from_pieces"].get<bool>());
+    BOOST_TEST(b["parallel"]["ranks"].get<int>() == ranks);
+    BOOST_TEST(b["iterations"] == a["iterations"]);
+    BOOST_TEST(b["worst_after"].get<double>() == a["worst_after"].get<double>(), boost::test_tools::tolerance(1e-10));
+    for (int p = 0; p < ranks; ++p)
+        BOOST_TEST(std::filesystem::exists(dir / "out" / ("out_" + std::to_string(p) + ".vtu")), p);
+}
+
+BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_bad");
+    pv::test::write_file(dir / "run.yaml", "input: {mesh: " + tangled().string() + "}\npartition:\n  parts: " +
+                                               std::to_string(ranks + 1) + "\n");
+    auto r = mpirun_cli(dir, "run " + quoted(dir / "run.yaml"));
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 2), boost::test_tools::per_element());
+    BOOST_TEST(count_of(r.err, "partition.parts: must equal the number of MPI ranks") == 1u, r.err);
+    BOOST_TEST(has(r.err, "run.yaml:3:10: partition.parts"), r.err);
+    // Missing pieces: a .pvtu that is not there, and a listed piece that is not there.
+    r = mpirun_cli(dir, "run --set 'input.pieces=[" + (dir / "missing.pvtu").string() + "]'");
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 1), boost::test_tools::per_element());
+    BOOST_TEST(count_of(r.err, "missing.pvtu") == 1u, r.err);
+    std::string listed;
+    for (int p = 0; p < ranks; ++p) listed += (p ? ", " : "") + (dir / ("piece_" + std::to_string(p) + ".vtu")).string();
+    r = mpirun_cli(dir, "run --set 'input.pieces=[" + listed + "]'");
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 1), boost::test_tools::per_element());
+    BOOST_TEST(count_of(r.err, "paloverde: error:") == 1u, r.err);
+    BOOST_TEST(has(r.err, "piece_0.vtu"), r.err);
+    // A serial config under mpirun says what to set.
+    r = mpirun_cli(dir, "run --set input.mesh=" + quoted(tangled()));
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 2), boost::test_tools::per_element());
+    BOOST_TEST(count_of(r.err, "partition.parts: " + std::to_string(ranks)) == 1u, r.err);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+// In the plain `config` run MPI is never started: a partitioned run says what it needs, after
+// the config's own errors.
+BOOST_AUTO_TEST_SUITE(partitioned_without_mpi)
+
+BOOST_AUTO_TEST_CASE(a_partitioned_run_asks_for_mpi_init) {
+    int initialized = 0;
+    MPI_Initialized(&initialized);
+    if (initialized) {
+        BOOST_TEST_MESSAGE("MPI was started by another suite of this run; nothing to check");
+        return;
+    }
+    const std::string yaml = "input: {mesh: missing.vtk}\noutput: {pieces: p.pvtu}\n";
+    BOOST_CHECK_THROW(cfg::run(cfg::parse_config(yaml + "partition: {parts: 3}\n", "run.yaml")), cfg::ConfigError);
+    try {
+        cfg::run(cfg::parse_config(yaml, "run.yaml"));
+        BOOST_FAIL("no error");
+    } catch (const cfg::ConfigError& e) {
+        BOOST_FAIL("a config error: " << e.what());
+    } catch (const pv::Error& e) {
+        BOOST_TEST(has(e.what(), "call MPI_Init before config::run"), e.what());
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
