@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "io/xml_reader.hpp"
+
 namespace paloverde::config::detail {
 
 namespace {
@@ -35,20 +37,6 @@ std::vector<double> ticks(Range& r, int count) {
     r.hi = std::ceil(r.hi / step) * step;
     std::vector<double> out;
     for (double t = r.lo; t <= r.hi + step * 1e-9; t += step) out.push_back(std::abs(t) < step * 1e-9 ? 0.0 : t);
-    return out;
-}
-
-std::string escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        switch (c) {
-            case '<': out += "&lt;"; break;
-            case '>': out += "&gt;"; break;
-            case '&': out += "&amp;"; break;
-            case '"': out += "&quot;"; break;
-            default: out += c;
-        }
-    }
     return out;
 }
 
@@ -85,7 +73,7 @@ std::string svg_plot(const std::vector<PlotSeries>& series, const PlotLabels& la
     out << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << width << "\" height=\"" << height
         << "\" viewBox=\"0 0 " << width << ' ' << height << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
         << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
-        << "<text x=\"" << width / 2 << "\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">" << escape(labels.title)
+        << "<text x=\"" << width / 2 << "\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">" << io::xml_escaped(labels.title)
         << "</text>\n";
     auto panel = [&](double left, const Range& xr, const std::vector<double>& xt, const std::string& xlabel, bool use_left) {
         auto x_pos = [&](double v) { return left + panel_width * (v - xr.lo) / (xr.hi - xr.lo); };
@@ -99,9 +87,9 @@ std::string svg_plot(const std::vector<PlotSeries>& series, const PlotLabels& la
                 << top + plot_height + 16 << "\" text-anchor=\"middle\">" << number(t) << "</text>\n";
         out << "<rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << panel_width << "\" height=\"" << plot_height
             << "\" fill=\"none\" stroke=\"black\"/>\n<text x=\"" << left + panel_width / 2 << "\" y=\""
-            << top + plot_height + 38 << "\" text-anchor=\"middle\">" << escape(xlabel) << "</text>\n"
+            << top + plot_height + 38 << "\" text-anchor=\"middle\">" << io::xml_escaped(xlabel) << "</text>\n"
             << "<text transform=\"translate(" << left - 52 << ' ' << top + plot_height / 2
-            << ") rotate(-90)\" text-anchor=\"middle\">" << escape(labels.y) << "</text>\n";
+            << ") rotate(-90)\" text-anchor=\"middle\">" << io::xml_escaped(labels.y) << "</text>\n";
         const std::string clip = use_left ? "left" : "right";
         out << "<clipPath id=\"" << clip << "\"><rect x=\"" << left << "\" y=\"" << top << "\" width=\"" << panel_width
             << "\" height=\"" << plot_height << "\"/></clipPath>\n";
@@ -121,7 +109,7 @@ std::string svg_plot(const std::vector<PlotSeries>& series, const PlotLabels& la
         const double ly = top + 14 + 18 * static_cast<double>(i), lx = left0 + panel_width - 150;
         out << "<line x1=\"" << lx << "\" x2=\"" << lx + 24 << "\" y1=\"" << ly << "\" y2=\"" << ly
             << "\" stroke-width=\"2\" stroke=\"" << kColors[i % std::size(kColors)] << "\"/>\n<text x=\"" << lx + 30
-            << "\" y=\"" << ly + 4 << "\">" << escape(series[i].name) << "</text>\n";
+            << "\" y=\"" << ly + 4 << "\">" << io::xml_escaped(series[i].name) << "</text>\n";
     }
     out << "</svg>\n";
     return out.str();
