@@ -25,7 +25,7 @@
 #include "run_support.hpp"
 
 namespace paloverde {
-struct DistributedMesh;
+class DistributedMesh;
 }
 
 namespace paloverde::detail {

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# A long fuzzing run of every mesh reader (docs/robustness.md), one target after the other, one
-# process each (the machine has 2 cores):
+# A long fuzzing run of every mesh reader and the config reader (docs/robustness.md), one target
+# after the other, one process each (the machine has 2 cores):
 #   bash tests/fuzz/long_run.sh [LIBFUZZER_FLAGS...]      default: -runs=2200000 per target
 #   bash tests/fuzz/long_run.sh -max_total_time=3600      an hour per target
 # Needs the fuzz build (cmake --preset fuzz && cmake --build --preset fuzz). The corpus grows in
@@ -10,7 +10,7 @@
 set -uo pipefail
 cd "$(dirname "$0")/../.."
 BUILD=${PALOVERDE_FUZZ_BUILD:-build-fuzz}
-FORMATS=${PALOVERDE_FUZZ_FORMATS:-"vtk vtu gmsh medit tetgen"}
+FORMATS=${PALOVERDE_FUZZ_FORMATS:-"vtk vtu gmsh medit tetgen config"}
 flags=("$@")
 [ ${#flags[@]} -eq 0 ] && flags=(-runs=2200000)
 out="$BUILD/long"
@@ -19,7 +19,9 @@ failed=0
 for format in $FORMATS; do
   mkdir -p "$out/corpus/$format" "$out/findings/$format"
   log="$out/$format.log"
-  inputs=("$out/corpus/$format" "$BUILD/tests/fuzz/corpus/$format" "tests/fuzz/seeds/$format")
+  inputs=("$out/corpus/$format" "tests/fuzz/seeds/$format")
+  if [ "$format" = config ]; then inputs+=("$BUILD/tests/fuzz/example_configs")
+  else inputs+=("$BUILD/tests/fuzz/corpus/$format"); fi
   [ -d "tests/fuzz/regressions/$format" ] && inputs+=("tests/fuzz/regressions/$format")
   rm -rf "$out/scratch"
   PALOVERDE_FUZZ_SCRATCH="$out/scratch" \

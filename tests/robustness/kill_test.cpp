@@ -5,6 +5,7 @@
 #include <cerrno>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -66,12 +67,58 @@ bool ended(pid_t pid) {
     return close == std::string::npos || close + 2 >= text.size() || text[close + 2] == 'Z';
 }
 
+// The processes whose parent is `parent` (the ranks mpirun started on this machine).
+std::vector<pid_t> children_of(pid_t parent) {
+    std::vector<pid_t> children;
+    for (const auto& entry : fs::directory_iterator("/proc")) {
+        const std::string name = entry.path().filename().string();
+        if (name.find_first_not_of("0123456789") != std::string::npos) continue;
+        std::ifstream stat(entry.path() / "stat");
+        std::string text((std::istreambuf_iterator<char>(stat)), std::istreambuf_iterator<char>());
+        const auto close = text.rfind(')');  // the fields after the command's name: state, ppid, ...
+        if (close == std::string::npos) continue;
+        std::istringstream fields(text.substr(close + 1));
+        std::string state;
+        pid_t ppid = 0;
+        if (fields >> state >> ppid && ppid == parent) children.push_back(std::stoi(name));
+    }
+    return children;
+}
+
 // The same final mesh, bit for bit, and the same iterations and outcome.
 void check_same_result(const fs::path& a_mesh, const json& a, const fs::path& b_mesh, const json& b) {
     BOOST_TEST(pv::test::same_coordinates(pv::read_mesh(a_mesh).mesh, pv::read_mesh(b_mesh).mesh));
     BOOST_TEST(a["iterations"].get<int>() == b["iterations"].get<int>());
     BOOST_TEST(a["termination"].get<std::string>() == b["termination"].get<std::string>());
     BOOST_TEST(a["worst_after"].get<double>() == b["worst_after"].get<double>());
+}
+
+// `paloverde improve` arguments for a run that would go on for a long time (no convergence test,
+// many iterations), with a checkpoint every 5 iterations to show that it is iterating.
+std::vector<std::string> long_improve(const fs::path& dir) {
+    return {"improve", kTire, "-o", (dir / "out.vtu").string(), "--summary", (dir / "s.json").string(),
+            "--iterations", "100000", "--set", "queue[0].improve.termination.min_progress=0", "--checkpoint",
+            (dir / "run.ckpt").string(), "--checkpoint-every", "5", "-q"};
+}
+
+// What a stopped long_improve() run must have done: exit with 4 after writing the best iterate it
+// saw and a summary that says it was interrupted.
+void check_stopped_improve(ChildProcess& child, const fs::path& dir) {
+    BOOST_TEST_REQUIRE(child.wait(60.0));
+    BOOST_TEST_INFO(child.output());
+    BOOST_TEST(child.exit_code() == 4);
+    BOOST_TEST_REQUIRE(fs::exists(dir / "out.vtu"));
+    const json s = read_json(dir / "s.json");
+    BOOST_TEST(s["status"].get<std::string>() == "interrupted");
+    BOOST_TEST(s["termination"].get<std::string>() == "interrupted");
+    BOOST_TEST(s["inverted_after"].get<int>() == 0);
+    BOOST_TEST(s["worst_after"].get<double>() >= s["worst_before"].get<double>());
+    double best = -1.0;
+    for (const auto& r : s["steps"][0]["summary"]["history"]) best = std::max(best, r["worst_quality"].get<double>());
+    BOOST_TEST(s["steps"][0]["summary"]["worst_after"].get<double>() == best, boost::test_tools::tolerance(1e-12));
+    const auto written = pv::read_mesh(dir / "out.vtu").mesh;
+    BOOST_TEST(pv::count_orientations(written).inverted == 0);
+    BOOST_TEST(written.num_vertices() == pv::read_mesh(kTire).mesh.num_vertices());
 }
 
 }  // namespace
@@ -82,29 +129,26 @@ BOOST_AUTO_TEST_SUITE(killed)
 // summary, and exits with 4.
 BOOST_AUTO_TEST_CASE(sigterm_stops_improve_which_writes_its_best_mesh_and_exits_four) {
     const pv::test::ScratchDir dir("kill_sigterm");
-    // A run that would go on for a long time: no convergence test, many iterations.
-    ChildProcess child({kCli, "improve", kTire, "-o", (dir / "out.vtu").string(), "--summary", (dir / "s.json").string(),
-                        "--iterations", "100000", "--set", "queue[0].improve.termination.min_progress=0", "--checkpoint",
-                        (dir / "run.ckpt").string(), "--checkpoint-every", "5", "-q"},
-                       dir / "log.txt");
-    // Its first checkpoint: it is iterating.
+    ChildProcess child(std::vector<std::string>{kCli} + long_improve(dir.path()), dir / "log.txt");
     BOOST_TEST_REQUIRE(pv::test::wait_for_file(dir / "run.ckpt", child, 60.0), child.output());
     child.signal(SIGTERM);
-    BOOST_TEST_REQUIRE(child.wait(60.0));
-    BOOST_TEST_INFO(child.output());
-    BOOST_TEST(child.exit_code() == 4);
-    BOOST_TEST_REQUIRE(fs::exists(dir / "out.vtu"));
-    const json s = read_json(dir / "s.json");
-    BOOST_TEST(s["status"].get<std::string>() == "interrupted");
-    BOOST_TEST(s["termination"].get<std::string>() == "interrupted");
-    BOOST_TEST(s["inverted_after"].get<int>() == 0);
-    BOOST_TEST(s["worst_after"].get<double>() >= s["worst_before"].get<double>());
-    // The mesh written is the best iterate the run saw.
-    double best = -1.0;
-    for (const auto& r : s["steps"][0]["summary"]["history"]) best = std::max(best, r["worst_quality"].get<double>());
-    const auto written = pv::read_mesh(dir / "out.vtu").mesh;
-    BOOST_TEST(pv::count_orientations(written).inverted == 0);
-    BOOST_TEST(s["steps"][0]["summary"]["worst_after"].get<double>() == best, boost::test_tools::tolerance(1e-12));
+    check_stopped_improve(child, dir.path());
+}
+
+// `paloverde improve` on 2 ranks under mpirun, stopped the way a batch system stops a job (SIGTERM
+// to every rank, as Slurm's scancel does): the ranks stop at the same iteration, rank 0 writes the
+// gathered best mesh and the summary, and mpirun passes on the ranks' exit code 4. (SIGTERM to
+// mpirun itself is Open MPI's business: docs/robustness.md.)
+BOOST_AUTO_TEST_CASE(sigterm_to_the_ranks_of_an_mpirun_improve_writes_its_best_mesh_and_exits_four) {
+    const pv::test::ScratchDir dir("kill_sigterm_np2");
+    auto launcher = mpirun(2);
+    launcher.back() = kCli;  // the command line itself, not the test program
+    ChildProcess child(launcher + long_improve(dir.path()), dir / "log.txt");
+    BOOST_TEST_REQUIRE(pv::test::wait_for_file(dir / "run.ckpt", child, 60.0), child.output());
+    const std::vector<pid_t> ranks = children_of(child.pid());
+    BOOST_TEST_REQUIRE(ranks.size() == 2u, child.output());
+    for (pid_t pid : ranks) ::kill(pid, SIGTERM);
+    check_stopped_improve(child, dir.path());
 }
 
 // The same for `paloverde run` with a config: a study stopped in its first method skips the

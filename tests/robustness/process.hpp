@@ -53,6 +53,7 @@ public:
     // Signals the whole process group.
     void signal_group(int number) const { ::kill(-pid_, number); }
     void signal(int number) const { ::kill(pid_, number); }
+    pid_t pid() const { return pid_; }
 
     // Whether it has ended (reaped), without waiting.
     bool finished() {
