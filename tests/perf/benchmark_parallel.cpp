@@ -1,6 +1,6 @@
 // The distributed run's numbers, as the paper reports them: initialization time by stage (its
 // Table 1), the communication of the exchange (Table 2), the solve time (Figs. 3, 5). Run by
-// hand under mpirun (examples/parallel_scaling.sh); never timed in CI.
+// hand under mpirun (examples/study.py); never timed in CI.
 //   mpirun -n P paloverde_parallel_benchmark MESH [--method global|local] [--iterations N]
 //          [--exchange colored|root]
 // Prints the run's report as JSON, with the peak resident memory of the ranks.
