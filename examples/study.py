@@ -314,6 +314,25 @@ except ImportError:
           file=sys.stderr)
     sys.exit(0)
 
+
+
+def per_process_plot(series, efficiency, time_title, efficiency_title, name):
+    """Time per iteration and an efficiency against the process count: one line per (label, rows)."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    for label, mine in series:
+        if not mine:
+            continue
+        axes[0].plot([r["ranks"] for r in mine], [r["s_per_iteration"] for r in mine], "o-", label=label)
+        axes[1].plot([r["ranks"] for r in mine], [r[efficiency] for r in mine], "o-", label=label)
+    axes[0].set_title(time_title)
+    axes[1].set_title(efficiency_title)
+    for ax in axes:
+        ax.set_xlabel("processes")
+        ax.legend()
+    fig.tight_layout()
+    fig.savefig(os.path.join(args.out, name), dpi=110)
+
+
 meshes = list(results["meshes"])
 if meshes:
     # Worst and mean quality per iteration, one process (Figs. 2 and 4).
@@ -336,22 +355,11 @@ if meshes:
     fig.savefig(os.path.join(args.out, "quality.png"), dpi=110)
 
     # Solve time per iteration and strong-scaling efficiency per process count (Figs. 3, 5, 6).
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    for r_method in DISTRIBUTED:
-        for mesh in meshes:
-            mine = [r for r in rows if r["method"] == r_method and r["mesh"] == os.path.basename(mesh)]
-            if not mine:
-                continue
-            label = f"{r_method}, {os.path.basename(mesh)}"
-            axes[0].plot([r["ranks"] for r in mine], [r["s_per_iteration"] for r in mine], "o-", label=label)
-            axes[1].plot([r["ranks"] for r in mine], [r["efficiency"] for r in mine], "o-", label=label)
-    axes[0].set_title("solve time per iteration (s)")
-    axes[1].set_title("strong-scaling efficiency T1 / (p Tp)")
-    for ax in axes:
-        ax.set_xlabel("processes")
-        ax.legend()
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "scaling.png"), dpi=110)
+    series = [(f"{method}, {os.path.basename(mesh)}",
+               [r for r in rows if r["method"] == method and r["mesh"] == os.path.basename(mesh)])
+              for method in DISTRIBUTED for mesh in meshes]
+    per_process_plot(series, "efficiency", "solve time per iteration (s)", "strong-scaling efficiency T1 / (p Tp)",
+                     "scaling.png")
 
 # Initialization by stage (Table 1), global solver runs.
 stages = ("read_s", "partition_s", "distribute_s", "schedule_s")
@@ -384,16 +392,7 @@ if any(results["meshes"][m].get("partitions") for m in meshes):
     fig.savefig(os.path.join(args.out, "partitions.png"), dpi=110)
 # Weak scaling (Table 3): time per iteration and efficiency against processes.
 if weak_rows:
-    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
-    for method in weak_methods:
-        mine = [r for r in weak_rows if r["method"] == method]
-        axes[0].plot([r["ranks"] for r in mine], [r["s_per_iteration"] for r in mine], "o-", label=method)
-        axes[1].plot([r["ranks"] for r in mine], [r["weak_efficiency"] for r in mine], "o-", label=method)
-    axes[0].set_title(f"time per iteration, {args.per_rank:,} tets per process (s)")
-    axes[1].set_title("weak-scaling efficiency T1 / Tp")
-    for ax in axes:
-        ax.set_xlabel("processes")
-        ax.legend()
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "weak.png"), dpi=110)
+    per_process_plot([(method, [r for r in weak_rows if r["method"] == method]) for method in weak_methods],
+                     "weak_efficiency", f"time per iteration, {args.per_rank:,} tets per process (s)",
+                     "weak-scaling efficiency T1 / Tp", "weak.png")
 print(f"study.py: wrote {args.out}/results.csv, results.json, partitions.csv, report.md and plots", file=sys.stderr)
