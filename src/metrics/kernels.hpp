@@ -1,13 +1,16 @@
 #pragma once
 // The metric formulas, one struct each. tet()/tri() return the value and, when `g` is not null,
 // write the gradient with respect to the corners (3 doubles per corner). Inlined into the batch
-// loops of KernelMetric, so a pass over the mesh makes no call per element.
+// loops of KernelMetric, so a pass over the mesh makes no call per element. The metrics the
+// solvers use most also have tet_block(), the same formula over a block of tetrahedra
+// (tet_blocks.hpp), which the batch passes prefer.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string_view>
 
 #include "geometry.hpp"
+#include "tet_blocks.hpp"
 
 namespace paloverde::metrics {
 
@@ -48,6 +51,9 @@ struct AspectRatio {
     static constexpr std::string_view name = "aspect_ratio";
     double tet(const double* x, double* g, const MetricScale&) const { return tet_aspect(TetGeometry(x), g); }
     double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
+    void tet_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q, TetBlock* g) const {
+        tet_aspect_block(path, x, q, g);
+    }
 };
 
 // Mean ratio: 12 * (3|V|)^(2/3) / (sum l^2), signed by V. Its gradient is unbounded as V -> 0;
@@ -195,6 +201,9 @@ struct UntangleHybrid {
         double qgrad[12];
         const double q = tet_aspect(t, g ? qgrad : nullptr);
         return blend(t.volume, q, t.dvolume, qgrad, 4, g, s);
+    }
+    void tet_block(BlockPath path, const TetBlock& x, const double* reference_volume, double* q, TetBlock* g) const {
+        tet_hybrid_block(path, x, reference_volume, alpha, q, g);
     }
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);

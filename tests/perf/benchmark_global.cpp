@@ -11,6 +11,7 @@
 #include <iostream>
 #include <string>
 
+#include "metrics/tet_blocks.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 #include "paloverde/solvers/global_solver.hpp"
@@ -59,7 +60,9 @@ int main(int argc, char** argv) {
         const double per_million = 1e6 / static_cast<double>(m);
         std::cout << argv[1] << ": " << mesh.num_vertices() << " vertices, " << mesh.num_elements() << " elements ("
                   << m << " movable), " << threads << " thread(s)\n"
-                  << "read " << read << " s, renumber + setup " << setup << " s\n";
+                  << "read " << read << " s, renumber + setup " << setup << " s\n"
+                  << "tetrahedron block kernels: "
+                  << (pv::metrics::best_block_path() == pv::metrics::BlockPath::avx2 ? "AVX2" : "baseline (SSE2)") << "\n";
 
         const auto& wm = work.mesh();
         std::vector<double> x(wm.coordinates().begin(), wm.coordinates().end());

@@ -1,0 +1,196 @@
+// GCC's -ftrapping-math (the default) forbids computing the values a select discards (those of
+// degenerate elements) unconditionally, and so stops the loops below from vectorizing. Nothing
+// reads the FP exception flags; the results are the same either way.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("no-trapping-math")
+#endif
+
+#include "tet_blocks.hpp"
+
+#include <cmath>
+#include <cstddef>
+
+#include "kernels.hpp"
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define PALOVERDE_X86 1
+#endif
+
+namespace paloverde::metrics {
+namespace {
+
+// The loops below repeat the formulas of TetGeometry, tet_aspect() and UntangleHybrid::blend()
+// operation for operation, with selects instead of the early return for degenerate elements,
+// so that they vectorize and round exactly like the scalar code.
+
+// Square roots of a block with explicit SIMD instructions (correctly rounded, as std::sqrt):
+// the library's -frounding-math (for CGAL) makes std::sqrt a call the vectorizer leaves alone.
+struct Sqrt128 {
+    [[gnu::always_inline]] static void run(const double* in, double* out) {
+#ifdef PALOVERDE_X86
+        for (int j = 0; j < kTetBlock; j += 2) _mm_store_pd(out + j, _mm_sqrt_pd(_mm_load_pd(in + j)));
+#else
+        for (int j = 0; j < kTetBlock; ++j) out[j] = std::sqrt(in[j]);
+#endif
+    }
+};
+#ifdef PALOVERDE_X86
+struct Sqrt256 {
+    [[gnu::target("avx2")]] static void run(const double* in, double* out) {
+        for (int j = 0; j < kTetBlock; j += 4) _mm256_store_pd(out + j, _mm256_sqrt_pd(_mm256_load_pd(in + j)));
+    }
+};
+#endif
+
+[[gnu::always_inline]] inline void corners_of(const TetBlock& x, int j, P* c) {
+    for (int i = 0; i < 4; ++i) c[i] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
+}
+
+// Quality into quality[j], signed volume into volume[j]; with Gradient, also the gradients of
+// both. Two loops around the square roots: the first measures, the second rates.
+template <class Sqrt, bool Gradient>
+[[gnu::always_inline]] inline void aspect_loop(const TetBlock& x, double* quality, TetBlock* gradient, double* volume,
+                                               TetBlock* dvolume) {
+    alignas(64) double edge_sum[kTetBlock], root[kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) {
+        P c[4], dv[4];
+        corners_of(x, j, c);
+        volume[j] = TetGeometry::tet_volume(c, dv);
+        edge_sum[j] = TetGeometry::tet_edge_sum(c);
+        if constexpr (Gradient)
+            for (int i = 0; i < 4; ++i) {
+                dvolume->at[3 * i][j] = dv[i].x;
+                dvolume->at[3 * i + 1][j] = dv[i].y;
+                dvolume->at[3 * i + 2][j] = dv[i].z;
+            }
+    }
+    Sqrt::run(edge_sum, root);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double l = edge_sum[j];
+        const bool valid = l > 0.0;
+        const double inv = 1.0 / (l * root[j]);
+        const double q = kTetAspectScale * volume[j] * inv;
+        quality[j] = valid ? q : 0.0;
+        if constexpr (Gradient) {
+            P c[4], de[4];
+            corners_of(x, j, c);
+            TetGeometry::tet_dedge_sum(c, de);
+            const double a = kTetAspectScale * inv, b = 1.5 * q / l;
+            for (int i = 0; i < 4; ++i) {
+                const P dv{dvolume->at[3 * i][j], dvolume->at[3 * i + 1][j], dvolume->at[3 * i + 2][j]};
+                const P g = a * dv - b * de[i];
+                gradient->at[3 * i][j] = valid ? g.x : 0.0;
+                gradient->at[3 * i + 1][j] = valid ? g.y : 0.0;
+                gradient->at[3 * i + 2][j] = valid ? g.z : 0.0;
+            }
+        }
+    }
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void aspect(const TetBlock& x, double* quality, TetBlock* gradient) {
+    alignas(64) double volume[kTetBlock];
+    if (gradient) {
+        TetBlock dvolume;
+        aspect_loop<Sqrt, true>(x, quality, gradient, volume, &dvolume);
+    } else {
+        aspect_loop<Sqrt, false>(x, quality, nullptr, volume, nullptr);
+    }
+}
+
+template <class Sqrt, bool Gradient>
+[[gnu::always_inline]] inline void hybrid_loop(const TetBlock& x, const double* reference_volume, double alpha,
+                                               double* quality, TetBlock* gradient) {
+    alignas(64) double q[kTetBlock], volume[kTetBlock], e[kTetBlock];
+    TetBlock qgrad, dvolume;
+    aspect_loop<Sqrt, Gradient>(x, q, &qgrad, volume, &dvolume);
+    // exp has no vector version that rounds like the scalar one: a scalar loop.
+    for (int j = 0; j < kTetBlock; ++j) e[j] = std::exp(alpha * (volume[j] / reference_volume[j]));
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double v = volume[j] / reference_volume[j];
+        const double w = 1.0 / (1.0 + e[j]);
+        quality[j] = w * v + (1.0 - w) * q[j];
+        if constexpr (Gradient) {
+            // dw/dv = -alpha w (1 - w)
+            const double dq_dvolume = (w - alpha * w * (1.0 - w) * (v - q[j])) / reference_volume[j];
+            for (int k = 0; k < 12; ++k) gradient->at[k][j] = dq_dvolume * dvolume.at[k][j] + (1.0 - w) * qgrad.at[k][j];
+        }
+    }
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void hybrid(const TetBlock& x, const double* reference_volume, double alpha,
+                                          double* quality, TetBlock* gradient) {
+    if (gradient) hybrid_loop<Sqrt, true>(x, reference_volume, alpha, quality, gradient);
+    else hybrid_loop<Sqrt, false>(x, reference_volume, alpha, quality, nullptr);
+}
+
+void aspect_baseline(const TetBlock& x, double* quality, TetBlock* gradient) { aspect<Sqrt128>(x, quality, gradient); }
+void hybrid_baseline(const TetBlock& x, const double* reference_volume, double alpha, double* quality,
+                     TetBlock* gradient) {
+    hybrid<Sqrt128>(x, reference_volume, alpha, quality, gradient);
+}
+#ifdef PALOVERDE_X86
+// AVX2 without FMA: contraction is off anyway (ISO C++ mode), and this keeps it so.
+[[gnu::target("avx2")]] void aspect_avx2(const TetBlock& x, double* quality, TetBlock* gradient) {
+    aspect<Sqrt256>(x, quality, gradient);
+}
+[[gnu::target("avx2")]] void hybrid_avx2(const TetBlock& x, const double* reference_volume, double alpha,
+                                         double* quality, TetBlock* gradient) {
+    hybrid<Sqrt256>(x, reference_volume, alpha, quality, gradient);
+}
+#endif
+
+}  // namespace
+
+// Two elements at a time with 128-bit loads and a transpose where SSE2 is: about 2/3 of the
+// time of copying coordinate by coordinate, which is bound by the number of loads and stores.
+// (AVX2 versions of this and of the scatter measured no faster.)
+void gather_tets(const VertexId* connectivity, const double* coordinates, int count, TetBlock& x) {
+    int j = 0;
+#ifdef PALOVERDE_X86
+    for (; j + 2 <= count; j += 2)
+        for (int i = 0; i < 4; ++i) {
+            const double* p0 = coordinates + 3 * static_cast<std::size_t>(connectivity[4 * j + i]);
+            const double* p1 = coordinates + 3 * static_cast<std::size_t>(connectivity[4 * (j + 1) + i]);
+            const __m128d a = _mm_loadu_pd(p0), b = _mm_loadu_pd(p1);  // x y
+            _mm_store_pd(&x.at[3 * i][j], _mm_unpacklo_pd(a, b));
+            _mm_store_pd(&x.at[3 * i + 1][j], _mm_unpackhi_pd(a, b));
+            _mm_store_pd(&x.at[3 * i + 2][j], _mm_loadh_pd(_mm_load_sd(p0 + 2), p1 + 2));
+        }
+#endif
+    for (; j < count; ++j)
+        for (int i = 0; i < 4; ++i) {
+            const double* p = coordinates + 3 * static_cast<std::size_t>(connectivity[4 * j + i]);
+            for (int d = 0; d < 3; ++d) x.at[3 * i + d][j] = p[d];
+        }
+    for (; j < kTetBlock; ++j)
+        for (int k = 0; k < 12; ++k) x.at[k][j] = 0.0;
+}
+
+BlockPath best_block_path() {
+#ifdef PALOVERDE_X86
+    static const BlockPath path = __builtin_cpu_supports("avx2") ? BlockPath::avx2 : BlockPath::baseline;
+    return path;
+#else
+    return BlockPath::baseline;
+#endif
+}
+
+void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient) {
+#ifdef PALOVERDE_X86
+    if (path == BlockPath::avx2) return aspect_avx2(corners, quality, gradient);
+#endif
+    aspect_baseline(corners, quality, gradient);
+}
+
+void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
+                      double* quality, TetBlock* gradient) {
+#ifdef PALOVERDE_X86
+    if (path == BlockPath::avx2) return hybrid_avx2(corners, reference_volume, alpha, quality, gradient);
+#endif
+    hybrid_baseline(corners, reference_volume, alpha, quality, gradient);
+}
+
+}  // namespace paloverde::metrics

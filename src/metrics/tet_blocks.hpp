@@ -1,0 +1,35 @@
+#pragma once
+// Tetrahedron metrics over blocks of elements, for the batch passes: the corners of kTetBlock
+// elements are gathered into structure-of-arrays buffers and one branch-free loop rates them
+// all, which the compiler turns into SIMD code. The results are bit for bit those of the scalar
+// kernels in kernels.hpp: the same operations in the same order, and no contraction into FMA.
+#include "paloverde/core/types.hpp"
+
+namespace paloverde::metrics {
+
+inline constexpr int kTetBlock = 16;
+
+// Coordinate d of corner i of the block's element j is at[3 * i + d][j]; also used for the
+// gradient with respect to that coordinate.
+struct TetBlock {
+    alignas(64) double at[12][kTetBlock];
+};
+
+// The baseline build is SSE2 (2 doubles per instruction); CPUs with AVX2 run a copy of the
+// loops compiled for it (4 doubles). Both give the same bits.
+enum class BlockPath { baseline, avx2 };
+BlockPath best_block_path();
+
+// Copies the corners of `count` (at most kTetBlock) tetrahedra, given by their 4 vertex ids each
+// in `connectivity`, from `coordinates` (3 per vertex) into x; pads the rest of the block with a
+// degenerate element at the origin (quality 0, no NaN).
+void gather_tets(const VertexId* connectivity, const double* coordinates, int count, TetBlock& x);
+
+// quality[j] for the block's elements, and when `gradient` is not null their gradients.
+// As tet_aspect(): 0 with a zero gradient for an element without edge length.
+void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient);
+// As UntangleHybrid::tet() with the reference volume reference_volume[j] for element j.
+void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
+                      double* quality, TetBlock* gradient);
+
+}  // namespace paloverde::metrics

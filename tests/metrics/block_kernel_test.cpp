@@ -1,0 +1,181 @@
+// The block kernels (vectorized, baseline and AVX2) against the scalar kernels, bit for bit, on
+// real meshes and on degenerate elements: the batch passes the solvers use must give exactly
+// what the one-element calls give, on every CPU.
+#include <boost/test/unit_test.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "metrics/tet_blocks.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/metrics/quality_metric.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace pm = paloverde::metrics;
+
+namespace {
+
+// Same bits; any NaN matches any NaN (operand order may pick a different payload).
+bool same(double a, double b) {
+    if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+std::vector<pm::BlockPath> paths() {
+    std::vector<pm::BlockPath> out{pm::BlockPath::baseline};
+    if (pm::best_block_path() == pm::BlockPath::avx2) out.push_back(pm::BlockPath::avx2);
+    return out;
+}
+
+std::vector<double> corners_of(const pv::SimplexMesh& mesh, pv::ElementId e) {
+    std::vector<double> x;
+    for (pv::VertexId v : mesh.element(e))
+        for (int d = 0; d < 3; ++d) x.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + d]);
+    return x;
+}
+
+// Rates `elements` (12 doubles each) with the block kernel of `name` on each path and compares
+// with the metric's scalar value_and_gradient.
+void check_blocks(const std::string& name, const std::vector<std::vector<double>>& elements, double reference_volume) {
+    auto metric = pv::make_metric(name);
+    pv::MetricScale scale;
+    scale.reference_volume = reference_volume;
+    metric->set_scale(scale);
+    const double alpha = pv::MetricOptions{}.hybrid_sharpness;
+    for (pm::BlockPath path : paths()) {
+        std::size_t mismatches = 0, first_mismatch = 0;
+        for (std::size_t first = 0; first < elements.size(); first += pm::kTetBlock) {
+            pm::TetBlock x{}, g{};
+            double q[pm::kTetBlock], reference[pm::kTetBlock];
+            const std::size_t count = std::min<std::size_t>(pm::kTetBlock, elements.size() - first);
+            for (std::size_t j = 0; j < count; ++j)
+                for (int k = 0; k < 12; ++k) x.at[k][j] = elements[first + j][k];
+            for (double& r : reference) r = reference_volume;
+            for (const bool gradient : {false, true}) {
+                if (name == "aspect_ratio") pm::tet_aspect_block(path, x, q, gradient ? &g : nullptr);
+                else pm::tet_hybrid_block(path, x, reference, alpha, q, gradient ? &g : nullptr);
+                for (std::size_t j = 0; j < count; ++j) {
+                    double expected_gradient[12];
+                    const double expected = metric->value_and_gradient(pv::ElementKind::Tetrahedron,
+                                                                       elements[first + j].data(), expected_gradient);
+                    bool equal = same(q[j], expected);
+                    for (int k = 0; k < 12 && gradient; ++k) equal = equal && same(g.at[k][j], expected_gradient[k]);
+                    if (!equal && mismatches++ == 0) first_mismatch = first + j;
+                }
+            }
+        }
+        BOOST_TEST_CONTEXT(name << ", path " << static_cast<int>(path) << ", first mismatch at element "
+                                << first_mismatch) {
+            BOOST_TEST(mismatches == 0u);
+        }
+    }
+}
+
+std::vector<std::vector<double>> mesh_elements(const pv::SimplexMesh& mesh) {
+    std::vector<std::vector<double>> out;
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) out.push_back(corners_of(mesh, e));
+    return out;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(block_kernels)
+
+BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_a_real_mesh) {
+    const auto mesh = pv::read_mesh(pv::test::shared_data("tetwild/octopus-vol.mesh")).mesh;
+    const auto elements = mesh_elements(mesh);
+    BOOST_TEST_REQUIRE(elements.size() > 1000u);
+    const double reference = pv::MetricScale::of(mesh).reference_volume;
+    check_blocks("aspect_ratio", elements, reference);
+    check_blocks("untangle_hybrid", elements, reference);
+}
+
+BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degenerate_elements) {
+    auto elements = mesh_elements(pv::read_mesh(pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk")).mesh);
+    const std::vector<double> regular{0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0, 0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)};
+    std::vector<double> inverted = regular;
+    inverted[11] = -inverted[11];
+    std::vector<double> flat = regular;
+    flat[11] = 0.0;
+    const std::vector<double> point(12, 0.25);  // all corners at one point: no edge length
+    std::vector<double> tiny = regular, huge = regular, infinite = regular, nan = regular;
+    for (double& v : tiny) v *= 1e-300;
+    for (double& v : huge) v *= 1e200;
+    infinite[3] = INFINITY;
+    nan[7] = NAN;
+    for (const auto& e : {regular, inverted, flat, point, tiny, huge, infinite, nan}) elements.push_back(e);
+    check_blocks("aspect_ratio", elements, 0.1);
+    check_blocks("untangle_hybrid", elements, 0.1);
+}
+
+// The batch calls (which take the block path for tetrahedra) against the one-element calls:
+// qualities, and gradient and curvature sums added in the same order.
+BOOST_AUTO_TEST_CASE(batch_passes_equal_element_by_element_sums) {
+    const auto mesh = pv::read_mesh(pv::test::shared_data("tetwild/octopus-vol.mesh")).mesh;
+    const pv::ElementId m = mesh.num_elements();
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    std::vector<double> weight(static_cast<std::size_t>(m)), curvature_weight(weight.size()),
+        local_volume(weight.size());
+    for (pv::ElementId e = 0; e < m; ++e) {
+        weight[e] = e % 11 == 0 ? 0.0 : 1.0 / (1.0 + e % 7);  // some zero weights, which are skipped
+        curvature_weight[e] = e % 5 == 0 ? 0.0 : 0.5 + e % 3;
+        local_volume[e] = 0.001 * (1.0 + e % 13);
+    }
+    for (const std::string name : {"aspect_ratio", "untangle_hybrid"}) {
+        for (const bool per_element_scale : {false, true}) {
+            auto metric = pv::make_metric(name);
+            pv::MetricScale scale = pv::MetricScale::of(mesh);
+            if (per_element_scale) scale.element_reference_volume = local_volume;
+            metric->set_scale(scale);
+            // An odd range: blocks start off the element numbering's multiples of the block size.
+            const pv::ElementId first = 3, last = m - 2;
+            std::vector<double> quality(static_cast<std::size_t>(last - first));
+            metric->evaluate(mesh, mesh.coordinates(), first, last, quality.data());
+            std::vector<double> gradient(3 * n, 0.0), curvature(6 * n, 0.0);
+            pv::QualityMetric::GradientTarget target;
+            target.weight = weight.data() + first;
+            target.gradient = gradient.data();
+            target.curvature_weight = curvature_weight.data() + first;
+            target.curvature = curvature.data();
+            metric->accumulate_gradient(mesh, mesh.coordinates(), first, last, target);
+
+            std::vector<double> expected_gradient(3 * n, 0.0), expected_curvature(6 * n, 0.0);
+            auto one = pv::make_metric(name);
+            bool qualities_equal = true;
+            for (pv::ElementId e = first; e < last; ++e) {
+                pv::MetricScale s = scale;
+                if (per_element_scale) s.reference_volume = local_volume[e];
+                s.element_reference_volume = {};
+                one->set_scale(s);
+                const auto x = corners_of(mesh, e);
+                double g[12];
+                const double q = one->value_and_gradient(pv::ElementKind::Tetrahedron, x.data(), g);
+                qualities_equal = qualities_equal && same(q, quality[e - first]);
+                const double w = weight[e], cw = curvature_weight[e];
+                if (w == 0.0 && cw == 0.0) continue;
+                for (int i = 0; i < 4; ++i) {
+                    const auto v = static_cast<std::size_t>(mesh.element(e)[i]);
+                    const double* gi = g + 3 * i;
+                    for (int d = 0; d < 3; ++d) expected_gradient[3 * v + d] += w * gi[d];
+                    double* c = &expected_curvature[6 * v];
+                    c[0] += cw * gi[0] * gi[0];
+                    c[1] += cw * gi[0] * gi[1];
+                    c[2] += cw * gi[0] * gi[2];
+                    c[3] += cw * gi[1] * gi[1];
+                    c[4] += cw * gi[1] * gi[2];
+                    c[5] += cw * gi[2] * gi[2];
+                }
+            }
+            BOOST_TEST_CONTEXT(name << (per_element_scale ? ", per-element scale" : "")) {
+                BOOST_TEST(qualities_equal);
+                BOOST_TEST(std::memcmp(gradient.data(), expected_gradient.data(), gradient.size() * sizeof(double)) == 0);
+                BOOST_TEST(std::memcmp(curvature.data(), expected_curvature.data(), curvature.size() * sizeof(double)) == 0);
+            }
+        }
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
