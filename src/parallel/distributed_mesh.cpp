@@ -9,6 +9,7 @@
 #include <numeric>
 #include <set>
 #include <string>
+#include <type_traits>
 
 #include "io/xml_reader.hpp"
 #include "paloverde/core/error.hpp"
@@ -264,26 +265,41 @@ private:
 // Rank 0: splits the whole mesh (canonical numbering given by `canonical`) into the ranks' parts.
 std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId> canonical,
                               std::span<const GlobalId> element_order, std::span<const int> part, int ranks) {
-    std::vector<std::vector<ElementId>> elements(static_cast<std::size_t>(ranks));
+    // Each part's elements, counted first so that each list is allocated once.
     std::vector<int> touching;
-    for (ElementId e = 0; e < whole.num_elements(); ++e) {
+    auto parts_touching = [&](ElementId e) {
         touching.clear();
         for (VertexId v : whole.element(e)) touching.push_back(part[v]);
         std::sort(touching.begin(), touching.end());
         touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
-        for (int p : touching) elements[p].push_back(e);
-    }
+        return std::span<const int>(touching);
+    };
+    std::vector<std::size_t> counts(static_cast<std::size_t>(ranks), 0);
+    for (ElementId e = 0; e < whole.num_elements(); ++e)
+        for (int p : parts_touching(e)) ++counts[p];
+    std::vector<std::vector<ElementId>> elements(static_cast<std::size_t>(ranks));
+    for (int p = 0; p < ranks; ++p) elements[p].reserve(counts[p]);
+    for (ElementId e = 0; e < whole.num_elements(); ++e)
+        for (int p : parts_touching(e)) elements[p].push_back(e);
     std::vector<PartArrays> parts(static_cast<std::size_t>(ranks));
     std::vector<VertexId> local(static_cast<std::size_t>(whole.num_vertices()), -1);
     for (int p = 0; p < ranks; ++p) {
-        std::vector<VertexId> vertices;
+        std::vector<VertexId> vertices;  // each once (marked in `local`), then in canonical order
         for (ElementId e : elements[p])
-            for (VertexId v : whole.element(e)) vertices.push_back(v);
+            for (VertexId v : whole.element(e))
+                if (local[v] < 0) local[v] = 0, vertices.push_back(v);
         for (VertexId v = 0; v < whole.num_vertices(); ++v)
             if (part[v] == p && whole.elements_of(v).empty()) vertices.push_back(v);  // isolated vertices
         std::sort(vertices.begin(), vertices.end(), [&](VertexId a, VertexId b) { return canonical[a] < canonical[b]; });
-        vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
         PartArrays& out = parts[p];
+        // Sized up front: growing them would leave freed blocks behind on rank 0, which holds
+        // the whole mesh too.
+        out.coordinates.reserve(3 * vertices.size());
+        out.fixed.reserve(vertices.size());
+        out.canonical.reserve(vertices.size());
+        out.owner.reserve(vertices.size());
+        out.connectivity.reserve(elements[p].size() * static_cast<std::size_t>(whole.corners()));
+        out.element_order.reserve(elements[p].size());
         for (std::size_t i = 0; i < vertices.size(); ++i) {
             const VertexId v = vertices[i];
             local[v] = static_cast<VertexId>(i);
@@ -297,6 +313,7 @@ std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId
             out.element_order.push_back(element_order[e]);
         }
         for (VertexId v : vertices) local[v] = -1;
+        std::vector<ElementId>().swap(elements[p]);
     }
     return parts;
 }
@@ -311,12 +328,13 @@ WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
     if (whole.num_vertices() < ranks)
         throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
                           std::to_string(ranks) + " processes: use at most as many processes as vertices");
-    const Renumbering order = locality_order(whole);
+    Renumbering order = locality_order(whole);
+    std::vector<ElementId>().swap(order.old_element);  // elements get the canonical order instead
     std::vector<GlobalId> canonical(static_cast<std::size_t>(whole.num_vertices()));
     for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
     const auto element_order = detail::canonical_element_positions(whole, canonical);
     const auto part = partition_vertices(whole, ranks);
-    return {split(whole, canonical, element_order, part, ranks), order.old_vertex};
+    return {split(whole, canonical, element_order, part, ranks), std::move(order.old_vertex)};
 }
 
 // Piece files: the part's mesh with its global ids, owners and which elements it counts.
@@ -593,11 +611,12 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
 
 void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode) {
     PartArrays& mine = *static_cast<PartArrays*>(arrays);
-    mesh = SimplexMesh(kind, std::move(mine.coordinates),
-                       std::vector<VertexId>(mine.connectivity.begin(), mine.connectivity.end()));
+    static_assert(std::is_same_v<std::int32_t, VertexId> && std::is_same_v<std::int64_t, GlobalId> &&
+                  std::is_same_v<std::int32_t, int>, "the part's arrays are moved into the mesh, not copied");
+    mesh = SimplexMesh(kind, std::move(mine.coordinates), std::move(mine.connectivity));
     mesh.set_fixed(std::move(mine.fixed));
-    mesh.set_global_ids(std::vector<GlobalId>(mine.canonical.begin(), mine.canonical.end()));
-    vertex_owner.assign(mine.owner.begin(), mine.owner.end());
+    mesh.set_global_ids(std::move(mine.canonical));
+    vertex_owner = std::move(mine.owner);
     element_order = std::move(mine.element_order);
     // The smallest canonical id is the first corner in local order (vertices are sorted by it).
     counted.resize(static_cast<std::size_t>(mesh.num_elements()));

@@ -64,6 +64,9 @@ DistributedRunReport run(MPI_Comm comm, const DistributedRunOptions& options,
         });
         report.read_seconds = seconds_since(start);
         part = DistributedMesh::scatter(comm, rank == 0 ? &whole : nullptr, options.distribute);
+        // Rank 0 keeps the whole mesh only to write it: it is as large as all the parts together.
+        const bool writes_whole = !options.output.empty() && options.output.extension() != ".pvtu";
+        if (!writes_whole) whole = SimplexMesh();
     }
     report.timings = part.timings;
     const double local[2] = {static_cast<double>(part.received_vertices()), static_cast<double>(part.schedule().partners.size())};

@@ -7,6 +7,7 @@
 #include <queue>
 #include <set>
 #include <string>
+#include <type_traits>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/renumber.hpp"
@@ -21,11 +22,16 @@ std::vector<int> partition_vertices(const SimplexMesh& mesh, int parts) {
                           " parts: use at most as many processes as the mesh has vertices");
     std::vector<int> part(static_cast<std::size_t>(n), 0);
     if (parts == 1) return part;
-    const VertexGraph graph = vertex_graph(mesh);
-    if (graph.neighbours.size() > static_cast<std::size_t>(std::numeric_limits<idx_t>::max()))
-        throw OptionError("the mesh is too large for this METIS build (32-bit indices)");
-    std::vector<idx_t> xadj(graph.offsets.begin(), graph.offsets.end());
-    std::vector<idx_t> adjncy(graph.neighbours.begin(), graph.neighbours.end());
+    // METIS's own working memory is a few times the graph's: only its copy of the graph stays.
+    std::vector<idx_t> xadj, adjncy;
+    {
+        VertexGraph graph = vertex_graph(mesh);
+        if (graph.neighbours.size() > static_cast<std::size_t>(std::numeric_limits<idx_t>::max()))
+            throw OptionError("the mesh is too large for this METIS build (32-bit indices)");
+        xadj.assign(graph.offsets.begin(), graph.offsets.end());
+        if constexpr (std::is_same_v<idx_t, VertexId>) adjncy = std::move(graph.neighbours);
+        else adjncy.assign(graph.neighbours.begin(), graph.neighbours.end());
+    }
     idx_t vertices = n, constraints = 1, nparts = parts, cut = 0;
     idx_t options[METIS_NOPTIONS];
     METIS_SetDefaultOptions(options);

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <functional>
 #include <numeric>
+#include <functional>
 #include <optional>
 
 #include "core/blocked_sum.hpp"
@@ -12,6 +12,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/solvers/stop.hpp"
+#include "paloverde/solvers/vertex_coloring.hpp"
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
@@ -52,6 +53,41 @@ struct Stage {
     int round = 0;
 };
 
+// Whole-mesh figures of the movable elements' qualities, the same on every process.
+struct Stats {
+    double worst, mean;
+    long bad;  // non-positive qualities
+    long nan;  // qualities that are not numbers
+};
+
+Stats quality_stats(const detail::Workspace& work, std::span<const double> all, std::vector<double>& buffer) {
+    const Reducer& reducer = work.reducer();
+    const auto q = work.counted(all, buffer);
+    Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
+    double largest = 0.0;
+    for (double v : q) {
+        if (std::isnan(v)) {
+            ++s.nan;
+            continue;
+        }
+        s.worst = std::min(s.worst, v);
+        largest = std::max(largest, std::abs(v));
+        s.bad += v <= 0.0;
+    }
+    largest = reducer.max(largest);
+    auto sums = detail::bounded_sums<3>(q.size(), {largest, 0.0, 0.0}, [&](std::size_t i, auto& acc) {
+        if (!std::isnan(q[i])) acc[0].add(q[i]);
+    });
+    sums[1].add(static_cast<double>(s.bad));
+    sums[2].add(static_cast<double>(s.nan));
+    reducer.sum(sums);
+    s.worst = reducer.min(s.worst);
+    s.bad = static_cast<long>(sums[1].value());
+    s.nan = static_cast<long>(sums[2].value());
+    s.mean = sums[0].value() / std::max(1.0, work.global_movable());
+    return s;
+}
+
 // Everything that changes the result, for the checkpoint's fingerprint.
 std::string options_text(const GlobalSolverOptions& o) {
     detail::OptionsText t;
@@ -83,12 +119,7 @@ public:
     PhaseResult run(const detail::SolverState* resume = nullptr);
 
 private:
-    struct Stats {
-        double worst, mean;
-        long bad;  // non-positive qualities
-        long nan;  // qualities that are not numbers
-    };
-    Stats stats(std::span<const double> q);
+    Stats stats(std::span<const double> q) { return quality_stats(work_, q, counted_); }
     // Exact sums of term(v, acc) over the owned vertices of all processes.
     template <int K, class Term>
     std::array<double, K> vertex_sums(Term term) const;
@@ -137,33 +168,6 @@ private:
     int steps_at_mu_ = 0;
     std::vector<double> best_history_, measure_history_, bad_history_;
 };
-
-Phase::Stats Phase::stats(std::span<const double> all) {
-    const auto q = work_.counted(all, counted_);
-    Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
-    double largest = 0.0;
-    for (double v : q) {
-        if (std::isnan(v)) {
-            ++s.nan;
-            continue;
-        }
-        s.worst = std::min(s.worst, v);
-        largest = std::max(largest, std::abs(v));
-        s.bad += v <= 0.0;
-    }
-    largest = reducer_.max(largest);
-    auto sums = detail::bounded_sums<3>(q.size(), {largest, 0.0, 0.0}, [&](std::size_t i, auto& acc) {
-        if (!std::isnan(q[i])) acc[0].add(q[i]);
-    });
-    sums[1].add(static_cast<double>(s.bad));
-    sums[2].add(static_cast<double>(s.nan));
-    reducer_.sum(sums);
-    s.worst = reducer_.min(s.worst);
-    s.bad = static_cast<long>(sums[1].value());
-    s.nan = static_cast<long>(sums[2].value());
-    s.mean = sums[0].value() / std::max(1.0, work_.global_movable());
-    return s;
-}
 
 template <int K, class Term>
 std::array<double, K> Phase::vertex_sums(Term term) const {
@@ -395,8 +399,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     previous_gradient_.assign(n3, 0.0);
     best_x_ = x_;
     damping_.assign(n3 / 3, 1.0);
-    curvature_weight_.assign(m, 0.0);
-    curvature_.assign(2 * n3, 0.0);
+    // Only the preconditioner needs the curvature (8 bytes per element, 48 per vertex).
+    const bool precondition = untangling_ && options_.precondition_untangling;
+    curvature_weight_.assign(precondition ? m : 0, 0.0);
+    curvature_.assign(precondition ? 2 * n3 : 0, 0.0);
     preconditioned_.assign(n3, 0.0);
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
@@ -427,7 +433,6 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         if (untangling_ && s.bad == 0 && untangled()) return end(TerminationReason::TargetReached, "untangled");
     }
 
-    const bool precondition = untangling_ && options_.precondition_untangling;
     for (int iteration = first_iteration;; ++iteration) {
         // Checkpoints and stops at the top of an iteration, where the state is complete. Every
         // process stops at the same iteration: a stop requested on any of them counts.
@@ -557,37 +562,56 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     }
 }
 
-// Sweeps over the free vertices of non-positive elements, untangling each locally, until a sweep
-// moves none (or ten sweeps); records one history entry. Returns the vertices moved.
-int local_untangle_sweeps(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& hybrid,
-                          Summary& summary, const IterationObserver& observer, Clock::time_point start) {
+// Where the barrier ascent stalls with elements inverted: sweeps of local untangling (Freitag &
+// Plassmann) that move each free vertex of an element non-positive at the sweep's start, its
+// neighbours held still, to where its elements' smallest volume is largest; until a sweep moves
+// none, at most ten. Serially the vertices go one after the other in id order; a distributed run
+// goes color by color (`coloring`, from the canonical ids: the same moves on any number of
+// ranks), ghosts taking their owners' positions after each color. Records one history entry;
+// returns the vertices moved everywhere.
+int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* coloring, std::vector<double>& xyz,
+                          const QualityMetric& hybrid, Summary& summary, const IterationObserver& observer,
+                          Clock::time_point start) {
     const SimplexMesh& mesh = work.mesh();
-    const auto m = static_cast<std::size_t>(work.movable_elements());
-    std::vector<double> q(m);
+    const auto owned = work.owned();
+    std::vector<std::vector<VertexId>> classes;
+    if (coloring) {
+        classes = coloring->classes();
+    } else {
+        classes.emplace_back(static_cast<std::size_t>(mesh.num_vertices()));
+        std::iota(classes[0].begin(), classes[0].end(), VertexId{0});
+    }
+    std::vector<double> q(static_cast<std::size_t>(work.movable_elements()));
+    std::vector<std::uint8_t> candidate(static_cast<std::size_t>(mesh.num_vertices()));
     int moved = 0;
     for (int sweep = 0; sweep < 10; ++sweep) {
         work.evaluate(hybrid, xyz, q);
-        std::vector<VertexId> candidates;
-        for (std::size_t e = 0; e < m; ++e)
+        std::fill(candidate.begin(), candidate.end(), 0);
+        for (std::size_t e = 0; e < q.size(); ++e)
             if (q[e] <= 0.0)
-                for (VertexId v : mesh.element(static_cast<ElementId>(e)))
-                    if (!mesh.fixed()[v]) candidates.push_back(v);
-        std::sort(candidates.begin(), candidates.end());
-        candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
-        int moved_now = 0;
-        for (VertexId v : candidates) moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved;
-        moved += moved_now;
-        if (moved_now == 0) break;
+                for (VertexId v : mesh.element(static_cast<ElementId>(e))) candidate[v] = 1;
+        double moved_now = 0.0;
+        for (const auto& members : classes) {
+            for (VertexId v : members)
+                if (candidate[v] && owned[v] && !mesh.fixed()[v])
+                    moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
+            if (coloring) work.halo().update(xyz, 3);
+        }
+        moved_now = work.reducer().total(moved_now);
+        moved += static_cast<int>(moved_now);
+        if (moved_now == 0.0) break;
     }
+    std::vector<double> buffer;
     work.evaluate(hybrid, xyz, q);
     ++summary.quality_passes;
+    const Stats s = quality_stats(work, q, buffer);
     IterationRecord r;
     r.iteration = summary.iterations;
     r.phase = "untangle_local";
-    r.worst_quality = q.empty() ? 0.0 : *std::min_element(q.begin(), q.end());
-    r.best_worst_quality = r.worst_quality;
-    r.inverted = std::count_if(q.begin(), q.end(), [](double v) { return v <= 0.0; });
-    r.mean_quality = std::accumulate(q.begin(), q.end(), 0.0) / static_cast<double>(std::max<std::size_t>(1, m));
+    r.worst_quality = s.worst;
+    r.best_worst_quality = s.worst;
+    r.inverted = s.bad;
+    r.mean_quality = s.mean;
     r.moved = moved;
     r.seconds = seconds_since(start);
     summary.history.push_back(std::move(r));
@@ -627,8 +651,8 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         hybrid->set_scale(hybrid_scale);
         // The global barrier ascent untangles most of a mesh; where it stalls on a few elements
         // (a local maximum of the worst quality), local steps move single vertices to where
-        // their elements' smallest volume is largest, and the barrier ascent resumes. (Serial
-        // runs only: the local steps go vertex by vertex.)
+        // their elements' smallest volume is largest, and the barrier ascent resumes.
+        std::optional<VertexColoring> colors;  // distributed runs; collective: made when first needed
         const int first_round = resume ? static_cast<int>(resume->number("round")) : 0;
         for (int round = first_round;; ++round) {
             const detail::SolverState* here = resume && round == first_round ? &*resume : nullptr;
@@ -647,8 +671,10 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
             }
             const bool out_of_budget =
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
-            if (out_of_budget || round == options.local_untangle_rounds || work.distributed() ||
-                local_untangle_sweeps(work, xyz, *hybrid, summary, observer, start) == 0) {
+            if (work.distributed() && !out_of_budget && round < options.local_untangle_rounds && !colors)
+                colors = color_vertices(work.mesh(), work.mesh().global_ids(), work.owned(), work.halo(), work.reducer());
+            if (out_of_budget || round == options.local_untangle_rounds ||
+                local_untangle_sweeps(work, colors ? &*colors : nullptr, xyz, *hybrid, summary, observer, start) == 0) {
                 copy_back(xyz);
                 return finish(TerminationReason::CannotUntangle,
                               "untangling stopped (" + result.message + ") with elements still inverted");

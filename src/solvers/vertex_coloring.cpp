@@ -115,13 +115,12 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
     return true;
 }
 
-VertexColoring color_vertices(const DistributedMesh& part) {
-    const SimplexMesh& mesh = part.mesh;
+VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId> ids, std::span<const std::uint8_t> owned,
+                              const Halo& halo, const Reducer& reducer) {
     const VertexId n = mesh.num_vertices();
     const auto fixed = mesh.fixed();
-    const auto ids = mesh.global_ids();
-    // SplitMix64 of the global id: a priority that looks random (few rounds) yet is the same on
-    // every rank.
+    // SplitMix64 of the id: a priority that looks random (few rounds) yet is the same on every
+    // rank and in every numbering.
     auto priority = [&](VertexId v) {
         std::uint64_t z = static_cast<std::uint64_t>(ids[v]) + 0x9e3779b97f4a7c15ULL;
         z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
@@ -136,7 +135,7 @@ VertexColoring color_vertices(const DistributedMesh& part) {
         chosen.clear();
         double uncolored = 0.0;
         for (VertexId v = 0; v < n; ++v) {
-            if (fixed[v] || part.vertex_owner[v] != part.rank || color[v] >= 0.0) continue;
+            if (fixed[v] || !owned[v] || color[v] >= 0.0) continue;
             uncolored += 1.0;
             bool first = true;
             used.assign(1, 0);
@@ -155,9 +154,9 @@ VertexColoring color_vertices(const DistributedMesh& part) {
             while (static_cast<std::size_t>(c) < used.size() && used[static_cast<std::size_t>(c)]) ++c;
             chosen.push_back({v, c});
         }
-        if (part.reducer().total(uncolored) == 0.0) break;
+        if (reducer.total(uncolored) == 0.0) break;
         for (const auto& [v, c] : chosen) color[v] = c;
-        part.halo().update(color, 1);
+        halo.update(color, 1);
     }
     VertexColoring result;
     result.color.resize(static_cast<std::size_t>(n));
@@ -166,8 +165,14 @@ VertexColoring color_vertices(const DistributedMesh& part) {
         result.color[v] = fixed[v] ? -1 : static_cast<int>(color[v]);
         count = std::max(count, result.color[v] + 1);
     }
-    result.count = static_cast<int>(part.reducer().max(count));
+    result.count = static_cast<int>(reducer.max(count));
     return result;
+}
+
+VertexColoring color_vertices(const DistributedMesh& part) {
+    std::vector<std::uint8_t> owned(static_cast<std::size_t>(part.mesh.num_vertices()));
+    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
+    return color_vertices(part.mesh, part.mesh.global_ids(), owned, part.halo(), part.reducer());
 }
 
 }  // namespace paloverde

@@ -43,24 +43,24 @@ std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::
     return position;
 }
 
-Workspace::Workspace(const SimplexMesh& mesh, bool renumber) {
-    SimplexMesh ordered;
+Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
     if (renumber) {
         Renumbering order = locality_order(mesh);
-        ordered = renumbered(mesh, order);
+        own_ = renumbered(mesh, order);
         old_vertex_ = std::move(order.old_vertex);
     } else {
-        ordered = mesh;
+        own_ = mesh;
     }
-    const VertexId n = ordered.num_vertices();
+    const VertexId n = own_.num_vertices();
     std::vector<GlobalId> ids(static_cast<std::size_t>(n));
     std::iota(ids.begin(), ids.end(), GlobalId{0});
-    auto positions = canonical_element_positions(ordered, ids);
+    auto positions = canonical_element_positions(own_, ids);
     owned_.assign(static_cast<std::size_t>(n), 1);
-    finish(ordered, std::move(positions), {}, ordered.num_elements());
+    std::vector<std::uint8_t> all_counted;
+    finish(positions, all_counted, own_.num_elements());
 }
 
-Workspace::Workspace(const DistributedMesh& part) {
+Workspace::Workspace(DistributedMesh& part) : part_(&part), mesh_(part.mesh) {
     distributed_ = true;
     reducer_ = &part.reducer();
     halo_ = &part.halo();
@@ -70,37 +70,72 @@ Workspace::Workspace(const DistributedMesh& part) {
         owned_[v] = part.vertex_owner[v] == part.rank;
         if (!owned_[v]) ghosts_.push_back(v);
     }
-    finish(part.mesh, part.element_order, part.counted, part.global_elements);
+    part_order_ = finish(part.element_order, part.counted, part.global_elements);
     if (part.mesh.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal;
 }
 
-void Workspace::finish(const SimplexMesh& mesh, std::vector<GlobalId> element_order, std::vector<std::uint8_t> counted,
-                       GlobalId global_elements) {
+namespace {
+// out[i] = values[order[i]]
+template <class T>
+std::vector<T> permuted(const std::vector<T>& values, std::span<const ElementId> order) {
+    std::vector<T> out(values.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
+    return out;
+}
+// The order that undoes `order`.
+std::vector<ElementId> inverse(std::span<const ElementId> order) {
+    std::vector<ElementId> out(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) out[static_cast<std::size_t>(order[i])] = static_cast<ElementId>(i);
+    return out;
+}
+// The mesh with its elements in `order` (element i is element order[i]), vertices unchanged.
+SimplexMesh reordered_elements(const SimplexMesh& mesh, std::vector<ElementId> order) {
+    Renumbering elements;
+    elements.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+    std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
+    elements.old_element = std::move(order);
+    return renumbered(mesh, elements);
+}
+}  // namespace
+
+Workspace::~Workspace() {
+    if (!part_) return;
+    // The local smoother's sums follow the part's element order: hand the part back in it. All
+    // or nothing: should memory run out, the part stays whole, in the workspace's order.
+    try {
+        const std::vector<ElementId> back = inverse(part_order_);
+        SimplexMesh mesh = reordered_elements(part_->mesh, back);
+        std::vector<GlobalId> element_order = permuted(part_->element_order, back);
+        std::vector<std::uint8_t> counted = permuted(part_->counted, back);
+        part_->mesh = std::move(mesh);
+        part_->element_order = std::move(element_order);
+        part_->counted = std::move(counted);
+    } catch (const std::exception&) {
+    }
+}
+
+std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
+                                         GlobalId global_elements) {
     // Movable elements first, each group in canonical order.
-    const ElementId m = mesh.num_elements();
+    const ElementId m = mesh_.num_elements();
     std::vector<ElementId> order(static_cast<std::size_t>(m));
     std::iota(order.begin(), order.end(), ElementId{0});
-    std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) movable[e] = has_free_vertex(mesh, e);
-    std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
-        if (movable[a] != movable[b]) return movable[a] > movable[b];
-        return element_order[a] < element_order[b];
-    });
-    movable_ = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 1));
-    Renumbering identity_vertices;
-    identity_vertices.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
-    std::iota(identity_vertices.old_vertex.begin(), identity_vertices.old_vertex.end(), VertexId{0});
-    identity_vertices.old_element = order;
-    mesh_ = renumbered(mesh, identity_vertices);
-    std::vector<GlobalId> sorted_order(static_cast<std::size_t>(m));
-    std::vector<std::uint8_t> sorted_counted(static_cast<std::size_t>(m), 1);
-    for (ElementId i = 0; i < m; ++i) {
-        sorted_order[i] = element_order[order[i]];
-        if (!counted.empty()) sorted_counted[i] = counted[order[i]];
+    {
+        std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
+        for (ElementId e = 0; e < m; ++e) movable[e] = has_free_vertex(mesh_, e);
+        std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
+            if (movable[a] != movable[b]) return movable[a] > movable[b];
+            return element_order[a] < element_order[b];
+        });
+        movable_ = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 1));
     }
+    mesh_ = reordered_elements(mesh_, order);
+    element_order = permuted(element_order, order);
+    if (!counted.empty()) counted = permuted(counted, order);
+    const auto is_counted = [&](ElementId e) { return counted.empty() || counted[e] != 0; };
     if (!counted.empty())
         for (ElementId e = 0; e < movable_; ++e)
-            if (sorted_counted[e]) counted_.push_back(e);
+            if (counted[e]) counted_.push_back(e);
     global_movable_ = reducer_->total(static_cast<double>(counted.empty() ? movable_ : counted_.size()));
 
     // The metric scale: the mean absolute element volume over the whole mesh, summed exactly.
@@ -109,16 +144,18 @@ void Workspace::finish(const SimplexMesh& mesh, std::vector<GlobalId> element_or
         const std::vector<double> volume = absolute_volumes();
         ExactSum sum;
         for (ElementId e = 0; e < m; ++e)
-            if (sorted_counted[e]) sum.add(volume[e]);
+            if (is_counted(e)) sum.add(volume[e]);
         const double total = reducer_->total(sum);
-        const double count = reducer_->total(static_cast<double>(std::count(sorted_counted.begin(), sorted_counted.end(), 1)));
+        const double count =
+            reducer_->total(static_cast<double>(counted.empty() ? m : std::count(counted.begin(), counted.end(), 1)));
         scale_.reference_volume = total > 0.0 && std::isfinite(total) && count > 0.0 ? total / count : 1.0;
     }
     // The edge of the regular simplex of the reference volume.
     reference_length_ = mesh_.kind() == ElementKind::Tetrahedron
                             ? std::cbrt(6.0 * std::numbers::sqrt2 * scale_.reference_volume)
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
-    build_lanes(sorted_order, global_elements);
+    build_lanes(element_order, global_elements);
+    return order;
 }
 
 void Workspace::build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements) {

@@ -18,7 +18,7 @@
 #include "paloverde/parallel/reducer.hpp"
 
 namespace paloverde {
-struct DistributedMesh;
+class DistributedMesh;
 }
 
 namespace paloverde::detail {
@@ -27,8 +27,13 @@ class Workspace {
 public:
     // The whole mesh, serially; `renumber` false keeps the vertex numbering.
     Workspace(const SimplexMesh& mesh, bool renumber);
-    // This process's part of a distributed mesh.
-    explicit Workspace(const DistributedMesh& part);
+    // This process's part of a distributed mesh. The workspace orders the part's elements in place
+    // rather than holding a reordered copy (a copy would cost as much as the part's mesh), and
+    // puts them back in the part's order when it is destroyed.
+    explicit Workspace(DistributedMesh& part);
+    ~Workspace();
+    Workspace(const Workspace&) = delete;
+    Workspace& operator=(const Workspace&) = delete;
 
     const SimplexMesh& mesh() const { return mesh_; }
     ElementId movable_elements() const { return movable_; }
@@ -70,13 +75,18 @@ private:
         VertexId low, high;      // vertices they touch: [low, high]
         std::size_t offset;      // first vertex of the lane in the lane buffers
     };
-    // Orders the elements (movable first, then canonical) and sets up scale and lanes.
-    void finish(const SimplexMesh& mesh, std::vector<GlobalId> element_order, std::vector<std::uint8_t> counted,
-                GlobalId global_elements);
+    // Orders mesh_'s elements in place (movable first, then canonical), with `element_order` and
+    // `counted` (empty: all counted), and sets up scale and lanes. Returns the order: element i
+    // was element order[i].
+    std::vector<ElementId> finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
+                                  GlobalId global_elements);
     void build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
 
-    SimplexMesh mesh_;
+    SimplexMesh own_;                   // serial runs: the mesh in canonical order
+    DistributedMesh* part_ = nullptr;    // distributed runs: the part, whose elements mesh_ reorders
+    std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
+    SimplexMesh& mesh_;                  // own_, or the part's mesh
     std::vector<VertexId> old_vertex_;  // serial, renumbered: caller's id of each vertex
     ElementId movable_ = 0;
     std::vector<std::uint8_t> owned_;

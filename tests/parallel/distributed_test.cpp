@@ -132,7 +132,6 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
         pv::GlobalSolverOptions options;
         options.termination.max_iterations = 12;
         options.untangle_termination.max_iterations = 150;
-        options.local_untangle_rounds = 0;  // local steps are serial-only
         pv::SimplexMesh serial = input;
         const auto serial_summary = pv::GlobalSolver(options).improve(serial);
 
@@ -153,6 +152,44 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
     }
 }
 
+// Where the barrier ascent stalls with elements still inverted, sweeps of local untangling take
+// over. A distributed run sweeps color by color, its colors from the global ids, so it makes the
+// same moves on any number of ranks: the run on all ranks ends as the run of each rank alone.
+// (A serial run sweeps in id order: the same outcome, not the same mesh.)
+BOOST_AUTO_TEST_CASE(local_untangling_where_the_ascent_stalls_gives_the_same_answer_on_any_rank_count) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.3, 2);
+    pv::GlobalSolverOptions options;
+    options.untangle_termination.progress_window = 5;  // call the ascent stalled early
+    options.untangle_termination.min_progress = 0.01;
+    options.termination.max_iterations = 5;
+    auto local_rounds = [](const pv::Summary& s) {
+        return std::count_if(s.history.begin(), s.history.end(), [](const auto& r) { return r.phase == "untangle_local"; });
+    };
+    pv::SimplexMesh alone = input;
+    auto alone_part = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input, {});
+    const auto alone_summary = pv::GlobalSolver(options).improve(alone_part);
+    alone_part.gather_coordinates(&alone);
+    BOOST_TEST_REQUIRE(local_rounds(alone_summary) > 0);
+
+    pv::SimplexMesh gathered = input;
+    auto part = scatter(input);
+    const auto summary = pv::GlobalSolver(options).improve(part);
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report());
+    BOOST_TEST(local_rounds(summary) == local_rounds(alone_summary));
+    BOOST_TEST(summary.iterations == alone_summary.iterations);
+    BOOST_TEST(pv::to_string(summary.reason) == pv::to_string(alone_summary.reason));
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after == alone_summary.worst_after, boost::test_tools::tolerance(1e-12));
+    if (rank() == 0) BOOST_TEST(relative_difference(gathered, alone) <= 1e-10);
+    pv::test::check_never_worse(summary);
+
+    // The serial run untangles too.
+    pv::SimplexMesh serial = input;
+    const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+    BOOST_TEST(serial_summary.after.inverted == 0);
+}
+
 BOOST_AUTO_TEST_CASE(shape_improvement_on_a_valid_mesh_matches_too) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
     pv::GlobalSolverOptions options;
@@ -167,6 +204,21 @@ BOOST_AUTO_TEST_CASE(shape_improvement_on_a_valid_mesh_matches_too) {
     BOOST_TEST(summary.after.inverted == 0);
     BOOST_TEST(summary.iterations == serial_summary.iterations);
     if (rank() == 0) BOOST_TEST(relative_difference(gathered, serial) <= 1e-10);
+}
+
+// The global solver reorders the part's elements in place while it runs (rather than holding a
+// reordered copy); the local smoother's sums follow the part's order, so it must come back.
+BOOST_AUTO_TEST_CASE(global_solver_hands_the_part_back_in_its_element_order) {
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 3;
+    auto part = scatter(pv::test::shared_mesh("stellar/house2.node"));
+    const std::vector<pv::VertexId> connectivity(part.mesh.connectivity().begin(), part.mesh.connectivity().end());
+    const auto element_order = part.element_order;
+    const auto counted = part.counted;
+    pv::GlobalSolver(options).improve(part);
+    BOOST_TEST((std::vector<pv::VertexId>(part.mesh.connectivity().begin(), part.mesh.connectivity().end()) == connectivity));
+    BOOST_TEST((part.element_order == element_order));
+    BOOST_TEST((part.counted == counted));
 }
 
 BOOST_AUTO_TEST_CASE(more_ranks_than_vertices_is_an_error_on_every_rank) {
