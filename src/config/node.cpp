@@ -268,8 +268,9 @@ void apply(Node& root, const Assignment& a) {
         if (index) {
             if (at->kind != Node::Kind::Sequence)
                 fail(where, walked, "is " + at->describe() + ", not a list: [" + part + "] does not apply");
-            const std::size_t k = std::stoul(part);
-            if (k > at->items.size())
+            std::size_t k = 0;
+            const auto [end, error] = std::from_chars(part.data(), part.data() + part.size(), k);
+            if (error != std::errc() || end != part.data() + part.size() || k > at->items.size())
                 fail(where, walked, "has " + std::to_string(at->items.size()) + " entries; [" + part +
                                         "] can name one of them or append one at [" +
                                         std::to_string(at->items.size()) + "]");

@@ -242,6 +242,9 @@ BOOST_AUTO_TEST_CASE(set_overrides_with_the_same_checks) {
     BOOST_TEST(bad.key() == "queue[0].improve.termination.max_iterations");
     BOOST_TEST(error_of(yaml, {{"queue[0].improve.termination.max_iterations=x", "--iterations"}}).where() == "--iterations");
     BOOST_TEST(has(error_of(yaml, {{"queue[5].improve.name=local"}}).what(), "append one at [1]"));
+    // An index past any size_t (found by fuzz_config: it escaped as std::out_of_range).
+    BOOST_TEST(has(error_of(yaml, {{"queue[100000000000000000000000000].improve.name=local"}}).what(),
+                   "append one at [1]"));
     BOOST_TEST(has(error_of(yaml, {{"no equals sign"}}).what(), "key.path=value"));
     BOOST_TEST(error_of(yaml, {{"output.tabel=t.csv"}}).key() == "output.tabel");
 }

@@ -305,7 +305,8 @@ BOOST_AUTO_TEST_SUITE(partitioned_mpirun, *utf::disabled())
 
 BOOST_AUTO_TEST_CASE(mpirun_gives_the_serial_mesh) {
     const int ranks = launch().ranks;
-    const pv::test::ScratchDir dir("mpirun_same");
+    // A folder per rank count: CTest may run config_mpirun_np2 and _np4 at the same time.
+    const pv::test::ScratchDir dir("mpirun_same_np" + std::to_string(ranks));
     pv::test::write_file(dir / "run.yaml", global_config(tangled(), dir.path()));
     // The serial run of the same config (no mpirun, partition.parts: 1).
     const auto serial = run_cli("run -q " + quoted(dir / "run.yaml") + " --set output.mesh=" + quoted(dir / "serial.vtu"));
@@ -347,7 +348,7 @@ BOOST_AUTO_TEST_CASE(mpirun_gives_the_serial_mesh) {
 
 BOOST_AUTO_TEST_CASE(mpirun_local_and_pieces_give_the_one_rank_result) {
     const int ranks = launch().ranks;
-    const pv::test::ScratchDir dir("mpirun_local");
+    const pv::test::ScratchDir dir("mpirun_local_np" + std::to_string(launch().ranks));
     const auto tire = pv::test::shared_data("mesquite/tets/tire.vtk");
     pv::test::write_file(dir / "local.yaml", "input: {mesh: " + tire.string() + "}\nthreads: 1\n"
                                              "queue: [improve: {name: local, termination: {max_iterations: 4}}]\n"
@@ -383,7 +384,7 @@ BOOST_AUTO_TEST_CASE(mpirun_local_and_pieces_give_the_one_rank_result) {
 
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {
     const int ranks = launch().ranks;
-    const pv::test::ScratchDir dir("mpirun_bad");
+    const pv::test::ScratchDir dir("mpirun_bad_np" + std::to_string(launch().ranks));
     pv::test::write_file(dir / "run.yaml", "input: {mesh: " + tangled().string() + "}\npartition:\n  parts: " +
                                                std::to_string(ranks + 1) + "\n");
     auto r = mpirun_cli(dir, "run " + quoted(dir / "run.yaml"));
