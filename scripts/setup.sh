@@ -6,9 +6,9 @@
 #   bash scripts/setup.sh sanitize   build with AddressSanitizer + UBSan (build-sanitize/) and run
 #                                    the tests there (all but the install check, which links a
 #                                    downstream program without the sanitizers)
-#   bash scripts/setup.sh fuzz       build the mesh readers' libFuzzer targets with clang
-#                                    (build-fuzz/) and run each for a short fixed number of
-#                                    inputs (docs/robustness.md)
+#   bash scripts/setup.sh fuzz       build the libFuzzer targets of the mesh readers and the
+#                                    config reader with clang (build-fuzz/) and run each for a
+#                                    short fixed number of inputs (docs/robustness.md)
 # Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,8 +27,9 @@ PACKAGES=(
   python3-matplotlib                  # plots of examples/compare_methods.py
   tetgen                              # benchmark meshes (docs/global_solver.md)
 )
-# For `fuzz` only: clang and its libFuzzer runtime.
-FUZZ_PACKAGES=(clang libclang-rt-dev)
+# For `fuzz` only: clang, its libFuzzer runtime and its OpenMP (the config target links the
+# whole library).
+FUZZ_PACKAGES=(clang libclang-rt-dev libomp-dev)
 
 install_packages() {  # also installs the packages given as arguments
   local missing=()
