@@ -48,7 +48,7 @@ public:
     void evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                   double* quality) const override {
         if constexpr (kHasBlocks) {
-            if (mesh.kind() == ElementKind::Tetrahedron) return evaluate_blocks(mesh, xyz, first, last, quality);
+            if (blocks_pay(mesh, first, last)) return evaluate_blocks(mesh, xyz, first, last, quality);
         }
         if (mesh.kind() == ElementKind::Tetrahedron)
             evaluate_kind<4>(mesh, xyz, first, last, quality);
@@ -61,7 +61,7 @@ public:
         require_gradient();
         const bool curvature = target.curvature && target.curvature_weight;
         if constexpr (kHasBlocks) {
-            if (mesh.kind() == ElementKind::Tetrahedron) {
+            if (blocks_pay(mesh, first, last)) {
                 if (curvature) accumulate_blocks<true>(mesh, xyz, first, last, target);
                 else accumulate_blocks<false>(mesh, xyz, first, last, target);
                 return;
@@ -80,6 +80,12 @@ private:
     static constexpr bool kHasBlocks = requires(const Kernel k, const TetBlock& x, TetBlock* g) {
         k.tet_block(BlockPath::baseline, x, nullptr, nullptr, g);
     };
+
+    // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
+    // time, and a block of one would cost 16. (Both paths give the same bits.)
+    static bool blocks_pay(const SimplexMesh& mesh, ElementId first, ElementId last) {
+        return mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock;
+    }
 
     void require_gradient() const {
         if (assessment_only<Kernel>())
