@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <functional>
+#include <numeric>
 #include <optional>
 
 #include "core/blocked_sum.hpp"
@@ -566,8 +566,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
 // Plassmann) that move each free vertex of an element non-positive at the sweep's start, its
 // neighbours held still, to where its elements' smallest volume is largest; until a sweep moves
 // none, at most ten. Serially the vertices go one after the other in id order; a distributed run
-// goes color by color (`coloring`, from the canonical ids: the same moves on any number of
-// ranks), ghosts taking their owners' positions after each color. Records one history entry;
+// goes color by color (`coloring`, from the global ids: the same moves on any number of ranks),
+// ghosts taking their owners' positions after each color. Records one history entry;
 // returns the vertices moved everywhere.
 int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* coloring, std::vector<double>& xyz,
                           const QualityMetric& hybrid, Summary& summary, const IterationObserver& observer,
