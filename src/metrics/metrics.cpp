@@ -97,10 +97,15 @@ private:
         if constexpr (K == 4) return kernel_.tet(x, g, scale);
         else return kernel_.tri(x, g, scale);
     }
-    // The scale of element e: the mesh's, with e's own reference volume when there are some.
+    // Element e's reference volume: its own when there are some, else the mesh's.
+    double reference_volume_of(ElementId e) const {
+        return scale_.element_reference_volume.empty() ? scale_.reference_volume
+                                                       : scale_.element_reference_volume[static_cast<std::size_t>(e)];
+    }
+    // The scale of element e: the mesh's, with e's own reference volume.
     const MetricScale& scale_of(ElementId e, MetricScale& local) const {
         if (scale_.element_reference_volume.empty()) return scale_;
-        local.reference_volume = scale_.element_reference_volume[static_cast<std::size_t>(e)];
+        local.reference_volume = reference_volume_of(e);
         return local;
     }
 
@@ -161,10 +166,7 @@ private:
     void gather_block(const VertexId* conn, const double* coords, ElementId first, int count, TetBlock& x,
                       double* reference_volume) const {
         gather_tets(conn + 4 * static_cast<std::size_t>(first), coords, count, x);
-        for (int j = 0; j < count; ++j)
-            reference_volume[j] = scale_.element_reference_volume.empty()
-                                      ? scale_.reference_volume
-                                      : scale_.element_reference_volume[static_cast<std::size_t>(first + j)];
+        for (int j = 0; j < count; ++j) reference_volume[j] = reference_volume_of(first + j);
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
 

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <functional>
-#include <numeric>
 #include <optional>
 
 #include "core/blocked_sum.hpp"
@@ -574,13 +573,7 @@ int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* c
                           Clock::time_point start) {
     const SimplexMesh& mesh = work.mesh();
     const auto owned = work.owned();
-    std::vector<std::vector<VertexId>> classes;
-    if (coloring) {
-        classes = coloring->classes();
-    } else {
-        classes.emplace_back(static_cast<std::size_t>(mesh.num_vertices()));
-        std::iota(classes[0].begin(), classes[0].end(), VertexId{0});
-    }
+    const auto classes = coloring ? coloring->classes() : std::vector<std::vector<VertexId>>{};
     std::vector<double> q(static_cast<std::size_t>(work.movable_elements()));
     std::vector<std::uint8_t> candidate(static_cast<std::size_t>(mesh.num_vertices()));
     int moved = 0;
@@ -591,11 +584,17 @@ int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* c
             if (q[e] <= 0.0)
                 for (VertexId v : mesh.element(static_cast<ElementId>(e))) candidate[v] = 1;
         double moved_now = 0.0;
-        for (const auto& members : classes) {
-            for (VertexId v : members)
-                if (candidate[v] && owned[v] && !mesh.fixed()[v])
-                    moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
-            if (coloring) work.halo().update(xyz, 3);
+        auto visit = [&](VertexId v) {
+            if (candidate[v] && owned[v] && !mesh.fixed()[v])
+                moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
+        };
+        if (coloring) {
+            for (const auto& members : classes) {
+                for (VertexId v : members) visit(v);
+                work.halo().update(xyz, 3);
+            }
+        } else {
+            for (VertexId v = 0; v < mesh.num_vertices(); ++v) visit(v);
         }
         moved_now = work.reducer().total(moved_now);
         moved += static_cast<int>(moved_now);
