@@ -558,6 +558,19 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         if (failures_ >= options_.max_failed_searches)
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         if (stalled) return end(TerminationReason::Converged, "the worst quality stopped improving");
+        // An ascent can inch up for hundreds of iterations on one element that it cannot free
+        // (fandisk-100k-boundary: 440 iterations from -0.102 to -0.100). When the inverted count
+        // did not fall over the window and, at the window's pace, the worst element would still
+        // be inverted when the budget runs out, hand over to local untangling now.
+        if (untangling_ && best_history_.size() > window) {
+            const std::size_t then = best_history_.size() - 1 - window;
+            const double pace = (best_worst_ - best_history_[then]) / static_cast<double>(window);
+            const double left = static_cast<double>(stop_.max_iterations - iteration);
+            if (bad_history_.back() >= bad_history_[then] && best_worst_ + pace * left <= 0.0)
+                return end(TerminationReason::Converged,
+                           "the worst element rose too slowly to become valid within the iteration budget (" +
+                               std::to_string(pace) + " per iteration over the last " + std::to_string(window) + ")");
+        }
     }
 }
 
