@@ -189,7 +189,7 @@ Tables::Tables() {
     log_barrier.real("barrier_shrink", &ObjectiveOptions::barrier_shrink, "mu is multiplied by this after steps_per_mu steps, in (0, 1].")
         .real("initial_mu", &ObjectiveOptions::initial_mu, "First mu; 0: chosen from the qualities.")
         .real("barrier_initial_active", &ObjectiveOptions::barrier_initial_active,
-              "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1.");
+              "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1; 0: 0.5% of the elements, at least 10,000.");
     p_mean.real("p", &ObjectiveOptions::p, "Exponent, nonzero; negative stresses the worst elements.");
 
     checkpoint.path("file", &CheckpointOptions::file,

@@ -2,7 +2,10 @@
 // mesh by the solver's workspace) against finite differences.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <utility>
+#include <vector>
 
+#include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/perturb.hpp"
 #include "paloverde/objectives/objective_function.hpp"
@@ -76,6 +79,33 @@ BOOST_AUTO_TEST_CASE(barrier_t_solves_its_optimality_condition) {
     BOOST_TEST(barrier.mu() == 0.005);
     const double t_small_mu = barrier.t();
     BOOST_TEST(t_small_mu > 0.19);  // t climbs towards the worst quality as mu shrinks
+}
+
+// Elements that are all nearly alike: the spread (1e-13 here) is no scale for the barrier's
+// first gap, which would make it so steep that the ascent creeps.
+BOOST_AUTO_TEST_CASE(barrier_starts_a_sizeable_gap_below_elements_that_are_all_alike) {
+    std::vector<double> q(1000);
+    for (std::size_t i = 0; i < q.size(); ++i) q[i] = 0.5 + 1e-16 * static_cast<double>(i);
+    pv::LogBarrier barrier;
+    barrier.update(q, pv::Reducer{});
+    BOOST_TEST(0.5 - barrier.t() >= 1e-3 * 0.5);
+    BOOST_TEST(barrier.t() < 0.5);
+}
+
+// With barrier_initial_active 0 (the default) the barrier first weighs about 0.5% of the
+// elements like the worst, at least 10,000: the same start as those numbers given explicitly.
+BOOST_AUTO_TEST_CASE(barrier_start_follows_the_element_count) {
+    auto start = [](std::size_t n, double initial_active) {
+        std::vector<double> q(n);
+        for (std::size_t i = 0; i < n; ++i) q[i] = 0.1 + 0.8 * std::sqrt(static_cast<double>(i) / static_cast<double>(n));
+        pv::LogBarrier barrier(0.8, 0.0, initial_active);
+        barrier.update(q, pv::Reducer{});
+        return std::pair{barrier.mu(), barrier.t()};
+    };
+    BOOST_TEST((start(100'000, 0.0) == start(100'000, 1e4)));
+    BOOST_TEST((start(3'000'000, 0.0) == start(3'000'000, 15'000.0)));
+    BOOST_TEST((start(3'000'000, 0.0) != start(3'000'000, 1e4)));
+    BOOST_CHECK_THROW(pv::LogBarrier(0.8, 0.0, 0.5), pv::OptionError);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

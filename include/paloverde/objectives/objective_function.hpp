@@ -55,8 +55,9 @@ class LogBarrier final : public ObjectiveFunction {
 public:
     // mu <= 0 chooses the first mu from the qualities: t starts half the spread below the worst
     // quality, or closer when more than about `initial_active` elements would weigh as much as
-    // the worst.
-    explicit LogBarrier(double shrink = 0.8, double initial_mu = 0.0, double initial_active = 1e4);
+    // the worst (0: 0.5% of the elements, at least 10,000), but never closer than a thousandth of
+    // the qualities' size.
+    explicit LogBarrier(double shrink = 0.8, double initial_mu = 0.0, double initial_active = 0.0);
     std::string_view name() const override { return "log_barrier"; }
     void update(std::span<const double> counted, const Reducer& reducer) override;
     void advance() override;
@@ -72,6 +73,8 @@ public:
     double t() const { return t_; }
 
 private:
+    double automatic_active(double elements) const;
+
     double shrink_;
     double initial_active_;
     double mu_;
@@ -114,7 +117,8 @@ private:
 struct ObjectiveOptions {
     double barrier_shrink = 0.8;  // mu <- shrink * mu after steps_per_mu steps, in (0, 1]
     double initial_mu = 0.0;      // 0: chosen from the qualities
-    double barrier_initial_active = 1e4;  // with automatic mu: elements the barrier first weighs
+    double barrier_initial_active = 0.0;  // with automatic mu: elements the barrier first weighs
+                                          // like the worst; 0: 0.5% of them, at least 10,000
     double p = -2.0;              // p_mean exponent, nonzero
     void validate() const;        // throws OptionError
 };
