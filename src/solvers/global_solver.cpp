@@ -229,9 +229,8 @@ bool Phase::line_search(double objective, double max_direction) {
     // An element blocks a step when it leaves the objective's domain or becomes non-positive
     // although it was positive. Rather than shrinking the whole step for it, the step of its
     // vertices is damped until it no longer blocks: one tangle does not freeze the mesh.
-    auto blocks = [&](ElementId e) {
-        return !objective_.admissible(trial_q_[e]) || (trial_q_[e] <= 0.0 && q_[e] > 0.0);
-    };
+    const double floor = objective_.domain_floor();
+    auto blocks = [&](ElementId e) { return !(trial_q_[e] > floor) || (trial_q_[e] <= 0.0 && q_[e] > 0.0); };
     std::vector<VertexId> damped;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;

@@ -30,8 +30,9 @@ public:
     // A number that keeps rising while the method still makes progress, though the worst
     // quality may pause (the barrier's t, which climbs to the worst quality as mu shrinks).
     virtual double progress_measure() const { return 0.0; }
-    // Whether an element of this quality lies in the objective's domain.
-    virtual bool admissible(double quality) const { return quality > -1e308; }
+    // The objective's domain: qualities above this number (a bound, not a test per element, so
+    // that solvers check whole arrays in a plain loop).
+    virtual double domain_floor() const { return -1e308; }
 
     virtual double value(std::span<const double> counted, const Reducer& reducer) const = 0;
     // d(value)/d(quality[i]) into weight[i], at the state of the last update().
@@ -61,12 +62,12 @@ public:
     std::string_view name() const override { return "log_barrier"; }
     void update(std::span<const double> counted, const Reducer& reducer) override;
     void advance() override;
-    bool admissible(double quality) const override { return quality > t_; }
+    double domain_floor() const override { return t_; }
     double progress_measure() const override { return t_; }
     double value(std::span<const double> counted, const Reducer& reducer) const override;
     void weights(std::span<const double> quality, std::span<double> weight) const override;
     void curvature_weights(std::span<const double> quality, std::span<double> curvature) const override;
-    std::vector<double> state() const override { return {mu_, t_}; }
+    std::vector<double> state() const override { return {mu_, t_, gap_ratio_}; }
     void restore_state(std::span<const double> state) override;
 
     double mu() const { return mu_; }
@@ -79,6 +80,7 @@ private:
     double initial_active_;
     double mu_;
     double t_ = 0.0;
+    double gap_ratio_ = 0.0;  // (worst quality - t) / mu at the last t solve; 0 before the first
 };
 
 // The p-mean of the qualities, (1/n sum q_i^p)^(1/p) (Mesquite's LPtoP, normalized). A negative
@@ -87,7 +89,7 @@ class PMean final : public ObjectiveFunction {
 public:
     explicit PMean(double p = -2.0);
     std::string_view name() const override { return "p_mean"; }
-    bool admissible(double quality) const override { return quality > 0.0; }
+    double domain_floor() const override { return 0.0; }
     void update(std::span<const double> counted, const Reducer& reducer) override;
     double value(std::span<const double> counted, const Reducer& reducer) const override;
     void weights(std::span<const double> quality, std::span<double> weight) const override;
