@@ -479,9 +479,11 @@ std::string registry_markdown() {
     };
     auto table = [&](const std::vector<OptionInfo>& options) {
         out << "\n| key | type | default | meaning |\n|---|---|---|---|\n";
-        for (const auto& o : options)
-            out << "| `" << o.key << "` | " << escape(o.type) << " | " << (o.default_value.empty() ? "" : "`" + escape(o.default_value) + "`")
-                << " | " << escape(o.help) << " |\n";
+        for (const auto& o : options) {
+            out << "| `" << o.key << "` | " << escape(o.type) << " | ";
+            if (!o.default_value.empty()) out << '`' << escape(o.default_value) << '`';
+            out << " | " << escape(o.help) << " |\n";
+        }
     };
     const auto& all = registry();
     auto of_kind = [&](std::string_view kind) {

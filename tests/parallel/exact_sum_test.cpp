@@ -115,6 +115,51 @@ BOOST_AUTO_TEST_CASE(bounded_sums_do_not_depend_on_order_or_split) {
     BOOST_TEST(threaded[0].value() == whole);
 }
 
+// add_all() splits many terms per SIMD instruction: it must give add()'s bits, with terms past
+// the bound, infinities and NaN among them, for any run length and wherever the flushes fall.
+BOOST_AUTO_TEST_CASE(bounded_sums_of_whole_buffers_equal_those_of_single_terms) {
+    std::mt19937_64 random(5);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-70, 2);
+    const double bound = 2.5;
+    std::vector<double> terms(20000);
+    for (double& t : terms) t = std::ldexp(mantissa(random), exponent(random));  // up to 4: some past the bound
+    terms[7] = std::numeric_limits<double>::infinity();
+    terms[9000] = -std::numeric_limits<double>::infinity();
+    auto one_by_one = [&](const std::vector<double>& x) {
+        pv::detail::BoundedSum s(bound);
+        for (double t : x) s.add(t);
+        pv::ExactSum e;
+        s.add_to(e);
+        return e;
+    };
+    using Simd = pv::detail::BoundedSum::Simd;
+    auto in_runs = [&](const std::vector<double>& x, Simd simd) {
+        pv::detail::BoundedSum s(bound);
+        for (std::size_t begin = 0; begin < x.size();) {
+            const std::size_t length = std::min<std::size_t>(x.size() - begin, random() % 300);
+            s.add_all(x.data() + begin, length, simd);
+            begin += length;
+        }
+        pv::ExactSum e;
+        s.add_to(e);
+        return e;
+    };
+    for (int trial = 0; trial < 4; ++trial) {
+        for (const Simd simd : {Simd::best, Simd::sse2}) {
+            BOOST_TEST(std::isnan(one_by_one(terms).value()));  // +inf and -inf
+            BOOST_TEST(std::isnan(in_runs(terms, simd).value()));
+            std::vector<double> finite(terms);
+            for (double& t : finite)
+                if (!std::isfinite(t)) t = -3.0;
+            BOOST_TEST(one_by_one(finite).value() == in_runs(finite, simd).value());  // bit for bit
+            finite[123] = std::nan("");
+            BOOST_TEST(std::isnan(in_runs(finite, simd).value()));
+        }
+        std::shuffle(terms.begin(), terms.end(), random);
+    }
+}
+
 BOOST_AUTO_TEST_CASE(bounded_sums_take_terms_past_the_bound_exactly) {
     pv::detail::BoundedSum s(1.0);
     s.add(0.5);
