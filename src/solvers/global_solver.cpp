@@ -1,6 +1,7 @@
 #include "paloverde/solvers/global_solver.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <functional>
@@ -74,9 +75,10 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
         s.bad += v <= 0.0;
     }
     largest = reducer.max(largest);
-    auto sums = detail::bounded_sums<3>(q.size(), {largest, 0.0, 0.0}, [&](std::size_t i, auto& acc) {
+    // The qualities' sum, then the two counts: one reduction for all three.
+    std::array<ExactSum, 3> sums{detail::bounded_sums<1>(q.size(), {largest}, [&](std::size_t i, auto& acc) {
         if (!std::isnan(q[i])) acc[0].add(q[i]);
-    });
+    })[0]};
     sums[1].add(static_cast<double>(s.bad));
     sums[2].add(static_cast<double>(s.nan));
     reducer.sum(sums);
