@@ -4,6 +4,7 @@
 // not untangle, an unwritable output), 2 bad usage (a flag, a config key or value), 3 finished
 // but a target was not reached while the mesh is still valid.
 #include <CLI/CLI.hpp>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,7 +31,12 @@ struct ReportFlags {
     void add_to(CLI::App& command);
 };
 
-// Runs (or prints) a resolved config and returns the exit code.
+// Runs (or prints) a resolved config and returns the exit code. Its errors and failure messages
+// name the input (a batch of runs must tell which input failed).
 int execute(const config::RunSpec& spec, const ReportFlags& flags);
+
+// Runs `work`; an error whose message names none of `inputs` is thrown again (of the same kind
+// for the exit code: usage or not) with "INPUT: " in front, INPUT the inputs joined by ", ".
+void naming_input(const std::vector<std::string>& inputs, const std::function<void()>& work);
 
 }  // namespace paloverde::cli

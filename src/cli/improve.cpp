@@ -131,7 +131,10 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         if (!o->checkpoint_every.empty()) flag(step + "checkpoint.every_iterations", o->checkpoint_every, "--checkpoint-every");
         if (!o->resume.empty()) flag(step + "checkpoint.resume", o->resume, "--resume", true);
         for (const auto& s : o->report.sets) set.push_back({s, "--set"});
-        exit_code = execute(config::parse_config("", "improve", set), o->report);
+        // A bad flag value names the input too (execute() does so for the run's own errors).
+        config::RunSpec spec;
+        naming_input({o->input}, [&] { spec = config::parse_config("", "improve", set); });
+        exit_code = execute(spec, o->report);
     });
 }
 

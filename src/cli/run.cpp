@@ -5,6 +5,7 @@
 #include "commands.hpp"
 #include "mpi_session.hpp"
 #include "paloverde/config/run.hpp"
+#include "paloverde/core/error.hpp"
 #include "progress.hpp"
 
 namespace paloverde::cli {
@@ -22,6 +23,35 @@ void ReportFlags::add_to(CLI::App& command) {
     command.add_flag("-q,--quiet", quiet, "Print nothing but errors (no progress line, no report)");
 }
 
+namespace {
+std::string joined(const std::vector<std::string>& names) {
+    std::string out;
+    for (const auto& n : names) out += (out.empty() ? "" : ", ") + n;
+    return out;
+}
+
+std::vector<std::string> inputs_of(const config::RunSpec& spec) {
+    if (!spec.input.mesh.empty()) return {spec.input.mesh};
+    return spec.input.pieces;
+}
+}  // namespace
+
+void naming_input(const std::vector<std::string>& inputs, const std::function<void()>& work) {
+    const auto named = [&](const std::string& message) {
+        for (const auto& input : inputs)
+            if (message.find(input) != std::string::npos) return message;
+        return joined(inputs) + ": " + message;
+    };
+    if (inputs.empty()) return work();
+    try {
+        work();
+    } catch (const OptionError& e) {
+        throw OptionError(named(e.what()));
+    } catch (const Error& e) {
+        throw Error(named(e.what()));
+    }
+}
+
 int execute(const config::RunSpec& spec, const ReportFlags& flags) {
     if (flags.print_config) {
         std::cout << config::to_yaml(spec);
@@ -29,14 +59,17 @@ int execute(const config::RunSpec& spec, const ReportFlags& flags) {
     }
     // A partitioned config runs without mpirun too, as a run of one rank.
     if (spec.partitioned()) MpiSession::ensure();
+    const std::vector<std::string> inputs = inputs_of(spec);
     ProgressLine progress(!flags.quiet && MpiSession::rank() == 0 && ProgressLine::terminal());
-    const config::RunResult result = config::run(spec, progress.hooks());
+    config::RunResult result;
+    naming_input(inputs, [&] { result = config::run(spec, progress.hooks()); });
     progress.finish();
     if (flags.json) std::cout << result.to_json() << "\n";
     else if (!flags.quiet) std::cout << result.report();
     for (const auto& m : result.methods)
         if (m.status == config::RunStatus::Failed)
-            std::cerr << "paloverde: " << (result.methods.size() > 1 ? m.name + ": " : std::string()) << m.message << "\n";
+            std::cerr << "paloverde: " << joined(inputs) << ": " << (result.methods.size() > 1 ? m.name + ": " : std::string())
+                      << m.message << "\n";
     return result.exit_code();
 }
 

@@ -159,4 +159,44 @@ BOOST_AUTO_TEST_CASE(perturb_makes_a_reproducible_tangle_that_improve_undoes) {
     BOOST_TEST(has(bad.output, "fraction"));
 }
 
+// A batch of runs must tell which input failed: on meshes where nothing can move (every vertex on
+// the boundary), a surface the solvers do not take and a bad flag value, the message on stderr
+// names the input, and the summary carries it.
+BOOST_AUTO_TEST_CASE(improve_and_run_name_the_input_in_their_errors_and_failures) {
+    const pv::test::ScratchDir dir("cli_names_input");
+    const std::string head = "# vtk DataFile Version 3.0\nx\nASCII\nDATASET UNSTRUCTURED_GRID\n";
+    pv::test::write_file(dir / "one_tet.vtk", head + "POINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                                     "CELLS 1 5\n4 0 1 2 3\nCELL_TYPES 1\n10\n");
+    pv::test::write_file(dir / "two_tets.vtk", head + "POINTS 7 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n-1 0 0\n0 -1 0\n"
+                                                      "0 0 -1\nCELLS 2 10\n4 0 1 2 3\n4 0 4 6 5\nCELL_TYPES 2\n10\n10\n");
+    pv::test::write_file(dir / "triangles.vtk", head + "POINTS 4 double\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+                                                       "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5\n5\n");
+    pv::test::write_file(dir / "surface.vtk", head + "POINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                                     "CELLS 4 16\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\nCELL_TYPES 4\n5\n5\n5\n5\n");
+    for (const char* name : {"one_tet.vtk", "two_tets.vtk", "triangles.vtk"}) {
+        const std::string input = (dir / name).string();
+        const auto improve = run_cli("improve -q " + quoted(dir / name) + " -o " + quoted(dir / "out.vtk") + " --summary " +
+                                     quoted(dir / "s.json"));
+        const auto run = run_cli("run -q --set input.mesh=" + quoted(dir / name) + " --set output.mesh=" + quoted(dir / "out.vtk"));
+        BOOST_TEST_CONTEXT(name << ": " << improve.output << run.output) {
+            BOOST_TEST(improve.exit_code == 1);
+            BOOST_TEST(has(improve.output, "paloverde: " + input + ": 'global' failed: every vertex is fixed"));
+            BOOST_TEST(run.exit_code == 1);
+            BOOST_TEST(has(run.output, "paloverde: " + input + ": 'global' failed: every vertex is fixed"));
+            const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
+            BOOST_TEST(summary["input"].get<std::string>() == input);
+            BOOST_TEST(summary["status"].get<std::string>() == "failed");
+        }
+    }
+    // Errors, not failures: one raised while the run reads its input, one from a flag's value.
+    const std::string surface = (dir / "surface.vtk").string();
+    const auto error = run_cli("improve -q " + quoted(dir / "surface.vtk") + " -o " + quoted(dir / "out.vtk"));
+    BOOST_TEST(error.exit_code == 1);
+    BOOST_TEST(has(error.output, "paloverde: error: " + surface + ": "), error.output);
+    const std::string tet = (dir / "one_tet.vtk").string();
+    const auto usage = run_cli("improve " + quoted(dir / "one_tet.vtk") + " -o " + quoted(dir / "out.vtk") + " --iterations -4");
+    BOOST_TEST(usage.exit_code == 2);
+    BOOST_TEST(has(usage.output, "paloverde: " + tet + ": --iterations"), usage.output);
+}
+
 BOOST_AUTO_TEST_SUITE_END()
