@@ -237,10 +237,6 @@ void check_partitioned(const RunSpec& spec, int ranks, bool pieces) {
                                "mesh before splitting it, or split it in this run (input.mesh and partition.parts)");
         if (in.format != MeshFormat::FromExtension)
             throw config_error(spec, "input.format", "pieces are read by their extension: leave input.format: auto");
-        if (!spec.output.mesh.empty() && !is_pvtu(spec.output.mesh))
-            throw config_error(spec, "output.mesh",
-                               "a run from pieces has no whole mesh on one rank to write: give a .pvtu (pieces) "
-                               "or use output.pieces");
     }
     if (spec.study.size() > 1 && !spec.output.pieces.empty() && spec.output.pieces.find("{method}") == std::string::npos)
         throw config_error(spec, "output.pieces",
@@ -326,6 +322,8 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     report.from_pieces = pieces;
 
     MeshFile file;  // rank 0, when it reads and splits input.mesh: the whole mesh, for output.mesh
+    // output.mesh as one file: rank 0 writes the whole mesh, kept from the input or gathered from pieces.
+    const bool writes_whole = !spec.output.mesh.empty() && !is_pvtu(spec.output.mesh);
     DistributedMesh part;
     auto start = Clock::now();
     if (pieces) {
@@ -339,7 +337,13 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
         part = DistributedMesh::scatter(comm, rank == 0 ? &file.mesh : nullptr, distribute);
         report.partition_seconds = part.timings.partition;
         report.distribute_seconds = part.timings.distribute;
+        // The whole mesh is as large as all the parts together: rank 0 keeps it only to write it.
+        if (!writes_whole) file = MeshFile();
     }
+    // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
+    int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;
+    MPI_Bcast(&kept, 1, MPI_INT, 0, comm);
+    report.whole_mesh_on_rank_0 = pieces ? (writes_whole ? "gathered" : "never") : (kept ? "kept" : "dropped");
     report.schedule_seconds = part.timings.schedule;
     report.vertices = part.global_vertices;
     report.elements = part.global_elements;
@@ -380,6 +384,11 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
             r.mesh_written = replace_method(spec.output.mesh, method.name);
             if (is_pvtu(r.mesh_written)) {
                 part.write_pieces(r.mesh_written);
+            } else if (pieces) {
+                // No rank has the whole mesh: rank 0 builds it from the parts for this write only.
+                SimplexMesh whole;
+                together(comm, true, [&] { whole = part.gather_whole(); });
+                together(comm, rank == 0, [&] { write_mesh(r.mesh_written, whole, write); });
             } else {
                 // Every rank takes part in the gather; only rank 0 holds the whole mesh and writes it.
                 together(comm, true, [&] { part.gather_coordinates(rank == 0 ? &file.mesh : nullptr); });

@@ -364,6 +364,7 @@ std::string RunResult::report() const {
         out << std::defaultfloat << std::setprecision(3) << "parallel: " << p.ranks << (p.ranks == 1 ? " rank" : " ranks")
             << ", " << p.vertices << " vertices, " << p.elements << " elements, "
             << (p.from_pieces ? "read from pieces" : "split by rank 0") << ", " << p.exchange << " exchange\n"
+            << "  whole mesh on rank 0: " << p.whole_mesh_on_rank_0 << "\n"
             << "  seconds: read " << p.read_seconds << ", partition " << p.partition_seconds << ", distribute "
             << p.distribute_seconds << ", schedule " << p.schedule_seconds << ", solve " << p.solve_seconds << ", write "
             << p.write_seconds << "\n"
@@ -387,6 +388,7 @@ std::string RunResult::to_json() const {
         j["parallel"] = {{"ranks", p.ranks},
                          {"exchange", p.exchange},
                          {"from_pieces", p.from_pieces},
+                         {"whole_mesh_on_rank_0", p.whole_mesh_on_rank_0},
                          {"vertices", p.vertices},
                          {"elements", p.elements},
                          {"colors", p.colors},

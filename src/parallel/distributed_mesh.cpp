@@ -78,22 +78,24 @@ void on_root_or_fail_everywhere(MPI_Comm comm, int rank, Work work) {
 }
 
 // Collective: each rank's values, concatenated in rank order on rank 0, with each rank's count.
+template <class T = std::int64_t>
 struct Gathered {
-    std::vector<std::int64_t> values;
+    std::vector<T> values;
     std::vector<int> counts;
 };
-Gathered gather_to_root(MPI_Comm comm, const std::vector<std::int64_t>& mine) {
+template <class T>
+Gathered<T> gather_to_root(MPI_Comm comm, const std::vector<T>& mine) {
     int rank = 0, ranks = 1;
     MPI_Comm_rank(comm, &rank);
     MPI_Comm_size(comm, &ranks);
-    Gathered out;
+    Gathered<T> out;
     int count = static_cast<int>(mine.size());
     if (rank == 0) out.counts.resize(static_cast<std::size_t>(ranks));
     MPI_Gather(&count, 1, MPI_INT, out.counts.data(), 1, MPI_INT, 0, comm);
     std::vector<int> offsets(out.counts.size(), 0);
     for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + out.counts[p - 1];
     if (rank == 0) out.values.resize(static_cast<std::size_t>(offsets.back() + out.counts.back()));
-    MPI_Gatherv(mine.data(), count, MPI_INT64_T, out.values.data(), out.counts.data(), offsets.data(), MPI_INT64_T, 0, comm);
+    MPI_Gatherv(mine.data(), count, mpi_type<T>(), out.values.data(), out.counts.data(), offsets.data(), mpi_type<T>(), 0, comm);
     return out;
 }
 // The inverse: rank 0's values cut by `counts`, `expected` of them to each rank.
@@ -739,28 +741,21 @@ void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, con
 
 void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }
 
-void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
-    std::vector<std::int64_t> ids;
-    std::vector<double> xyz;
+// The owned vertices' global ids and coordinates (3 per vertex), in local order.
+void DistributedMesh::owned_vertices(std::vector<std::int64_t>& ids, std::vector<double>& xyz) const {
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (vertex_owner[v] == rank) {
             ids.push_back(mesh.global_ids()[v]);
             for (int c = 0; c < 3; ++c) xyz.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]);
         }
-    int count = static_cast<int>(ids.size());
-    std::vector<int> counts(rank == 0 ? ranks : 0), offsets(rank == 0 ? ranks : 0);
-    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
-    std::vector<std::int64_t> all_ids;
-    std::vector<double> all_xyz;
-    std::vector<int> counts3, offsets3;
-    if (rank == 0) {
-        for (int p = 1; p < ranks; ++p) offsets[p] = offsets[p - 1] + counts[p - 1];
-        all_ids.resize(static_cast<std::size_t>(offsets.back() + counts.back()));
-        all_xyz.resize(3 * all_ids.size());
-        for (int p = 0; p < ranks; ++p) counts3.push_back(3 * counts[p]), offsets3.push_back(3 * offsets[p]);
-    }
-    MPI_Gatherv(ids.data(), count, MPI_INT64_T, all_ids.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, comm);
-    MPI_Gatherv(xyz.data(), 3 * count, MPI_DOUBLE, all_xyz.data(), counts3.data(), offsets3.data(), MPI_DOUBLE, 0, comm);
+}
+
+void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
+    std::vector<std::int64_t> ids;
+    std::vector<double> xyz;
+    owned_vertices(ids, xyz);
+    const auto all_ids = gather_to_root(comm, ids).values;
+    const auto all_xyz = gather_to_root(comm, xyz).values;
     if (rank != 0) return;
     if (!whole || static_cast<GlobalId>(whole->num_vertices()) != global_vertices ||
         all_ids.size() != static_cast<std::size_t>(global_vertices))
@@ -770,6 +765,53 @@ void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
         const VertexId v = original_vertex_[static_cast<std::size_t>(all_ids[i])];
         for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(v) + c] = all_xyz[3 * i + c];
     }
+}
+
+SimplexMesh DistributedMesh::gather_whole() const {
+    // Vertices first, their buffers freed before the elements come: rank 0 holds the gathered
+    // arrays of one kind at a time next to the mesh it builds.
+    std::vector<double> coordinates;
+    std::vector<std::uint8_t> fixed;
+    {
+        std::vector<std::int64_t> ids;
+        std::vector<double> xyz;
+        owned_vertices(ids, xyz);
+        std::vector<std::int64_t> flags;  // int64 rather than bytes: one gather helper for both
+        for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+            if (vertex_owner[v] == rank) flags.push_back(mesh.fixed()[v]);
+        const auto all_ids = gather_to_root(comm, ids).values;
+        const auto all_flags = gather_to_root(comm, flags).values;
+        const auto all_xyz = gather_to_root(comm, xyz).values;
+        if (rank == 0) {
+            coordinates.resize(3 * static_cast<std::size_t>(global_vertices));
+            fixed.resize(static_cast<std::size_t>(global_vertices));
+            for (std::size_t i = 0; i < all_ids.size(); ++i) {
+                const auto g = static_cast<std::size_t>(all_ids[i]);
+                std::copy_n(all_xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i), 3, coordinates.begin() + 3 * static_cast<std::ptrdiff_t>(g));
+                fixed[g] = static_cast<std::uint8_t>(all_flags[i]);
+            }
+        }
+    }
+    // Each element once, from the rank that counts it: its canonical position, then its corners' ids.
+    const int k = mesh.corners();
+    std::vector<std::int64_t> records;
+    for (ElementId e = 0; e < mesh.num_elements(); ++e)
+        if (counted[e]) {
+            records.push_back(element_order[e]);
+            for (VertexId v : mesh.element(e)) records.push_back(mesh.global_ids()[v]);
+        }
+    auto all_records = gather_to_root(comm, records).values;
+    std::vector<std::int64_t>().swap(records);
+    if (rank != 0) return {};
+    std::vector<VertexId> connectivity(static_cast<std::size_t>(global_elements) * static_cast<std::size_t>(k));
+    for (std::size_t at = 0; at < all_records.size(); at += static_cast<std::size_t>(k) + 1) {
+        const auto position = static_cast<std::size_t>(all_records[at]) * static_cast<std::size_t>(k);
+        for (int c = 0; c < k; ++c) connectivity[position + static_cast<std::size_t>(c)] = static_cast<VertexId>(all_records[at + 1 + c]);
+    }
+    std::vector<std::int64_t>().swap(all_records);  // before the mesh builds its adjacency
+    SimplexMesh whole(mesh.kind(), std::move(coordinates), std::move(connectivity));
+    whole.set_fixed(std::move(fixed));
+    return whole;
 }
 
 std::int64_t DistributedMesh::received_vertices() const {

@@ -18,6 +18,7 @@
 #include "paloverde/config/config.hpp"
 #include "paloverde/config/run.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
@@ -76,6 +77,36 @@ std::vector<std::string> step_labels(const cfg::MethodResult& m) {
     for (const auto& s : m.queue.steps)
         labels.push_back(s.label + (std::holds_alternative<pv::QualityReport>(s.outcome) ? ":assess" : ":improve"));
     return labels;
+}
+
+// A mesh gathered from pieces against the serial result: the pieces number the vertices in the
+// canonical order (reverse Cuthill-McKee of the input), so gathered vertex i is the serial mesh's
+// vertex old_vertex[i]. The largest coordinate difference; every element must match too.
+double gathered_difference(const std::filesystem::path& input, const std::filesystem::path& serial,
+                           const std::filesystem::path& gathered) {
+    const auto order = pv::locality_order(pv::read_mesh(input).mesh);
+    const auto s = pv::read_mesh(serial).mesh, g = pv::read_mesh(gathered).mesh;
+    BOOST_REQUIRE(g.num_vertices() == s.num_vertices());
+    BOOST_REQUIRE(g.num_elements() == s.num_elements());
+    double difference = 0.0;
+    for (pv::VertexId v = 0; v < g.num_vertices(); ++v) {
+        const auto o = static_cast<std::size_t>(order.old_vertex[static_cast<std::size_t>(v)]);
+        BOOST_TEST(g.fixed()[v] == s.fixed()[o]);
+        for (std::size_t c = 0; c < 3; ++c)
+            difference = std::max(difference, std::abs(g.coordinates()[3 * static_cast<std::size_t>(v) + c] - s.coordinates()[3 * o + c]));
+    }
+    const auto elements = [](const pv::SimplexMesh& m, std::span<const pv::VertexId> map) {
+        std::vector<std::array<pv::VertexId, 4>> keys;
+        for (pv::ElementId e = 0; e < m.num_elements(); ++e) {
+            std::array<pv::VertexId, 4> key{-1, -1, -1, -1};
+            for (int c = 0; c < m.corners(); ++c) key[c] = map.empty() ? m.element(e)[c] : map[m.element(e)[c]];
+            keys.push_back(key);
+        }
+        std::sort(keys.begin(), keys.end());
+        return keys;
+    };
+    BOOST_TEST((elements(g, order.old_vertex) == elements(s, {})));
+    return difference;
 }
 
 std::size_t lines_of(const std::string& text) { return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')); }
@@ -198,6 +229,38 @@ BOOST_AUTO_TEST_CASE(a_run_from_pieces) {
     }
 }
 
+// Rank 0 holds the whole mesh only to write output.mesh as one file: kept from the input, or,
+// from pieces, gathered for the write (the serial mesh, in the pieces' numbering).
+BOOST_AUTO_TEST_CASE(rank_0_holds_the_whole_mesh_only_to_write_it) {
+    const pv::test::ScratchDir dir("partitioned_whole");
+    const std::string queue = "threads: 1\nqueue: untangle_then_improve\n";
+    const auto serial = cfg::run(cfg::parse_config("input: {mesh: " + tangled().string() + "}\n" + queue +
+                                                       "output: {mesh: " + (dir / "serial.vtu").string() + "}\n", "run.yaml"));
+    BOOST_TEST_REQUIRE(serial.exit_code() == 0);
+    pv::DistributedMesh::write_partitioned(pv::read_mesh(tangled()).mesh, 1, dir / "in.pvtu");
+    struct Case {
+        std::string input, output, holds;
+    };
+    for (const Case& c : {Case{"mesh: " + tangled().string(), "mesh: " + (dir / "kept.vtu").string(), "kept"},
+                          Case{"mesh: " + tangled().string(), "mesh: " + (dir / "dropped.pvtu").string(), "dropped"},
+                          Case{"mesh: " + tangled().string(), "summary: " + (dir / "s.json").string(), "dropped"},
+                          Case{"pieces: [" + (dir / "in.pvtu").string() + "]", "mesh: " + (dir / "gathered.vtk").string(), "gathered"},
+                          Case{"mesh: " + (dir / "in.pvtu").string(), "history: " + (dir / "h.csv").string(), "never"}}) {
+        BOOST_TEST_CONTEXT(c.input << ", " << c.output) {
+            // output.pieces makes each a partitioned run (of one rank, in this process).
+            const auto result = cfg::run(cfg::parse_config("input: {" + c.input + "}\n" + queue + "output: {" + c.output +
+                                                               ", pieces: " + (dir / "p.pvtu").string() + "}\n", "run.yaml"));
+            BOOST_TEST(result.exit_code() == 0);
+            BOOST_REQUIRE(result.parallel.has_value());
+            BOOST_TEST(result.parallel->whole_mesh_on_rank_0 == c.holds);
+            BOOST_TEST(has(result.to_json(), "\"whole_mesh_on_rank_0\": \"" + c.holds + "\""));
+            BOOST_TEST(result.methods[0].worst_after == serial.methods[0].worst_after, boost::test_tools::tolerance(1e-10));
+        }
+    }
+    BOOST_TEST(relative_difference(dir / "serial.vtu", dir / "kept.vtu") <= 1e-10);
+    BOOST_TEST(gathered_difference(tangled(), dir / "serial.vtu", dir / "gathered.vtk") <= 1e-10);
+}
+
 BOOST_AUTO_TEST_CASE(what_a_partitioned_run_cannot_do_is_named_before_reading) {
     struct Case {
         std::string yaml, key, where, words;
@@ -215,8 +278,7 @@ BOOST_AUTO_TEST_CASE(what_a_partitioned_run_cannot_do_is_named_before_reading) {
           Case{"input:\n  pieces: [a.vtu, b.vtu]\n", "input.pieces", "run.yaml:2:11", "mpirun -n 2"},
           Case{"input:\n  pieces: [a.pvtu, b.vtu]\n", "input.pieces", "run.yaml:2:11", "lists its pieces itself"},
           Case{"input:\n  pieces: [a.vtu]\n  fixed: boundary\n", "input.fixed", "run.yaml:3:10", "own `fixed` field"},
-          Case{"input:\n  pieces: [a.vtu]\n  fixed_vertices: [3]\n", "input.fixed_vertices", "run.yaml:3:19", "pieces"},
-          Case{"input: {pieces: [a.vtu]}\noutput:\n  mesh: out.vtk\n", "output.mesh", "run.yaml:3:9", ".pvtu"}}) {
+          Case{"input:\n  pieces: [a.vtu]\n  fixed_vertices: [3]\n", "input.fixed_vertices", "run.yaml:3:19", "pieces"}}) {
         BOOST_TEST_CONTEXT(c.yaml) {
             try {
                 cfg::run(cfg::parse_config(c.yaml, "run.yaml"));
@@ -380,6 +442,34 @@ BOOST_AUTO_TEST_CASE(mpirun_local_and_pieces_give_the_one_rank_result) {
     BOOST_TEST(b["worst_after"].get<double>() == a["worst_after"].get<double>(), boost::test_tools::tolerance(1e-10));
     for (int p = 0; p < ranks; ++p)
         BOOST_TEST(std::filesystem::exists(dir / "out" / ("out_" + std::to_string(p) + ".vtu")), p);
+}
+
+// `mpirun -n N paloverde improve PIECES.pvtu -o whole.vtk`: rank 0 gathers the improved parts
+// into one file, the serial result in the pieces' numbering. A run that splits input.mesh and
+// writes pieces drops the whole mesh on rank 0 after the scatter.
+BOOST_AUTO_TEST_CASE(mpirun_improve_from_pieces_writes_one_file) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_gather_np" + std::to_string(ranks));
+    const auto tire = pv::test::shared_data("mesquite/tets/tire.vtk");
+    const auto split = run_cli("partition " + quoted(tire) + " -n " + std::to_string(ranks) + " -o " + quoted(dir / "in.pvtu"));
+    BOOST_TEST_REQUIRE(split.exit_code == 0, split.output);
+    const std::string options = " -q --iterations 10 --threads 1";
+    const auto serial = run_cli("improve " + quoted(tire) + " -o " + quoted(dir / "serial.vtk") + options);
+    BOOST_TEST_REQUIRE(serial.exit_code == 0, serial.output);
+    const auto gathered = mpirun_cli(dir, "improve " + quoted(dir / "in.pvtu") + " -o " + quoted(dir / "whole.vtk") + options +
+                                              " --summary " + quoted(dir / "s.json"));
+    BOOST_TEST_INFO(gathered.err);
+    BOOST_TEST(gathered.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    // The global solver moves every vertex the same on any number of ranks.
+    BOOST_TEST(gathered_difference(tire, dir / "serial.vtk", dir / "whole.vtk") == 0.0);
+    const auto summary = nlohmann::json::parse(pv::test::read_text(dir / "s.json"));
+    BOOST_TEST(summary["parallel"]["from_pieces"].get<bool>());
+    BOOST_TEST(summary["parallel"]["whole_mesh_on_rank_0"].get<std::string>() == "gathered");
+    BOOST_TEST(summary["input"].get<std::string>() == (dir / "in.pvtu").string());
+
+    const auto dropped = mpirun_cli(dir, "improve " + quoted(tire) + " -o " + quoted(dir / "out.pvtu") + options + " --json");
+    BOOST_TEST(dropped.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(nlohmann::json::parse(dropped.out)["parallel"]["whole_mesh_on_rank_0"].get<std::string>() == "dropped");
 }
 
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {

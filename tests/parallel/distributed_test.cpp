@@ -4,6 +4,7 @@
 
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <string>
@@ -12,6 +13,7 @@
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/parallel/distributed_run.hpp"
 #include "paloverde/parallel/partition.hpp"
@@ -219,6 +221,39 @@ BOOST_AUTO_TEST_CASE(global_solver_hands_the_part_back_in_its_element_order) {
     BOOST_TEST((std::vector<pv::VertexId>(part.mesh.connectivity().begin(), part.mesh.connectivity().end()) == connectivity));
     BOOST_TEST((part.element_order == element_order));
     BOOST_TEST((part.counted == counted));
+}
+
+// gather_whole() builds on rank 0 the mesh no rank holds in a run from pieces: every vertex once,
+// at its global id, with its owner's coordinates and flag; every element once.
+BOOST_AUTO_TEST_CASE(gather_whole_builds_the_whole_mesh_in_the_canonical_order) {
+    pv::SimplexMesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    auto part = scatter(input);
+    // Moved on their owners, so that a ghost's stale copy would show.
+    for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v)
+        if (part.vertex_owner[v] == rank()) part.mesh.coordinates()[3 * static_cast<std::size_t>(v)] += 0.25;
+    const pv::SimplexMesh whole = part.gather_whole();
+    if (rank() != 0) {
+        BOOST_TEST(whole.num_vertices() == 0);
+        return;
+    }
+    const auto order = pv::locality_order(input);
+    BOOST_REQUIRE(whole.num_vertices() == input.num_vertices());
+    BOOST_REQUIRE(whole.num_elements() == input.num_elements());
+    for (pv::VertexId v = 0; v < whole.num_vertices(); ++v) {
+        const auto o = static_cast<std::size_t>(order.old_vertex[static_cast<std::size_t>(v)]);
+        BOOST_TEST(whole.coordinates()[3 * static_cast<std::size_t>(v)] == input.coordinates()[3 * o] + 0.25);
+        BOOST_TEST(whole.coordinates()[3 * static_cast<std::size_t>(v) + 2] == input.coordinates()[3 * o + 2]);
+        BOOST_TEST(whole.fixed()[v] == input.fixed()[o]);
+    }
+    std::vector<std::array<pv::VertexId, 4>> a, b;
+    for (pv::ElementId e = 0; e < input.num_elements(); ++e) {
+        std::array<pv::VertexId, 4> x{}, y{};
+        for (int c = 0; c < 4; ++c) x[c] = order.old_vertex[whole.element(e)[c]], y[c] = input.element(e)[c];
+        std::sort(x.begin(), x.end()), std::sort(y.begin(), y.end());
+        a.push_back(x), b.push_back(y);
+    }
+    std::sort(a.begin(), a.end()), std::sort(b.begin(), b.end());
+    BOOST_TEST((a == b));
 }
 
 BOOST_AUTO_TEST_CASE(more_ranks_than_vertices_is_an_error_on_every_rank) {

@@ -54,6 +54,10 @@ struct ParallelReport {
     std::int64_t ghost_copies = 0;  // ghost values received per exchange, summed over ranks
     std::int64_t messages = 0;      // point-to-point messages per exchange, summed over ranks
     int colors = 0;                 // rounds of the colored exchange
+    // Rank 0 and the whole mesh: "kept" (read from input.mesh and kept through the run, to write
+    // output.mesh as one file), "dropped" (read, then dropped after the scatter), "gathered"
+    // (from pieces: built from the parts only to write output.mesh), "never" (from pieces).
+    std::string whole_mesh_on_rank_0;
 };
 
 struct RunResult {

@@ -77,6 +77,12 @@ public:
     // Collective: rank 0 passes the mesh it gave to scatter(), whose coordinates become the
     // owners' current ones; the other ranks pass nullptr.
     void gather_coordinates(SimplexMesh* whole) const;
+    // Collective: rank 0 gets the whole mesh built from the parts (for runs from pieces, where no
+    // rank has it), the other ranks an empty mesh. Vertices come in global id order, elements in
+    // their canonical order, with the current coordinates and the fixed flags. Rank 0 holds the
+    // whole mesh and, while it builds it, the gathered values of either the vertices (40 bytes
+    // each) or the elements (8 bytes per corner, plus 8).
+    SimplexMesh gather_whole() const;
 
     // Collective: refreshes ghost coordinates from their owners.
     void update_ghost_coordinates();
@@ -110,6 +116,7 @@ private:
     // Builds the part from its arrays (an internal type), then the schedule and the reductions.
     void assemble(void* arrays, ElementKind kind, ExchangeMode mode);
     void build_schedule(ExchangeMode mode);
+    void owned_vertices(std::vector<std::int64_t>& ids, std::vector<double>& xyz) const;
     std::unique_ptr<ExchangeSchedule> schedule_;
     std::unique_ptr<Reducer> reducer_;
     std::unique_ptr<Halo> halo_;
