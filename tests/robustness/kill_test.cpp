@@ -123,7 +123,8 @@ void check_stopped_improve(ChildProcess& child, const fs::path& dir) {
 
 }  // namespace
 
-BOOST_AUTO_TEST_SUITE(killed)
+// Run by the CTest entry `robustness_killed` (--run_test=killed), not by `robustness`.
+BOOST_AUTO_TEST_SUITE(killed, *boost::unit_test::disabled())
 
 // SIGTERM to `paloverde improve`: it stops at the next iteration, writes its best mesh and the
 // summary, and exits with 4.
