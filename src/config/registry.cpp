@@ -217,6 +217,10 @@ Tables::Tables() {
                 "Search direction of each step.")
         .flag("untangle", &GlobalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
         .flag("improve_shape", &GlobalSolverOptions::improve_shape, "Run the shape phase (false: stop once untangled).")
+        .choice("untangling", &GlobalSolverOptions::untangling,
+                {{"energy", GlobalSolverOptions::Untangling::Energy}, {"barrier", GlobalSolverOptions::Untangling::Barrier}},
+                "How to untangle: energy (the regularized energy, then the barrier ascent where elements stay inverted) "
+                "or barrier (the barrier ascent on the hybrid metric alone).")
         .object("termination", &GlobalSolverOptions::termination, termination, "When the shape phase stops.")
         .object("untangle_termination", &GlobalSolverOptions::untangle_termination, termination, "When untangling stops.")
         .flag("precondition_untangling", &GlobalSolverOptions::precondition_untangling,
@@ -317,7 +321,7 @@ Tables::Tables() {
     wrappers.push_back({"shape_improvement",
                         "Assess, raise the worst element of a valid mesh with the global log-barrier solver, assess.",
                         "global", &global_kind,
-                        {{"untangle", "improve_shape", "untangle_termination", "precondition_untangling", "local_untangle_rounds"},
+                        {{"untangle", "improve_shape", "untangling", "untangle_termination", "precondition_untangling", "local_untangle_rounds"},
                          "shape_improvement does not untangle (untangle_then_improve does)"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::shape_improvement(options_as<GlobalSolverOptions>(o, "shape_improvement")); },

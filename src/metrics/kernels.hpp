@@ -213,6 +213,55 @@ struct UntangleHybrid {
     }
 };
 
+// The regularized untangling energy of Garanzha, Kaporin, Kudryavtseva, Protais, Ray & Sokolov
+// (foldover-free maps, 2021), negated so that larger is better. With J the Jacobian of the map
+// from the regular element of the element's reference volume to the element, d its dimension,
+// v = det J (the scale-free signed volume) and chi(v, eps) = (v + sqrt(eps^2 + v^2)) / 2 > 0,
+//   f = (1 - theta) (|J|^2 / d) / chi^(2/d) + theta (v^2 + 1) / (2 chi),
+// which is 1 for the reference element as eps -> 0. chi is positive for every v, so the energy is
+// finite on tangled meshes too; as eps shrinks it becomes a barrier against inversion. |J|^2
+// comes from the squared edge lengths L: L / (4 (3 V0)^(2/3)) for a tet, L / (2 sqrt(3) A0) for
+// a triangle.
+struct RegularizedEnergy {
+    static constexpr std::string_view name = "untangle_energy";
+    static constexpr double ideal = -1.0;
+    double epsilon = 1.0;
+    double theta = 1.0 / 128.0;
+
+    // -f and its gradient from the volume and the squared edge sum (and their corner gradients).
+    template <int D>
+    double energy(double volume, double edge_sum, const P* dvolume, const P* dedge_sum, double* g,
+                  const MetricScale& s) const {
+        constexpr int corners = D + 1;
+        const double v0 = s.reference_volume;
+        const double v = volume / v0;
+        const double shape_scale = D == 3 ? 1.0 / (12.0 * std::cbrt(9.0 * v0 * v0)) : 1.0 / (4.0 * std::numbers::sqrt3 * v0);
+        const double shape = edge_sum * shape_scale;  // |J|^2 / d
+        const double r = std::sqrt(epsilon * epsilon + v * v);
+        // (v + r)(r - v) = eps^2: the second form keeps its digits where v is very negative.
+        const double chi = v >= 0.0 ? 0.5 * (v + r) : 0.5 * epsilon * epsilon / (r - v);
+        const double chi_power = D == 3 ? std::cbrt(chi) * std::cbrt(chi) : chi;  // chi^(2/d)
+        const double f1 = shape / chi_power;
+        const double f2 = 0.5 * (v * v + 1.0) / chi;
+        if (g) {
+            // d chi / dv = chi / r.
+            const double df_dv = -(1.0 - theta) * (2.0 / D) * f1 / r + theta * (v / chi - f2 / r);
+            const double df_dshape = (1.0 - theta) / chi_power;
+            for (int i = 0; i < corners; ++i)
+                store(g, i, (-df_dv / v0) * dvolume[i] - (df_dshape * shape_scale) * dedge_sum[i]);
+        }
+        return -((1.0 - theta) * f1 + theta * f2);
+    }
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        const TetGeometry t(x);
+        return energy<3>(t.volume, t.edge_sum, t.dvolume, t.dedge_sum, g, s);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        return energy<2>(t.area, t.edge_sum, t.darea, t.dedge_sum, g, s);
+    }
+};
+
 // Smallest dihedral angle of a tetrahedron in degrees (70.53 for the regular tet), negative for
 // an inverted one. Assessment only.
 struct MinDihedralAngle {

@@ -7,8 +7,10 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/solvers/stop.hpp"
 
 namespace paloverde::detail {
 
@@ -292,6 +294,20 @@ void Workspace::copy_back(std::span<const double> xyz, SimplexMesh& original) co
 
 void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) const {
     std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
+}
+
+bool untangled(const Workspace& work, std::span<const double> xyz) {
+    double tangled = 0.0;
+    for (ElementId e = 0; e < work.movable_elements() && tangled == 0.0; ++e)
+        if (element_orientation(work.mesh(), xyz, e) <= 0) tangled = 1.0;
+    return work.reducer().max(tangled) == 0.0;
+}
+
+bool stop_requested_anywhere(const Workspace& work) { return work.reducer().max(stop_requested() ? 1.0 : 0.0) > 0.0; }
+
+std::string interrupted_after(int iterations) {
+    return "interrupted (a stop was requested) after " + std::to_string(iterations) +
+           " iterations; the best iterate is handed back";
 }
 
 }  // namespace paloverde::detail

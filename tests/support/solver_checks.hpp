@@ -16,12 +16,12 @@ namespace paloverde::test {
 
 inline SimplexMesh shared_mesh(const std::string& name) { return read_mesh(shared_data(name)).mesh; }
 
-// A shared mesh with `fraction` of its interior vertices moved by up to one local edge length;
-// requires that it came out tangled.
-inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed) {
+// A shared mesh with `fraction` of its interior vertices moved by up to `amount` local edge
+// lengths; requires that it came out tangled.
+inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed, double amount = 1.0) {
     auto mesh = shared_mesh(name);
     PerturbOptions perturb;
-    perturb.amount = 1.0;
+    perturb.amount = amount;
     perturb.fraction = fraction;
     perturb.seed = static_cast<std::uint64_t>(seed);
     paloverde::perturb(mesh, perturb);
