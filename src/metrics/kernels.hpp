@@ -235,20 +235,19 @@ struct RegularizedEnergy {
         constexpr int corners = D + 1;
         const double v0 = s.reference_volume;
         const double v = volume / v0;
-        const double shape_scale = D == 3 ? 1.0 / (12.0 * std::cbrt(9.0 * v0 * v0)) : 1.0 / (4.0 * std::numbers::sqrt3 * v0);
-        const double shape = edge_sum * shape_scale;  // |J|^2 / d
         const double r = std::sqrt(epsilon * epsilon + v * v);
         // (v + r)(r - v) = eps^2: the second form keeps its digits where v is very negative.
         const double chi = v >= 0.0 ? 0.5 * (v + r) : 0.5 * epsilon * epsilon / (r - v);
-        const double chi_power = D == 3 ? std::cbrt(chi) * std::cbrt(chi) : chi;  // chi^(2/d)
-        const double f1 = shape / chi_power;
+        // f1 = (|J|^2 / d) / chi^(2/d) = edge_sum * per_edge_sum, with one cube root for tets.
+        const double per_edge_sum = D == 3 ? 1.0 / (12.0 * std::cbrt(9.0 * (v0 * chi) * (v0 * chi)))
+                                           : 1.0 / (4.0 * std::numbers::sqrt3 * v0 * chi);
+        const double f1 = edge_sum * per_edge_sum;
         const double f2 = 0.5 * (v * v + 1.0) / chi;
         if (g) {
             // d chi / dv = chi / r.
             const double df_dv = -(1.0 - theta) * (2.0 / D) * f1 / r + theta * (v / chi - f2 / r);
-            const double df_dshape = (1.0 - theta) / chi_power;
             for (int i = 0; i < corners; ++i)
-                store(g, i, (-df_dv / v0) * dvolume[i] - (df_dshape * shape_scale) * dedge_sum[i]);
+                store(g, i, (-df_dv / v0) * dvolume[i] - ((1.0 - theta) * per_edge_sum) * dedge_sum[i]);
         }
         return -((1.0 - theta) * f1 + theta * f2);
     }

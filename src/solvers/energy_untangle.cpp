@@ -70,11 +70,7 @@ private:
     double energy(const QualityMetric& metric, std::span<const double> x);
     // The energy's gradient (the metric is its negative, so the sign flips).
     void energy_gradient(const QualityMetric& metric, std::span<const double> x, std::vector<double>& g);
-    double dot(const std::vector<double>& a, const std::vector<double>& b) const {
-        return owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
-            acc[0].add(a[3 * v] * b[3 * v] + a[3 * v + 1] * b[3 * v + 1] + a[3 * v + 2] * b[3 * v + 2]);
-        })[0];
-    }
+    double dot(const std::vector<double>& a, const std::vector<double>& b) const { return owned_dot(work_, a, b); }
     double largest_move(const std::vector<double>& d) const;
     void record(const Volumes& now, const Volumes& best, double epsilon, double energy, double step, double gain);
     bool untangled() const { return detail::untangled(work_, x_); }

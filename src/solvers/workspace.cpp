@@ -296,6 +296,20 @@ void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) co
     std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
 }
 
+double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
+    const auto owned = work.owned();
+    auto term = [&](std::size_t v) { return a[3 * v] * b[3 * v] + a[3 * v + 1] * b[3 * v + 1] + a[3 * v + 2] * b[3 * v + 2]; };
+    double largest = 0.0;
+    for (std::size_t v = 0; v < owned.size(); ++v)
+        if (owned[v]) largest = std::max(largest, std::abs(term(v)));
+    largest = work.reducer().max(largest);
+    auto sums = bounded_sums<1>(owned.size(), {largest}, [&](std::size_t v, auto& acc) {
+        if (owned[v]) acc[0].add(term(v));
+    });
+    work.reducer().sum(sums);
+    return sums[0].value();
+}
+
 bool untangled(const Workspace& work, std::span<const double> xyz) {
     double tangled = 0.0;
     for (ElementId e = 0; e < work.movable_elements() && tangled == 0.0; ++e)

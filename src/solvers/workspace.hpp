@@ -123,6 +123,11 @@ std::array<double, K> owned_sums(const Workspace& work, Term term) {
     return out;
 }
 
+// The dot product of two vertex fields (3 doubles per vertex) over the owned vertices of all
+// processes: bounded sums (core/exact_sums.hpp) under the largest term, the same bits for any
+// number of threads and processes, with additions only (faster than owned_sums' ExactSum).
+double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b);
+
 // Every movable element is positively oriented (decided exactly), over all processes.
 bool untangled(const Workspace& work, std::span<const double> xyz);
 // A stop was requested (stop.hpp) on any process: every process stops at the same iteration.
