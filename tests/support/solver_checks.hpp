@@ -14,7 +14,11 @@
 
 namespace paloverde::test {
 
-inline SimplexMesh shared_mesh(const std::string& name) { return read_mesh(shared_data(name)).mesh; }
+inline SimplexMesh shared_mesh(const std::string& name, OrientationMode orientation = OrientationMode::Auto) {
+    ReadOptions read;
+    read.orientation = orientation;
+    return read_mesh(shared_data(name), read).mesh;
+}
 
 // A shared mesh with `fraction` of its interior vertices moved by up to one local edge length;
 // requires that it came out tangled.
