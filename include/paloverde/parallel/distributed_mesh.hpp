@@ -45,7 +45,8 @@ struct ExchangeSchedule {
 struct DistributeOptions {
     ExchangeMode exchange = ExchangeMode::Colored;
     // read_pieces: the pieces' orientation convention, decided over all of them together (one
-    // total signed volume, summed across ranks), so that every rank flips alike.
+    // total signed volume, summed across ranks), so that every rank flips alike. (A whole file
+    // read by improve_distributed is read with it too.)
     OrientationMode orientation = OrientationMode::Auto;
     void validate() const {}
 };
