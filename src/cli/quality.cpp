@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/config/run.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/io/mesh_io.hpp"
 
@@ -35,8 +36,7 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         const QualityReport report = QualityAssessor().assess(file.mesh);
         const OrientationDecision& o = file.orientation;
         nlohmann::json json = nlohmann::json::parse(report.to_json());
-        json["input_orientation"] = {{"mode", std::string(to_string(o.mode))}, {"flipped", o.flipped},
-                                     {"oriented", o.oriented}, {"sign", o.sign}, {"share", o.share}};
+        json["input_orientation"] = nlohmann::json::parse(config::to_json(o));
         if (options->json) std::cout << json.dump(2) << "\n";
         else
             std::cout << options->mesh << ": " << to_string(file.mesh.kind()) << " mesh; "

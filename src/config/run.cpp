@@ -282,6 +282,15 @@ detail::PlotSeries series_of(const MethodResult& m) {
 
 }  // namespace
 
+std::string to_json(const OrientationDecision& o) {
+    return nlohmann::json{{"mode", std::string(to_string(o.mode))},
+                          {"flipped", o.flipped},
+                          {"oriented", o.oriented},
+                          {"sign", o.sign},
+                          {"share", o.share}}
+        .dump();
+}
+
 InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) { return build(steps, threads).queue; }
 
 RunResult run(const RunSpec& spec, const RunHooks& hooks) {
@@ -380,12 +389,7 @@ std::string RunResult::report() const {
 std::string RunResult::to_json() const {
     using nlohmann::json;
     json j{{"input", input},
-           {"input_orientation",
-            {{"mode", std::string(to_string(orientation.mode))},
-             {"flipped", orientation.flipped},
-             {"oriented", orientation.oriented},
-             {"sign", orientation.sign},
-             {"share", orientation.share}}},
+           {"input_orientation", json::parse(config::to_json(orientation))},
            {"status", std::string(to_string(status))},
            {"exit_code", exit_code()}};
     json list = json::array();

@@ -51,10 +51,6 @@ OrientationCounts count_orientations(const SimplexMesh& mesh, std::span<const do
     return counts;
 }
 
-}  // namespace paloverde
-
-namespace paloverde {
-
 std::string_view to_string(OrientationMode mode) {
     switch (mode) {
         case OrientationMode::Auto: return "auto";

@@ -85,6 +85,10 @@ struct RunHooks {
     std::function<void(const MethodResult&)> on_method_done;
 };
 
+// How the input's element order was taken, as the summary's "input_orientation" object (JSON
+// text): mode, flipped, oriented, sign, share. `paloverde quality --json` prints the same.
+std::string to_json(const OrientationDecision& orientation);
+
 // The queue the steps describe; each solver uses `threads`.
 InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);
 
