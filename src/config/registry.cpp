@@ -237,6 +237,7 @@ Tables::Tables() {
     local.add(metric_field(&LocalSolverOptions::metric, &LocalSolverOptions::metric_options,
                            "Shape metric whose minimum over each vertex's elements is raised (one with a gradient)."))
         .flag("untangle", &LocalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
+        .flag("improve_shape", &LocalSolverOptions::improve_shape, "Run the shape sweeps (false: stop once untangled).")
         .object("termination", &LocalSolverOptions::termination, termination, "When the shape sweeps stop.")
         .object("untangle_termination", &LocalSolverOptions::untangle_termination, termination, "When untangling stops.")
         .choice("coloring", &LocalSolverOptions::coloring,
@@ -288,7 +289,10 @@ Tables::Tables() {
                        {},
                        [] { return SolverOptions(LocalSolverOptions{}); },
                        [](const SolverOptions& o) { return std::make_unique<LocalSolver>(options_as<LocalSolverOptions>(o, "local")); },
-                       [shape_target](const SolverOptions& o) { return shape_target(std::get<LocalSolverOptions>(o).termination); }});
+                       [shape_target](const SolverOptions& o) {
+                           const auto& l = std::get<LocalSolverOptions>(o);
+                           return l.improve_shape ? shape_target(l.termination) : std::nullopt;
+                       }});
     const Skip smart_by_name{{"smart"}, "the name decides it: smart_laplace is smart Laplace, laplace is plain Laplace"};
     for (const bool smart : {true, false}) {
         const std::string name = smart ? "smart_laplace" : "laplace";
@@ -327,7 +331,10 @@ Tables::Tables() {
                         [](const SolverOptions& o) { return wrappers::shape_improvement(options_as<GlobalSolverOptions>(o, "shape_improvement")); },
                         [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<GlobalSolverOptions>(o).termination)}; }});
     wrappers.push_back({"local_shape_improvement", "Assess, improve with the local smoother (which untangles first), assess.",
-                        "local", &local_kind, {},
+                        "local", &local_kind,
+                        {{"improve_shape"},
+                         "local_shape_improvement improves the shape; to stop once untangled, use an improve step "
+                         "(name: local, improve_shape: false)"},
                         [] { return SolverOptions(LocalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::local_shape_improvement(options_as<LocalSolverOptions>(o, "local_shape_improvement")); },
                         [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LocalSolverOptions>(o).termination)}; }});
@@ -357,7 +364,12 @@ Tables::Tables() {
     };
     global.hint(owner_hint);
     local.hint(owner_hint);
-    laplace.hint(owner_hint);
+    laplace.hint([owner_hint](const std::string& key) {
+        std::string hint = owner_hint(key);
+        if (key == "untangle" || key == "improve_shape" || key == "untangle_termination")
+            hint += std::string(hint.empty() ? "" : "; ") + "Laplace smoothing does not untangle: untangle with global or local";
+        return hint;
+    });
 }
 
 const Tables& tables() {
@@ -396,6 +408,17 @@ const WrapperKind* find_wrapper(const std::string& name) {
 }
 
 const Skip& untangle_skip() { return tables().untangle; }
+
+void untangle_only(SolverOptions& options) {
+    std::visit(
+        [](auto& o) {
+            if constexpr (requires { o.improve_shape; }) {
+                o.untangle = true;
+                o.improve_shape = false;
+            }
+        },
+        options);
+}
 const Table<AssessSpec>& assess_table() { return tables().assess; }
 
 std::string solvers_with(const std::string& key, const std::string& except) {

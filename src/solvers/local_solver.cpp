@@ -43,7 +43,7 @@ double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[
 std::string options_text(const LocalSolverOptions& o) {
     detail::OptionsText t;
     t("metric", o.metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)("untangle", o.untangle)
-        ("termination", o.termination)("untangle_termination", o.untangle_termination)
+        ("improve_shape", o.improve_shape)("termination", o.termination)("untangle_termination", o.untangle_termination)
         ("coloring", o.coloring == ColoringOrder::SmallestLast ? "smallest_last" : "greedy")
         ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below);
     return t.text();
@@ -417,6 +417,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         }
         resume.reset();
     }
+    if (!options_.improve_shape)
+        return done(TerminationReason::TargetReached, "no element is inverted (improve_shape: false, no shape sweeps)");
 
     const TerminationCriterion& stop = options_.termination;
     if (!resume) {

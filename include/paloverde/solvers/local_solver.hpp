@@ -25,6 +25,7 @@ struct LocalSolverOptions {
     std::string metric = "aspect_ratio";
     MetricOptions metric_options;
     bool untangle = true;
+    bool improve_shape = true;         // false: stop once no element is inverted (no shape sweeps)
     TerminationCriterion termination;  // shape sweeps (an iteration is a sweep)
     TerminationCriterion untangle_termination = TerminationCriterion::for_untangling();
     ColoringOrder coloring = ColoringOrder::SmallestLast;
