@@ -252,6 +252,12 @@ struct RegularizedEnergy {
         return -((1.0 - theta) * f1 + theta * f2);
     }
     double tet(const double* x, double* g, const MetricScale& s) const {
+        if (!g) {  // the line search's passes need no corner gradients
+            P corner[4];
+            for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
+            const P e1 = corner[1] - corner[0], e2 = corner[2] - corner[0], e3 = corner[3] - corner[0];
+            return energy<3>(dot(e1, cross(e2, e3)) / 6.0, TetGeometry::tet_edge_sum(corner), nullptr, nullptr, nullptr, s);
+        }
         const TetGeometry t(x);
         return energy<3>(t.volume, t.edge_sum, t.dvolume, t.dedge_sum, g, s);
     }

@@ -17,6 +17,8 @@ constexpr double kTheta = 1.0 / 128.0;
 // Steps of limited-memory BFGS per value of eps, and the pairs it remembers.
 constexpr int kStepsPerEpsilon = 30;
 constexpr std::size_t kMemory = 7;
+// Steps without a better valid iterate that end the round after the first valid one.
+constexpr int kSettlePatience = 5;
 
 // The checkpoint's name of the k-th remembered step ('s') or gradient change ('y').
 std::string pair_field(char which, std::size_t k) {
@@ -101,6 +103,7 @@ private:
     int steps_ = 0;
     bool valid_found_ = false;        // an iterate was valid: best_ and best_x_ are the best valid one
     int rounds_valid_ = 0;            // rounds that ended with a valid iterate found
+    int since_best_ = 0;              // steps since the best iterate last changed
     Volumes now_, best_;
     std::vector<double> best_x_, g_;
     std::deque<std::vector<double>> s_history_, y_history_;
@@ -225,6 +228,7 @@ void EnergyUntangler::save(Checkpointer& checkpointer) const {
                      {"steps", steps_},
                      {"valid_found", valid_found_ ? 1.0 : 0.0},
                      {"rounds_valid", rounds_valid_},
+                     {"since_best", since_best_},
                      {"best_bad", static_cast<double>(best_.bad)},
                      {"best_worst", best_.worst},
                      {"pairs", static_cast<double>(s_history_.size())}};
@@ -249,6 +253,7 @@ void EnergyUntangler::restore(const SolverState& state) {
     steps_ = static_cast<int>(state.number("steps"));
     valid_found_ = state.number("valid_found") != 0.0;
     rounds_valid_ = static_cast<int>(state.number("rounds_valid"));
+    since_best_ = static_cast<int>(state.number("since_best"));
     best_ = {state.number("best_worst"), static_cast<long>(state.number("best_bad"))};
     start_round();
     e_start_ = state.number("energy_at_round_start");
@@ -345,18 +350,24 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
                 const double e_before = e_;
                 e_ = e_trial;
                 now_ = volumes(x_);
-                // Validity is decided exactly; among valid iterates the best has the largest
+                // Validity is decided exactly (only for an iterate that would be the best valid
+                // one: the check costs a pass); among valid iterates the best has the largest
                 // smallest volume.
-                const bool valid = now_.bad == 0 && untangled();
-                if (valid ? !valid_found_ || now_.worst > best_.worst
-                          : !valid_found_ && (now_.bad < best_.bad || (now_.bad == best_.bad && now_.worst > best_.worst))) {
+                const bool valid = now_.bad == 0 && (!valid_found_ || now_.worst > best_.worst) && untangled();
+                const bool better = valid || (!valid_found_ && (now_.bad < best_.bad ||
+                                                                (now_.bad == best_.bad && now_.worst > best_.worst)));
+                if (better) {
                     best_ = now_;
                     best_x_ = x_;
                 }
                 const bool first_valid = valid && !valid_found_;
                 valid_found_ = valid_found_ || valid;
+                since_best_ = better ? 0 : since_best_ + 1;
                 record(now_, best_, epsilon_, e_, step * move / length, e_before - e_);
-                round_over = first_valid || e_before - e_ <= 1e-6 * std::abs(e_) || inner_ == kStepsPerEpsilon;
+                // The round after the first valid iterate ends once the best has not risen for a
+                // few steps: on fandisk-2M-interior it rose in 11 steps, then not in the next 19.
+                round_over = first_valid || e_before - e_ <= 1e-6 * std::abs(e_) || inner_ == kStepsPerEpsilon ||
+                             (valid_found_ && since_best_ >= kSettlePatience);
             } else {
                 record(now_, best_, epsilon_, e_, 0.0, 0.0);
                 round_over = true;
