@@ -19,6 +19,12 @@ inline constexpr double kTriAspectScale = 4.0 * std::numbers::sqrt3;   // 1 for 
 
 inline double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
+// A tet's signed volume alone, for passes that need no gradient (TetGeometry computes them all).
+inline double tet_signed_volume(const double* x) {
+    const P a = load(x, 0), e1 = load(x, 1) - a, e2 = load(x, 2) - a, e3 = load(x, 3) - a;
+    return dot(e1, cross(e2, e3)) / 6.0;
+}
+
 // Triangles: the aspect ratio, mean ratio and inverse condition number all equal
 // 4*sqrt(3)*area / (sum of squared edges).
 inline double triangle_shape(const TriGeometry& t, double* g) {
@@ -162,6 +168,7 @@ struct EdgeRatio {
 struct ScaledVolume {
     static constexpr std::string_view name = "scaled_volume";
     double tet(const double* x, double* g, const MetricScale& s) const {
+        if (!g) return tet_signed_volume(x) / s.reference_volume;
         const TetGeometry t(x);
         const double inv = 1.0 / s.reference_volume;
         if (g)
@@ -255,11 +262,13 @@ struct RegularizedEnergy {
         if (!g) {  // the line search's passes need no corner gradients
             P corner[4];
             for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
-            const P e1 = corner[1] - corner[0], e2 = corner[2] - corner[0], e3 = corner[3] - corner[0];
-            return energy<3>(dot(e1, cross(e2, e3)) / 6.0, TetGeometry::tet_edge_sum(corner), nullptr, nullptr, nullptr, s);
+            return energy<3>(tet_signed_volume(x), TetGeometry::tet_edge_sum(corner), nullptr, nullptr, nullptr, s);
         }
         const TetGeometry t(x);
         return energy<3>(t.volume, t.edge_sum, t.dvolume, t.dedge_sum, g, s);
+    }
+    void tet_block(BlockPath path, const TetBlock& x, const double* reference_volume, double* q, TetBlock* g) const {
+        tet_energy_block(path, x, reference_volume, epsilon, theta, q, g);
     }
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);
