@@ -151,6 +151,27 @@ BOOST_AUTO_TEST_CASE(scaled_meshes_give_the_same_result) {
     }
 }
 
+// A heavy tangle (every interior vertex moved by up to 1.5 edge lengths), which the regularized
+// energy untangles: the same at 1e-4 and 1e4 (its epsilon and reference volumes are scale-free).
+BOOST_AUTO_TEST_CASE(heavy_tangles_untangle_alike_at_any_scale) {
+    const auto reference = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 21, 1.5);
+    pv::GlobalSolverOptions options;
+    options.improve_shape = false;
+    auto baseline = reference;
+    const auto base_summary = pv::GlobalSolver(options).improve(baseline);
+    BOOST_TEST_REQUIRE(base_summary.after.inverted == 0);
+    for (double scale : {1e-4, 1e4}) {
+        auto mesh = reference;
+        for (double& x : mesh.coordinates()) x *= scale;
+        const auto summary = pv::GlobalSolver(options).improve(mesh);
+        BOOST_TEST_CONTEXT("scale " << scale << ": " << summary.brief_report()) {
+            BOOST_TEST(summary.after.inverted == 0);
+            BOOST_TEST(summary.untangle_iterations == base_summary.untangle_iterations);
+            BOOST_TEST(summary.worst_after == base_summary.worst_after, boost::test_tools::tolerance(1e-6));
+        }
+    }
+}
+
 BOOST_AUTO_TEST_CASE(coordinates_near_1e300_or_1e_minus_300_are_assessed_and_smoothed_locally) {
     const auto reference = shared_mesh("mesquite/tets/tet_4_tangled.vtk");
     const auto unit = pv::QualityAssessor().assess(reference);
