@@ -391,7 +391,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         const double end_energy = total_energy();
         const double worst = detail::sweep_stats(*local_volume, mesh, xyz, movable, scratch).worst;
         const double next = detail::next_epsilon(epsilon, start_energy, end_energy,
-                                                 reducer.min(movable.empty() ? 0.0 : worst));
+                                                 reducer.min(movable.empty() ? std::numeric_limits<double>::infinity() : worst));
         // Below 1e-12 of an element's size the barrier is as sharp as it can usefully be.
         epsilon = std::isfinite(next) ? std::max(next, 1e-12) : epsilon;
         return moved;

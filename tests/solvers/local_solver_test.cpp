@@ -169,6 +169,25 @@ BOOST_DATA_TEST_CASE(energy_sweeps_untangle_heavy_tangles,
     }
 }
 
+// The energy sweeps are scale-free: the same tangle in units 1e4 times smaller or larger is
+// untangled in the same number of sweeps.
+BOOST_AUTO_TEST_CASE(energy_untangling_does_not_depend_on_the_units) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 5, 1.5);
+    auto options = quick_local(1);
+    options.improve_shape = false;
+    auto mesh = input;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    BOOST_TEST_REQUIRE(summary.after.inverted == 0);
+    for (double factor : {1e-4, 1e4}) {
+        auto scaled = input;
+        for (double& x : scaled.coordinates()) x *= factor;
+        const auto scaled_summary = pv::LocalSolver(options).improve(scaled);
+        BOOST_TEST_MESSAGE("x" << factor << ": " << scaled_summary.brief_report());
+        BOOST_TEST(scaled_summary.after.inverted == 0);
+        BOOST_TEST(scaled_summary.untangle_iterations == summary.untangle_iterations);
+    }
+}
+
 // The shape sweeps follow the energy's untangling, and the run as a whole is never worse.
 BOOST_AUTO_TEST_CASE(energy_untangling_then_shape_sweeps_raise_the_worst_element) {
     auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 11, 1.5);
