@@ -238,6 +238,10 @@ Tables::Tables() {
                            "Shape metric whose minimum over each vertex's elements is raised (one with a gradient)."))
         .flag("untangle", &LocalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
         .flag("improve_shape", &LocalSolverOptions::improve_shape, "Run the shape sweeps (false: stop once untangled).")
+        .choice("untangling", &LocalSolverOptions::untangling,
+                {{"energy", LocalSolverOptions::Untangling::Energy}, {"volume", LocalSolverOptions::Untangling::Volume}},
+                "How a vertex moves while untangling: energy (to the minimum of its elements' regularized energy) "
+                "or volume (to where its elements' smallest signed volume is largest).")
         .object("termination", &LocalSolverOptions::termination, termination, "When the shape sweeps stop.")
         .object("untangle_termination", &LocalSolverOptions::untangle_termination, termination, "When untangling stops.")
         .choice("coloring", &LocalSolverOptions::coloring,

@@ -11,6 +11,7 @@
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/stop.hpp"
+#include "local_untangle.hpp"
 
 namespace paloverde::detail {
 
@@ -205,24 +206,7 @@ std::vector<double> Workspace::absolute_volumes() const {
 // Per vertex the mean absolute volume of its elements; per element the mean of that over its
 // corners: a local, scale-free size.
 std::vector<double> Workspace::local_reference_volumes() const {
-    const std::vector<double> volume = absolute_volumes();
-    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh_.num_vertices()), 0.0);
-    for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
-        if (!owned_[v]) continue;
-        const auto elements = mesh_.elements_of(v);
-        for (ElementId e : elements) vertex_mean[v] += volume[e];
-        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
-    }
-    halo_->update(vertex_mean, 1);
-    std::vector<double> out(static_cast<std::size_t>(movable_));
-    for (ElementId e = 0; e < movable_; ++e) {
-        double sum = 0.0;
-        for (VertexId v : mesh_.element(e)) sum += vertex_mean[v];
-        const double local = sum / mesh_.corners();
-        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
-        out[e] = local > 1e-12 * scale_.reference_volume ? local : scale_.reference_volume;
-    }
-    return out;
+    return detail::local_reference_volumes(mesh_, mesh_.coordinates(), scale_, *halo_, movable_);
 }
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {

@@ -445,6 +445,31 @@ BOOST_AUTO_TEST_CASE(untangles_and_never_makes_the_worst_element_worse) {
     BOOST_TEST(std::equal(xyz.begin(), xyz.end(), part.mesh.coordinates().begin()));
 }
 
+// A heavy tangle (every interior vertex moved by up to 1.5 local edge lengths): the energy
+// sweeps free it with the same moves on any number of ranks (colors from global ids, exact sums
+// for the schedule's epsilon).
+BOOST_AUTO_TEST_CASE(energy_untangling_gives_the_one_rank_answer) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 21, 1.5);
+    pv::LocalSolverOptions options;
+    options.improve_shape = false;
+    auto part = scatter(input);
+    const auto summary = pv::LocalSolver(options).improve(part);
+    BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted > 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    pv::test::check_never_worse(summary);
+    auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input);
+    const auto alone_summary = pv::LocalSolver(options).improve(alone);
+    BOOST_TEST(summary.iterations == alone_summary.iterations);
+    pv::SimplexMesh from_one = input, from_all = input;
+    alone.gather_coordinates(&from_one);
+    part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
+    if (rank() == 0) {
+        BOOST_TEST(pv::count_orientations(from_all).inverted == 0);
+        BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
+    }
+}
+
 BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
     pv::LocalSolverOptions options;
