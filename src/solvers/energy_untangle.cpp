@@ -7,34 +7,23 @@
 
 #include "core/exact_sums.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
+#include "local_untangle.hpp"
 
 namespace paloverde::detail {
 
 namespace {
 
-// The weight of the energy's volume term (Garanzha et al. use a small one: shape dominates).
-constexpr double kTheta = 1.0 / 128.0;
 // Steps of limited-memory BFGS per value of eps, and the pairs it remembers.
 constexpr int kStepsPerEpsilon = 30;
 constexpr std::size_t kMemory = 7;
 // Steps without a better valid iterate that end the round after the first valid one.
 constexpr int kSettlePatience = 5;
-// The first epsilon, in units of the reference volume: large enough that inverted elements of
-// any depth pull their neighbours along, small enough that a tangle does not collapse instead
-// (of 1, 0.3, 0.1 and 0.01, on 39 perturbed shared meshes: 0.1 and 0.3 untangled all with the
-// best worst quality, 1 left elements barely valid, 0.01 took a third longer).
-constexpr double kFirstEpsilon = 0.1;
 
 // The checkpoint's name of the k-th remembered step ('s') or gradient change ('y').
 std::string pair_field(char which, std::size_t k) {
     std::string name(1, which);
     name += std::to_string(k);
     return name;
-}
-
-double chi(double v, double epsilon) {
-    const double r = std::sqrt(epsilon * epsilon + v * v);
-    return v >= 0.0 ? 0.5 * (v + r) : 0.5 * epsilon * epsilon / (r - v);
 }
 
 // Where the smallest scale-free volume stands, over every process.
@@ -99,7 +88,7 @@ private:
     std::vector<double> q_, ones_, counted_;
     std::vector<double> step_scale_;  // per vertex
     // The iteration's state (saved in checkpoints, with what it implies).
-    double epsilon_ = kFirstEpsilon;
+    double epsilon_ = kFirstUntangleEpsilon;
     double e_ = 0.0, e_start_ = 0.0;  // the energy now and at the round's start
     int inner_ = 0;                   // steps taken in this round
     int steps_ = 0;
@@ -172,7 +161,7 @@ void EnergyUntangler::record(const Volumes& now, const Volumes& best, double eps
 }
 
 void EnergyUntangler::start_round() {
-    metric_ = make_untangle_energy(epsilon_, kTheta);
+    metric_ = make_untangle_energy(epsilon_, kUntangleTheta);
     metric_->set_scale(scale_);
     e_ = energy(*metric_, x_);
     energy_gradient(*metric_, x_, g_);
@@ -385,12 +374,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
         // that flipped back by a hair): one more round at the next epsilon, whose barrier pushes
         // such elements open, and the phase ends on its best valid iterate.
         if (valid_found_ && ++rounds_valid_ == 2) return finish(TerminationReason::TargetReached, "untangled");
-        // The next epsilon (Garanzha et al.): the smallest element's chi shrinks by the factor
-        // 1 - sigma, sigma the relative decrease of the energy at this epsilon (at least a tenth):
-        // chi(v_min, eps') = mu solves to eps' = 2 sqrt(mu (mu - v_min)).
-        const double sigma = std::max(1.0 - e_ / e_start_, 0.1);
-        const double mu = (1.0 - sigma) * chi(now_.worst, epsilon_);
-        epsilon_ = now_.worst < mu ? 2.0 * std::sqrt(mu * (mu - now_.worst)) : 0.1 * epsilon_;
+        epsilon_ = next_epsilon(epsilon_, e_start_, e_, now_.worst);
         if (!(epsilon_ > 1e-300) || !std::isfinite(epsilon_))
             return finish(TerminationReason::NumericalFailure, "the untangling energy's epsilon left the numbers");
     }

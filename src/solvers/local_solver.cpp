@@ -43,7 +43,9 @@ double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[
 std::string options_text(const LocalSolverOptions& o) {
     detail::OptionsText t;
     t("metric", o.metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)("untangle", o.untangle)
-        ("improve_shape", o.improve_shape)("untangling", o.untangling == LocalSolverOptions::Untangling::Energy ? "energy" : "volume")("termination", o.termination)("untangle_termination", o.untangle_termination)
+        ("improve_shape", o.improve_shape)
+        ("untangling", o.untangling == LocalSolverOptions::Untangling::Energy ? "energy" : "volume")
+        ("termination", o.termination)("untangle_termination", o.untangle_termination)
         ("coloring", o.coloring == ColoringOrder::SmallestLast ? "smallest_last" : "greedy")
         ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below);
     return t.text();
@@ -253,7 +255,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     // input (the global solver's local reference volumes), and the schedule's epsilon.
     const bool by_energy = options_.untangling == LocalSolverOptions::Untangling::Energy;
     std::vector<double> reference;
-    double epsilon = 0.1;  // in units of the reference volume, as the global solver starts
+    double epsilon = detail::kFirstUntangleEpsilon;
     MetricScale local_scale = scale;
     if (by_energy) {
         reference = detail::local_reference_volumes(mesh, mesh.coordinates(), scale, domain.halo, mesh.num_elements());
