@@ -10,8 +10,6 @@
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
-#include "paloverde/mesh/orientation.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
 #include "checkpointer.hpp"
 #include "energy_untangle.hpp"
