@@ -31,6 +31,19 @@ struct ReportFlags {
     void add_to(CLI::App& command);
 };
 
+// --orientation MODE, the same choice as the config key input.orientation.
+inline CLI::Option* add_orientation_option(CLI::App& command, std::string& mode, const std::string& key_note = "") {
+    return command
+        .add_option("--orientation", mode,
+                    key_note + "the file's element orientation convention: auto (flip every element when the total "
+                               "signed volume is negative, the default), as_is, or flipped; outputs keep the file's order")
+        ->check(CLI::IsMember({"auto", "as_is", "flipped"}))
+        ->type_name("MODE");
+}
+inline OrientationMode orientation_mode(const std::string& mode) {
+    return mode == "as_is" ? OrientationMode::AsIs : mode == "flipped" ? OrientationMode::Flipped : OrientationMode::Auto;
+}
+
 // Runs (or prints) a resolved config and returns the exit code. Its errors and failure messages
 // name the input (a batch of runs must tell which input failed).
 int execute(const config::RunSpec& spec, const ReportFlags& flags);

@@ -21,7 +21,7 @@ std::string help_of(std::string_view kind, std::string_view name, std::string_vi
 // `--print-config` turns a command line into the equivalent config file.
 void add_improve_command(CLI::App& app, int& exit_code) {
     struct Options {
-        std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads;
+        std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
         std::string iterations, target, time_limit, barrier_shrink, improve_below;
         std::string checkpoint, checkpoint_every, resume;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
@@ -51,7 +51,9 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     cmd->add_option("--time-limit", o->time_limit,
                     "termination.max_seconds (and untangle_termination.max_seconds): stop after this many seconds")
         ->type_name("SECONDS");
-    cmd->add_flag("--untangle", o->untangle_only, "Only untangle: stop once no element is inverted (improve_shape: false; global)");
+    cmd->add_flag("--untangle", o->untangle_only,
+                  "Only untangle: stop once no element is inverted (improve_shape: false; global and local; laplace "
+                  "and smart_laplace do not untangle)");
     cmd->add_flag("--no-untangle", o->no_untangle, "Do not untangle; only improve a mesh that is already valid (untangle: false)");
     cmd->add_flag("--steepest", o->steepest, "Steepest ascent instead of conjugate gradient directions (direction; global)");
     cmd->add_option("--metric", o->metric, "metric: " + help_of("solver", "global", "metric"))
@@ -65,6 +67,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         ->type_name("X");
     cmd->add_option("--fixed", o->fixed, "input.fixed: auto, boundary, file or none (which vertices stay put)")
         ->type_name("MODE");
+    add_orientation_option(*cmd, o->orientation, "input.orientation: ");
     cmd->add_option("--threads", o->threads, "threads: threads of the solver; 0: OpenMP's default. Results do not depend on it")
         ->type_name("N");
     cmd->add_option("--history", o->history, "output.history: write the per-iteration history as CSV")
@@ -110,6 +113,11 @@ void add_improve_command(CLI::App& app, int& exit_code) {
             if (method.empty() || method == "global" || method == "local")
                 flag(step + "untangle_termination.max_seconds", o->time_limit, "--time-limit");
         }
+        const bool laplace = method == "laplace" || method == "smart_laplace";
+        if (laplace && (o->untangle_only || o->no_untangle))
+            throw OptionError(std::string(o->untangle_only ? "--untangle" : "--no-untangle") + ": --method " + method +
+                              " does not untangle (Laplace smoothing moves vertices towards their neighbours' mean, "
+                              "whatever is inverted); untangle with --method global or local");
         if (o->untangle_only) flag(step + "improve_shape", "false", "--untangle");
         if (o->no_untangle) flag(step + "untangle", "false", "--no-untangle");
         if (o->steepest) flag(step + "direction", "steepest_ascent", "--steepest");
@@ -118,6 +126,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         if (!o->barrier_shrink.empty()) flag(step + "objective.barrier_shrink", o->barrier_shrink, "--barrier-shrink");
         if (!o->improve_below.empty()) flag(step + "improve_below", o->improve_below, "--improve-below");
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
+        if (!o->orientation.empty()) flag("input.orientation", o->orientation, "--orientation");
         if (!o->threads.empty()) flag("threads", o->threads, "--threads");
         if (!o->history.empty()) flag("output.history", o->history, "--history", true);
         if (!o->summary.empty()) flag("output.summary", o->summary, "--summary", true);

@@ -15,6 +15,7 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
         std::string input, output;
         bool boundary = false, only_boundary = false, quiet = false, ascii = false, json = false;
         PerturbOptions perturb;
+        std::string orientation = "auto";
     };
     auto o = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("perturb", "Make a tangled test mesh: move vertices at random (reproducibly) by "
@@ -28,6 +29,7 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
     cmd->add_flag("--boundary", o->boundary, "Also move fixed (boundary) vertices");
     cmd->add_flag("--only-boundary", o->only_boundary, "Move only fixed (boundary) vertices, as the seed paper did");
     cmd->add_flag("--ascii", o->ascii, "Write text where the format has a binary form");
+    add_orientation_option(*cmd, o->orientation);
     cmd->add_flag("--json", o->json, "Print what was done as JSON (moved, elements, inverted, degenerate)");
     cmd->add_flag("-q,--quiet", o->quiet, "Print nothing but errors");
     cmd->callback([o, &exit_code] {
@@ -35,7 +37,9 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
         options.boundary = o->boundary || o->only_boundary;
         options.interior = !o->only_boundary;
         options.validate();
-        MeshFile file = read_mesh(o->input);
+        ReadOptions read;
+        read.orientation = orientation_mode(o->orientation);
+        MeshFile file = read_mesh(o->input, read);
         const VertexId moved = perturb(file.mesh, options);
         WriteOptions write;
         write.encoding = o->ascii ? Encoding::Ascii : Encoding::Binary;

@@ -1,9 +1,11 @@
 #include <iostream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "commands.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/config/run.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/io/mesh_io.hpp"
 
@@ -15,6 +17,7 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         bool json = false;
         std::string json_file;
         bool free_all = false;
+        std::string orientation = "auto";
     };
     auto options = std::make_shared<Options>();
     CLI::App* cmd = app.add_subcommand("quality", "Report the quality of a mesh: min/max/mean/rms of each metric, "
@@ -24,14 +27,21 @@ void add_quality_command(CLI::App& app, int& exit_code) {
     cmd->add_option("--json-file", options->json_file, "Also write the JSON report to this file");
     cmd->add_flag("--no-fixed-boundary", options->free_all,
                   "Without a `fixed` field in the file, treat every vertex as free (default: boundary fixed)");
+    add_orientation_option(*cmd, options->orientation);
     cmd->callback([options, &exit_code] {
         ReadOptions read;
         read.fix_boundary = !options->free_all;
+        read.orientation = orientation_mode(options->orientation);
         const MeshFile file = read_mesh(options->mesh, read);
         const QualityReport report = QualityAssessor().assess(file.mesh);
-        if (options->json) std::cout << report.to_json() << "\n";
-        else std::cout << options->mesh << ": " << to_string(file.mesh.kind()) << " mesh\n" << report.to_text();
-        if (!options->json_file.empty()) write_text_file(options->json_file, report.to_json() + "\n");
+        const OrientationDecision& o = file.orientation;
+        nlohmann::json json = nlohmann::json::parse(report.to_json());
+        json["input_orientation"] = nlohmann::json::parse(config::to_json(o));
+        if (options->json) std::cout << json.dump(2) << "\n";
+        else
+            std::cout << options->mesh << ": " << to_string(file.mesh.kind()) << " mesh; "
+                      << o.describe(file.mesh.kind()) << "\n" << report.to_text();
+        if (!options->json_file.empty()) write_text_file(options->json_file, json.dump(2) + "\n");
         exit_code = kDone;
     });
 }

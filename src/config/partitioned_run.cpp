@@ -289,6 +289,19 @@ DistributedMesh read_input_pieces(const RunSpec& spec, MPI_Comm comm, int rank, 
     }
 }
 
+// Rank 0's decision about the file it read, on every rank (for the same RunResult everywhere).
+OrientationDecision broadcast(MPI_Comm comm, OrientationDecision d) {
+    double packed[5] = {static_cast<double>(d.mode), d.oriented ? 1.0 : 0.0, static_cast<double>(d.sign), d.share,
+                        d.flipped ? 1.0 : 0.0};
+    MPI_Bcast(packed, 5, MPI_DOUBLE, 0, comm);
+    d.mode = static_cast<OrientationMode>(packed[0]);
+    d.oriented = packed[1] != 0.0;
+    d.sign = static_cast<int>(packed[2]);
+    d.share = packed[3];
+    d.flipped = packed[4] != 0.0;
+    return d;
+}
+
 std::string input_name(const RunSpec& spec) {
     if (!spec.input.mesh.empty()) return spec.input.mesh;
     std::string names;
@@ -316,6 +329,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     MPI_Comm_rank(comm, &rank);
     DistributeOptions distribute;
     distribute.exchange = spec.parallel.exchange == "root" ? ExchangeMode::RootRelayed : ExchangeMode::Colored;
+    distribute.orientation = spec.input.orientation;
     ParallelReport report;
     report.ranks = ranks;
     report.exchange = distribute.exchange == ExchangeMode::Colored ? "colored" : "root_relayed";
@@ -353,6 +367,8 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
 
     RunResult result;
     result.input = input_name(spec);
+    result.kind = part.mesh.kind();
+    result.orientation = pieces ? part.orientation : broadcast(comm, file.orientation);
     const QualityAssessor assessor = report_assessor(spec.output.metric);
     const std::vector<double> initial(part.mesh.coordinates().begin(), part.mesh.coordinates().end());
     WriteOptions write;

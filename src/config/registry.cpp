@@ -217,6 +217,10 @@ Tables::Tables() {
                 "Search direction of each step.")
         .flag("untangle", &GlobalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
         .flag("improve_shape", &GlobalSolverOptions::improve_shape, "Run the shape phase (false: stop once untangled).")
+        .choice("untangling", &GlobalSolverOptions::untangling,
+                {{"energy", GlobalSolverOptions::Untangling::Energy}, {"barrier", GlobalSolverOptions::Untangling::Barrier}},
+                "How to untangle: energy (the regularized energy, then the barrier ascent where elements stay inverted) "
+                "or barrier (the barrier ascent on the hybrid metric alone).")
         .object("termination", &GlobalSolverOptions::termination, termination, "When the shape phase stops.")
         .object("untangle_termination", &GlobalSolverOptions::untangle_termination, termination, "When untangling stops.")
         .flag("precondition_untangling", &GlobalSolverOptions::precondition_untangling,
@@ -233,6 +237,11 @@ Tables::Tables() {
     local.add(metric_field(&LocalSolverOptions::metric, &LocalSolverOptions::metric_options,
                            "Shape metric whose minimum over each vertex's elements is raised (one with a gradient)."))
         .flag("untangle", &LocalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
+        .flag("improve_shape", &LocalSolverOptions::improve_shape, "Run the shape sweeps (false: stop once untangled).")
+        .choice("untangling", &LocalSolverOptions::untangling,
+                {{"energy", LocalSolverOptions::Untangling::Energy}, {"volume", LocalSolverOptions::Untangling::Volume}},
+                "How a vertex moves while untangling: energy (to the minimum of its elements' regularized energy) "
+                "or volume (to where its elements' smallest signed volume is largest).")
         .object("termination", &LocalSolverOptions::termination, termination, "When the shape sweeps stop.")
         .object("untangle_termination", &LocalSolverOptions::untangle_termination, termination, "When untangling stops.")
         .choice("coloring", &LocalSolverOptions::coloring,
@@ -284,7 +293,10 @@ Tables::Tables() {
                        {},
                        [] { return SolverOptions(LocalSolverOptions{}); },
                        [](const SolverOptions& o) { return std::make_unique<LocalSolver>(options_as<LocalSolverOptions>(o, "local")); },
-                       [shape_target](const SolverOptions& o) { return shape_target(std::get<LocalSolverOptions>(o).termination); }});
+                       [shape_target](const SolverOptions& o) {
+                           const auto& l = std::get<LocalSolverOptions>(o);
+                           return l.improve_shape ? shape_target(l.termination) : std::nullopt;
+                       }});
     const Skip smart_by_name{{"smart"}, "the name decides it: smart_laplace is smart Laplace, laplace is plain Laplace"};
     for (const bool smart : {true, false}) {
         const std::string name = smart ? "smart_laplace" : "laplace";
@@ -317,13 +329,16 @@ Tables::Tables() {
     wrappers.push_back({"shape_improvement",
                         "Assess, raise the worst element of a valid mesh with the global log-barrier solver, assess.",
                         "global", &global_kind,
-                        {{"untangle", "improve_shape", "untangle_termination", "precondition_untangling", "local_untangle_rounds"},
+                        {{"untangle", "improve_shape", "untangling", "untangle_termination", "precondition_untangling", "local_untangle_rounds"},
                          "shape_improvement does not untangle (untangle_then_improve does)"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::shape_improvement(options_as<GlobalSolverOptions>(o, "shape_improvement")); },
                         [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<GlobalSolverOptions>(o).termination)}; }});
     wrappers.push_back({"local_shape_improvement", "Assess, improve with the local smoother (which untangles first), assess.",
-                        "local", &local_kind, {},
+                        "local", &local_kind,
+                        {{"improve_shape"},
+                         "local_shape_improvement improves the shape; to stop once untangled, use an improve step "
+                         "(name: local, improve_shape: false)"},
                         [] { return SolverOptions(LocalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::local_shape_improvement(options_as<LocalSolverOptions>(o, "local_shape_improvement")); },
                         [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LocalSolverOptions>(o).termination)}; }});
@@ -353,7 +368,12 @@ Tables::Tables() {
     };
     global.hint(owner_hint);
     local.hint(owner_hint);
-    laplace.hint(owner_hint);
+    laplace.hint([owner_hint](const std::string& key) {
+        std::string hint = owner_hint(key);
+        if (key == "untangle" || key == "improve_shape" || key == "untangle_termination")
+            hint += std::string(hint.empty() ? "" : "; ") + "Laplace smoothing does not untangle: untangle with global or local";
+        return hint;
+    });
 }
 
 const Tables& tables() {
@@ -392,6 +412,17 @@ const WrapperKind* find_wrapper(const std::string& name) {
 }
 
 const Skip& untangle_skip() { return tables().untangle; }
+
+void untangle_only(SolverOptions& options) {
+    std::visit(
+        [](auto& o) {
+            if constexpr (requires { o.improve_shape; }) {
+                o.untangle = true;
+                o.improve_shape = false;
+            }
+        },
+        options);
+}
 const Table<AssessSpec>& assess_table() { return tables().assess; }
 
 std::string solvers_with(const std::string& key, const std::string& except) {

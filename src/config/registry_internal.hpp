@@ -52,6 +52,9 @@ const std::vector<WrapperKind>& wrapper_kinds();
 const WrapperKind* find_wrapper(const std::string& name);
 // An untangle step: the global solver's options without the shape phase's.
 const Skip& untangle_skip();
+// What an untangle step (and `--untangle`) means for the solvers that untangle, global and
+// local: untangle, then stop once no element is inverted. Other options are left as they are.
+void untangle_only(SolverOptions& options);
 const Table<AssessSpec>& assess_table();
 // Which solvers (other than `except`) take `key`: "solver global" / "solvers global, local".
 std::string solvers_with(const std::string& key, const std::string& except);

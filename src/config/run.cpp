@@ -48,11 +48,9 @@ BuiltSolver build_solver(const StepSpec& step, int threads) {
     SolverOptions options = step.options;
     set_threads(options, threads);
     if (step.kind == StepSpec::Kind::Untangle) {
-        auto* global = std::get_if<GlobalSolverOptions>(&options);
-        if (!global || step.name != "global")
-            throw OptionError("an untangle step runs the global solver (got '" + step.name + "')");
-        global->untangle = true;
-        global->improve_shape = false;
+        if (step.name != "global" && step.name != "local")
+            throw OptionError("an untangle step runs the global or the local solver (got '" + step.name + "')");
+        untangle_only(options);
     }
     return {kind->make(options), kind->target(options)};
 }
@@ -67,6 +65,7 @@ MeshFile read_input(const RunSpec& spec) {
     ReadOptions read;
     read.format = in.format;
     read.fix_boundary = in.fixed != FixedVertices::None;
+    read.orientation = in.orientation;
     MeshFile file = read_mesh(in.mesh, read);
     SimplexMesh& mesh = file.mesh;
     switch (in.fixed) {
@@ -283,6 +282,15 @@ detail::PlotSeries series_of(const MethodResult& m) {
 
 }  // namespace
 
+std::string to_json(const OrientationDecision& o) {
+    return nlohmann::json{{"mode", std::string(to_string(o.mode))},
+                          {"flipped", o.flipped},
+                          {"oriented", o.oriented},
+                          {"sign", o.sign},
+                          {"share", o.share}}
+        .dump();
+}
+
 InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) { return build(steps, threads).queue; }
 
 RunResult run(const RunSpec& spec, const RunHooks& hooks) {
@@ -295,6 +303,8 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
     MeshFile file = detail::read_input(spec);
     RunResult result;
     result.input = spec.input.mesh;
+    result.kind = file.mesh.kind();
+    result.orientation = file.orientation;
     for (std::size_t i = 0; i < methods.size(); ++i) {
         // Every method starts from the input; the last may use it up.
         SimplexMesh copy;
@@ -326,6 +336,9 @@ void detail::write_reports(const RunSpec& spec, const RunResult& result) {
 
 std::string RunResult::report() const {
     std::ostringstream out;
+    const OrientationDecision& o = orientation;
+    if (o.flipped || o.mode != OrientationMode::Auto || (o.oriented && o.sign == 0))
+        out << "input: " << o.describe(kind) << "\n";
     const bool study = methods.size() > 1;
     for (const auto& m : methods) {
         if (study) out << "=== method " << m.name << "\n";
@@ -376,7 +389,10 @@ std::string RunResult::report() const {
 
 std::string RunResult::to_json() const {
     using nlohmann::json;
-    json j{{"input", input}, {"status", std::string(to_string(status))}, {"exit_code", exit_code()}};
+    json j{{"input", input},
+           {"input_orientation", json::parse(config::to_json(orientation))},
+           {"status", std::string(to_string(status))},
+           {"exit_code", exit_code()}};
     json list = json::array();
     for (const auto& m : methods) list.push_back(method_json(m));
     if (methods.size() == 1)

@@ -111,7 +111,13 @@ const Table<InputSpec>& input_table() {
                     "Which vertices stay put. auto: the file's `fixed` point field if it has one, else the boundary; "
                     "boundary: the boundary; file: the `fixed` field (an error without one); none: every vertex moves.")
             .integers("fixed_vertices", &InputSpec::fixed_vertices,
-                      "Vertices fixed as well: 0-based ids in the file's order.");
+                      "Vertices fixed as well: 0-based ids in the file's order.")
+            .choice("orientation", &InputSpec::orientation,
+                    {{"auto", OrientationMode::Auto}, {"as_is", OrientationMode::AsIs},
+                     {"flipped", OrientationMode::Flipped}},
+                    "The file's element orientation convention. auto: flip every element (two corners swapped) "
+                    "when the elements' total signed volume is negative (the mirror convention); as_is: the file's "
+                    "order; flipped: flip every element. Outputs keep the file's order. Pieces decide together.");
         return t;
     }();
     return t;
@@ -266,13 +272,11 @@ StepSpec read_step(const Node& node, const std::string& path, const Reader& r) {
     step.name = name && !name->is_null() ? one_of(*name, np, solver_names(), "solver") : "global";
     const SolverKind& s = *find_solver(step.name);
     if (step.kind == StepSpec::Kind::Untangle) {
-        if (step.name != "global")
-            fail(name->where, np, "only the global solver untangles without improving; use `improve: " + step.name +
-                                      "` (it untangles first when untangle: true)" );
+        if (step.name != "global" && step.name != "local")
+            fail(name->where, np, "only the global and local solvers untangle; " + step.name +
+                                      " moves vertices towards their neighbours' mean, whatever is inverted");
         step.options = s.defaults();
-        auto& g = std::get<GlobalSolverOptions>(step.options);
-        g.untangle = true;
-        g.improve_shape = false;
+        untangle_only(step.options);
         s.options->read(step.options, body, p, r, untangle_skip(), {"name", "label"});
         step.label = optional_text(body, "label", p, r, "untangle");
         return step;
@@ -381,7 +385,7 @@ const Table<RunSpec>& run_table() {
         Table<RunSpec> t("a run config", [](const RunSpec& s) {
             if (s.threads < 0) throw OptionError("threads must be >= 0 (0: OpenMP's default; got " + std::to_string(s.threads) + ")");
         });
-        t.object("input", &RunSpec::input, input_table(), "The mesh and which of its vertices stay put.")
+        t.object("input", &RunSpec::input, input_table(), "The mesh, which of its vertices stay put, and its orientation convention.")
             .integer("threads", &RunSpec::threads, "Threads of every solver; 0: OpenMP's default. Results do not depend on it.")
             .object("partition", &RunSpec::partition, partition_table(), "Splitting the mesh across MPI ranks.")
             .object("parallel", &RunSpec::parallel, parallel_table(), "How the ranks of a partitioned run talk.")
@@ -443,9 +447,9 @@ std::vector<ObjectInfo> section_infos() {
                    keys_info({{"name", "one of: " + join(solver_names()), "global", "The solver."},
                               {"label", "text", "the name", "Shown in reports, the history and the progress line."}})});
     out.push_back({"section", "untangle step",
-                   "`- untangle: global` or a map: `name`, `label` and the global solver's options except untangle, "
-                   "improve_shape and termination. Stops once no element is inverted.",
-                   keys_info({{"name", "global", "global", "The only solver that untangles without improving."},
+                   "`- untangle: global` (or `local`) or a map: `name`, `label` and the solver's options except "
+                   "untangle, improve_shape and termination. Stops once no element is inverted.",
+                   keys_info({{"name", "global or local", "global", "The solver that untangles (Laplace smoothing does not)."},
                               {"label", "text", "untangle", "Shown in reports, the history and the progress line."}})});
     out.push_back({"section", "wrapper step",
                    "`- wrapper: NAME` or a map: `name`, `label` and the options of the wrapper's solver (see Wrappers). "

@@ -751,7 +751,7 @@ void write_gmsh(std::ostream& stream, const MeshToWrite& data, Encoding encoding
     const int corners = mesh.corners();
     const std::int32_t type = mesh.kind() == ElementKind::Tetrahedron ? 4 : 2;
     const std::span<const double> xyz = mesh.coordinates();
-    const std::span<const VertexId> connectivity = mesh.connectivity();
+    const std::span<const VertexId> connectivity = data.connectivity;
 
     Output out(stream);
     out.text(binary ? "$MeshFormat\n2.2 1 8\n" : "$MeshFormat\n2.2 0 8\n");

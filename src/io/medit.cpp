@@ -246,7 +246,7 @@ void write_medit(std::ostream& stream, const MeshToWrite& data) {
     const std::vector<std::int64_t> vertex_refs = references(data.point_fields, n, "point");
     const std::vector<std::int64_t> element_refs = references(data.cell_fields, m, "cell");
     const std::span<const double> xyz = mesh.coordinates();
-    const std::span<const VertexId> connectivity = mesh.connectivity();
+    const std::span<const VertexId> connectivity = data.connectivity;
 
     Output out(stream);
     out.text("MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n");

@@ -37,29 +37,6 @@ Field narrow_cell_field(const Field& field, std::span<const std::size_t> kept_ce
     }
     return out;
 }
-// Swaps two corners of every tetrahedron if their signed volumes sum to less than zero.
-// Indices are checked here because the mesh has not been validated yet. The volumes are taken at
-// unit scale (an exact power-of-two rescaling): near 1e300 they would overflow, near 1e-300
-// underflow to zero, and either way the sign would be lost.
-bool orient_by_total_volume(const std::vector<double>& xyz, std::vector<VertexId>& tets) {
-    const std::size_t n = xyz.size() / 3;
-    const int scale = unit_scale_exponent(xyz);
-    auto at = [&](VertexId v, int k) { return std::ldexp(xyz[3 * static_cast<std::size_t>(v) + k], scale); };
-    double total = 0.0;
-    for (std::size_t e = 0; e + 3 < tets.size(); e += 4) {
-        const VertexId* c = &tets[e];
-        if (std::any_of(c, c + 4, [&](VertexId v) { return v < 0 || static_cast<std::size_t>(v) >= n; })) return false;
-        double d[3][3];
-        for (int i = 0; i < 3; ++i)
-            for (int k = 0; k < 3; ++k) d[i][k] = at(c[i + 1], k) - at(c[0], k);
-        total += d[0][0] * (d[1][1] * d[2][2] - d[1][2] * d[2][1]) - d[0][1] * (d[1][0] * d[2][2] - d[1][2] * d[2][0]) +
-                 d[0][2] * (d[1][0] * d[2][1] - d[1][1] * d[2][0]);
-    }
-    if (!(total < 0.0)) return false;
-    for (std::size_t e = 0; e + 3 < tets.size(); e += 4) std::swap(tets[e + 2], tets[e + 3]);
-    return true;
-}
-
 // The boundary vertices (on a face, or a triangle's edge, of one element only), as
 // boundary_vertices() finds them, and the check that no face is in more than two elements: such a
 // mesh no vertex placement can make valid (untangling could not succeed, and the face would pass
@@ -180,13 +157,13 @@ MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& 
     const std::vector<std::size_t>& kept = tets ? raw.tetrahedron_cells : raw.triangle_cells;
 
     MeshFile out;
-    if (raw.orient_by_total_volume && tets) out.reoriented = orient_by_total_volume(raw.coordinates, connectivity);
     try {
         out.mesh = SimplexMesh(kind, std::move(raw.coordinates), std::move(connectivity));
         check_no_duplicate_elements(out.mesh);
     } catch (const MeshError& e) {
         throw FileError(path, 0, e.what());
     }
+    out.orientation = orient(out.mesh, options.orientation);
     std::vector<std::uint8_t> boundary = manifold_boundary(out.mesh, path);
     const auto n = static_cast<std::size_t>(out.mesh.num_vertices());
     for (Field& f : raw.point_fields) {
@@ -264,7 +241,17 @@ void write_mesh(const std::filesystem::path& path,
         Field fixed{"fixed", 1, std::vector<double>(mesh.fixed().begin(), mesh.fixed().end())};
         points.push_back(std::move(fixed));
     }
-    const io::MeshToWrite data{mesh, points, cell_fields};
+    // The file's order: a mesh flipped on reading is flipped back (a copy of the corners only).
+    std::vector<VertexId> file_order;
+    std::span<const VertexId> connectivity = mesh.connectivity();
+    if (mesh.elements_flipped()) {
+        file_order.assign(connectivity.begin(), connectivity.end());
+        const auto k = static_cast<std::size_t>(mesh.corners());
+        for (std::size_t first = 0; first < file_order.size(); first += k)
+            std::swap(file_order[first + k - 2], file_order[first + k - 1]);
+        connectivity = file_order;
+    }
+    const io::MeshToWrite data{mesh, connectivity, points, cell_fields};
 
     AtomicFile file(path, true);
     switch (format) {

@@ -22,14 +22,12 @@ struct RawMesh {
     std::vector<std::size_t> triangle_cells;
     std::vector<Field> point_fields;
     std::vector<Field> cell_fields;
-    // For formats without an orientation convention: flip every element if the total signed
-    // volume is negative.
-    bool orient_by_total_volume = false;
 };
 
 // Everything a writer needs.
 struct MeshToWrite {
     const SimplexMesh& mesh;
+    std::span<const VertexId> connectivity;  // corners() per element, in the file's order
     std::span<const Field> point_fields;  // includes `fixed` when requested
     std::span<const Field> cell_fields;
 };

@@ -192,7 +192,6 @@ RawMesh read_tetgen(const std::string& path) {
     RawMesh raw;
     const Nodes nodes = read_node_file(node_path, raw);
     read_ele_file(ele_path, nodes, raw);
-    raw.orient_by_total_volume = true;
     return raw;
 }
 

@@ -576,7 +576,7 @@ void write_vtk_legacy(std::ostream& stream, const MeshToWrite& data, Encoding en
     out.integer(static_cast<std::int64_t>(m * (k + 1))).text('\n');
     for (std::size_t e = 0; e < m; ++e) {
         w.integer(k, ' ');
-        const auto corners = mesh.element(static_cast<ElementId>(e));
+        const VertexId* corners = data.connectivity.data() + e * static_cast<std::size_t>(k);
         for (int c = 0; c < k; ++c) w.integer(corners[c], c + 1 == k ? '\n' : ' ');
     }
     if (binary) out.text('\n');

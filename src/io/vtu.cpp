@@ -508,7 +508,7 @@ private:
         switch (a.content) {
             case Content::Field: return a.field->values.size();
             case Content::Points: return mesh_.coordinates().size();
-            case Content::Connectivity: return mesh_.connectivity().size();
+            case Content::Connectivity: return data_.connectivity.size();
             case Content::Offsets:
             case Content::Types: return m;
         }
@@ -555,7 +555,7 @@ void VtuWriter::ascii_values(const ArrayToWrite& a) {
         switch (a.content) {
             case Content::Field: out_.real(a.field->values[i]); break;
             case Content::Points: out_.real(mesh_.coordinates()[i]); break;
-            case Content::Connectivity: out_.integer(mesh_.connectivity()[i]); break;
+            case Content::Connectivity: out_.integer(data_.connectivity[i]); break;
             case Content::Offsets: out_.integer(static_cast<std::int64_t>(i + 1) * mesh_.corners()); break;
             case Content::Types: out_.integer(type); break;
         }
@@ -576,7 +576,7 @@ void VtuWriter::binary_values(const ArrayToWrite& a) {
             for (double v : mesh_.coordinates()) out_.binary(v, big);
             break;
         case Content::Connectivity:
-            for (VertexId v : mesh_.connectivity()) out_.binary(static_cast<std::int64_t>(v), big);
+            for (VertexId v : data_.connectivity) out_.binary(static_cast<std::int64_t>(v), big);
             break;
         case Content::Offsets:
             for (std::int64_t e = 0; e < m; ++e) out_.binary((e + 1) * k, big);

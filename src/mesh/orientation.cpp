@@ -2,6 +2,10 @@
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "core/exact_sums.hpp"
 
 namespace paloverde {
 
@@ -45,6 +49,114 @@ OrientationCounts count_orientations(const SimplexMesh& mesh, std::span<const do
         counts.degenerate += o == 0;
     }
     return counts;
+}
+
+std::string_view to_string(OrientationMode mode) {
+    switch (mode) {
+        case OrientationMode::Auto: return "auto";
+        case OrientationMode::AsIs: return "as_is";
+        case OrientationMode::Flipped: return "flipped";
+    }
+    return "unknown";
+}
+
+namespace {
+// Unit roundoff of double precision.
+constexpr double kRoundoff = 0x1p-53;
+// Shewchuk's static error bounds of orient3d and orient2d evaluated from coordinate differences:
+// the computed determinant is within this factor times the permanent (the determinant with every
+// product made absolute) of the exact one.
+constexpr double kTetBound = (7.0 + 56.0 * kRoundoff) * kRoundoff;
+constexpr double kTriangleBound = (3.0 + 16.0 * kRoundoff) * kRoundoff;
+// Terms that underflow lose their relative accuracy; at unit scale that takes elements some 300
+// orders of magnitude smaller than the mesh, and this much per element covers them.
+constexpr double kUnderflowSlack = 0x1p-1000;
+}  // namespace
+
+SignedMeasure signed_measure(const SimplexMesh& mesh, std::span<const double> xyz, int scale_exponent,
+                             const Vec3& plane_normal, std::span<const std::uint8_t> counted) {
+    const bool tets = mesh.kind() == ElementKind::Tetrahedron;
+    int axis = 0;
+    for (int i = 1; i < 3; ++i)
+        if (std::abs(plane_normal[i]) > std::abs(plane_normal[axis])) axis = i;
+    const int u = (axis + 1) % 3, w = (axis + 2) % 3;
+    const double up = plane_normal[axis] >= 0.0 ? 1.0 : -1.0;
+    const auto connectivity = mesh.connectivity();
+    const std::size_t k = static_cast<std::size_t>(mesh.corners());
+    auto at = [&](VertexId v, int c) { return std::ldexp(xyz[3 * static_cast<std::size_t>(v) + c], scale_exponent); };
+    const auto sums = detail::exact_sums<3>(static_cast<std::size_t>(mesh.num_elements()), [&](std::size_t e, auto& acc) {
+        if (!counted.empty() && !counted[e]) return;
+        const VertexId* c = connectivity.data() + e * k;
+        double det = 0.0, permanent = 0.0;
+        if (tets) {
+            double d[3][3];
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j) d[i][j] = at(c[i + 1], j) - at(c[0], j);
+            const double m0 = d[1][1] * d[2][2], m1 = d[1][2] * d[2][1];
+            const double m2 = d[1][0] * d[2][2], m3 = d[1][2] * d[2][0];
+            const double m4 = d[1][0] * d[2][1], m5 = d[1][1] * d[2][0];
+            det = d[0][0] * (m0 - m1) - d[0][1] * (m2 - m3) + d[0][2] * (m4 - m5);
+            permanent = std::abs(d[0][0]) * (std::abs(m0) + std::abs(m1)) +
+                        std::abs(d[0][1]) * (std::abs(m2) + std::abs(m3)) +
+                        std::abs(d[0][2]) * (std::abs(m4) + std::abs(m5));
+            permanent *= kTetBound;
+        } else {
+            const double a0 = at(c[1], u) - at(c[0], u), a1 = at(c[1], w) - at(c[0], w);
+            const double b0 = at(c[2], u) - at(c[0], u), b1 = at(c[2], w) - at(c[0], w);
+            const double left = a0 * b1, right = a1 * b0;
+            det = up * (left - right);
+            permanent = kTriangleBound * (std::abs(left) + std::abs(right));
+        }
+        acc[0].add(det);
+        acc[1].add(std::abs(det));
+        acc[2].add(permanent + kUnderflowSlack);
+    });
+    return {sums[0], sums[1], sums[2]};
+}
+
+OrientationDecision decide_orientation(OrientationMode mode, bool oriented, const SignedMeasure& measure) {
+    OrientationDecision d;
+    d.mode = mode;
+    d.oriented = oriented;
+    const double total = measure.total.value(), magnitude = measure.magnitude.value();
+    // The rounded sums are within an ulp: a margin far above that keeps the comparison safe.
+    const double rounding = measure.rounding.value() * (1.0 + 1e-9);
+    if (oriented) {
+        d.sign = total > rounding ? 1 : total < -rounding ? -1 : 0;
+        d.share = magnitude > 0.0 ? total / magnitude : 0.0;
+    }
+    d.flipped = mode == OrientationMode::Flipped || (mode == OrientationMode::Auto && d.sign < 0);
+    return d;
+}
+
+OrientationDecision orient(SimplexMesh& mesh, OrientationMode mode) {
+    const bool oriented = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    SignedMeasure measure;
+    if (oriented) measure = signed_measure(mesh, mesh.coordinates(), unit_scale_exponent(mesh.coordinates()), mesh.plane_normal());
+    const OrientationDecision d = decide_orientation(mode, oriented, measure);
+    if (d.flipped) {
+        mesh.flip_elements();
+        mesh.set_elements_flipped(!mesh.elements_flipped());
+    }
+    return d;
+}
+
+std::string OrientationDecision::describe(ElementKind kind) const {
+    const bool tets = kind == ElementKind::Tetrahedron;
+    std::ostringstream out;
+    out << "orientation " << to_string(mode) << ": ";
+    if (flipped)
+        out << "elements flipped (corners " << (tets ? "2 and 3" : "1 and 2")
+            << " swapped; outputs get the file's order back)";
+    else
+        out << "elements as in the file";
+    if (!oriented) return out.str() + "; triangles not in one plane have no orientation";
+    out << "; total signed " << (tets ? "volume " : "area about the plane normal ");
+    if (sign == 0) return out.str() + "zero within rounding: the file's convention cannot be told";
+    out << std::showpos << std::fixed << std::setprecision(1) << 100.0 * share << std::noshowpos << "% of the absolute "
+        << (tets ? "volume" : "area");
+    if (sign < 0) out << " (the mirror convention)";
+    return out.str();
 }
 
 }  // namespace paloverde

@@ -141,6 +141,7 @@ SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
     SimplexMesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
     out.set_fixed(std::move(fixed));
     out.set_global_ids(std::move(global));
+    out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
     return out;
 }
 

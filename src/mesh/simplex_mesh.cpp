@@ -131,6 +131,15 @@ void SimplexMesh::find_plane() {
     plane_normal_ = normal;
 }
 
+void SimplexMesh::flip_elements() {
+    const auto k = static_cast<std::size_t>(corners());
+    for (std::size_t first = 0; first < connectivity_.size(); first += k)
+        std::swap(connectivity_[first + k - 2], connectivity_[first + k - 1]);
+    // Every cross product of find_plane() changes sign, exactly, and so does their sum.
+    if (planar_)
+        for (double& c : plane_normal_) c = -c;
+}
+
 void SimplexMesh::set_fixed(std::vector<std::uint8_t> fixed) {
     if (fixed.size() != static_cast<std::size_t>(num_vertices()))
         throw MeshError("fixed flags: " + std::to_string(fixed.size()) + " given for " +

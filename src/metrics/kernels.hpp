@@ -19,6 +19,12 @@ inline constexpr double kTriAspectScale = 4.0 * std::numbers::sqrt3;   // 1 for 
 
 inline double sign_of(double v) { return v > 0.0 ? 1.0 : (v < 0.0 ? -1.0 : 0.0); }
 
+// A tet's signed volume alone, for passes that need no gradient (TetGeometry computes them all).
+inline double tet_signed_volume(const double* x) {
+    const P a = load(x, 0), e1 = load(x, 1) - a, e2 = load(x, 2) - a, e3 = load(x, 3) - a;
+    return dot(e1, cross(e2, e3)) / 6.0;
+}
+
 // Triangles: the aspect ratio, mean ratio and inverse condition number all equal
 // 4*sqrt(3)*area / (sum of squared edges).
 inline double triangle_shape(const TriGeometry& t, double* g) {
@@ -162,6 +168,7 @@ struct EdgeRatio {
 struct ScaledVolume {
     static constexpr std::string_view name = "scaled_volume";
     double tet(const double* x, double* g, const MetricScale& s) const {
+        if (!g) return tet_signed_volume(x) / s.reference_volume;
         const TetGeometry t(x);
         const double inv = 1.0 / s.reference_volume;
         if (g)
@@ -210,6 +217,62 @@ struct UntangleHybrid {
         double qgrad[9];
         const double q = triangle_shape(t, g ? qgrad : nullptr);
         return blend(t.area, q, t.darea, qgrad, 3, g, s);
+    }
+};
+
+// The regularized untangling energy of Garanzha, Kaporin, Kudryavtseva, Protais, Ray & Sokolov
+// (foldover-free maps, 2021), negated so that larger is better. With J the Jacobian of the map
+// from the regular element of the element's reference volume to the element, d its dimension,
+// v = det J (the scale-free signed volume) and chi(v, eps) = (v + sqrt(eps^2 + v^2)) / 2 > 0,
+//   f = (1 - theta) (|J|^2 / d) / chi^(2/d) + theta (v^2 + 1) / (2 chi),
+// which is 1 for the reference element as eps -> 0. chi is positive for every v, so the energy is
+// finite on tangled meshes too; as eps shrinks it becomes a barrier against inversion. |J|^2
+// comes from the squared edge lengths L: L / (4 (3 V0)^(2/3)) for a tet, L / (2 sqrt(3) A0) for
+// a triangle.
+struct RegularizedEnergy {
+    static constexpr std::string_view name = "untangle_energy";
+    static constexpr double ideal = -1.0;
+    double epsilon = 1.0;
+    double theta = 1.0 / 128.0;
+
+    // -f and its gradient from the volume and the squared edge sum (and their corner gradients).
+    template <int D>
+    double energy(double volume, double edge_sum, const P* dvolume, const P* dedge_sum, double* g,
+                  const MetricScale& s) const {
+        constexpr int corners = D + 1;
+        const double v0 = s.reference_volume;
+        const double v = volume / v0;
+        const double r = std::sqrt(epsilon * epsilon + v * v);
+        // (v + r)(r - v) = eps^2: the second form keeps its digits where v is very negative.
+        const double chi = v >= 0.0 ? 0.5 * (v + r) : 0.5 * epsilon * epsilon / (r - v);
+        // f1 = (|J|^2 / d) / chi^(2/d) = edge_sum * per_edge_sum, with one cube root for tets.
+        const double per_edge_sum = D == 3 ? 1.0 / (12.0 * std::cbrt(9.0 * (v0 * chi) * (v0 * chi)))
+                                           : 1.0 / (4.0 * std::numbers::sqrt3 * v0 * chi);
+        const double f1 = edge_sum * per_edge_sum;
+        const double f2 = 0.5 * (v * v + 1.0) / chi;
+        if (g) {
+            // d chi / dv = chi / r.
+            const double df_dv = -(1.0 - theta) * (2.0 / D) * f1 / r + theta * (v / chi - f2 / r);
+            for (int i = 0; i < corners; ++i)
+                store(g, i, (-df_dv / v0) * dvolume[i] - ((1.0 - theta) * per_edge_sum) * dedge_sum[i]);
+        }
+        return -((1.0 - theta) * f1 + theta * f2);
+    }
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        if (!g) {  // the line search's passes need no corner gradients
+            P corner[4];
+            for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
+            return energy<3>(tet_signed_volume(x), TetGeometry::tet_edge_sum(corner), nullptr, nullptr, nullptr, s);
+        }
+        const TetGeometry t(x);
+        return energy<3>(t.volume, t.edge_sum, t.dvolume, t.dedge_sum, g, s);
+    }
+    void tet_block(BlockPath path, const TetBlock& x, const double* reference_volume, double* q, TetBlock* g) const {
+        tet_energy_block(path, x, reference_volume, epsilon, theta, q, g);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        return energy<2>(t.area, t.edge_sum, t.darea, t.dedge_sum, g, s);
     }
 };
 

@@ -47,24 +47,28 @@ struct Sqrt256 {
     for (int i = 0; i < 4; ++i) c[i] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
 }
 
+// Element j's signed volume and squared edge sum; with Gradient, the volume's gradient too.
+template <bool Gradient>
+[[gnu::always_inline]] inline void measure(const TetBlock& x, int j, double* volume, double* edge_sum, TetBlock* dvolume) {
+    P c[4], dv[4];
+    corners_of(x, j, c);
+    volume[j] = TetGeometry::tet_volume(c, dv);
+    edge_sum[j] = TetGeometry::tet_edge_sum(c);
+    if constexpr (Gradient)
+        for (int i = 0; i < 4; ++i) {
+            dvolume->at[3 * i][j] = dv[i].x;
+            dvolume->at[3 * i + 1][j] = dv[i].y;
+            dvolume->at[3 * i + 2][j] = dv[i].z;
+        }
+}
+
 // Quality into quality[j], signed volume into volume[j]; with Gradient, also the gradients of
 // both. Two loops around the square roots: the first measures, the second rates.
 template <class Sqrt, bool Gradient>
 [[gnu::always_inline]] inline void aspect_loop(const TetBlock& x, double* quality, TetBlock* gradient, double* volume,
                                                TetBlock* dvolume) {
     alignas(64) double edge_sum[kTetBlock], root[kTetBlock];
-    for (int j = 0; j < kTetBlock; ++j) {
-        P c[4], dv[4];
-        corners_of(x, j, c);
-        volume[j] = TetGeometry::tet_volume(c, dv);
-        edge_sum[j] = TetGeometry::tet_edge_sum(c);
-        if constexpr (Gradient)
-            for (int i = 0; i < 4; ++i) {
-                dvolume->at[3 * i][j] = dv[i].x;
-                dvolume->at[3 * i + 1][j] = dv[i].y;
-                dvolume->at[3 * i + 2][j] = dv[i].z;
-            }
-    }
+    for (int j = 0; j < kTetBlock; ++j) measure<Gradient>(x, j, volume, edge_sum, dvolume);
     Sqrt::run(edge_sum, root);
     for (int j = 0; j < kTetBlock; ++j) {
         const double l = edge_sum[j];
@@ -126,13 +130,69 @@ template <class Sqrt>
     else hybrid_loop<Sqrt, false>(x, reference_volume, alpha, quality, nullptr);
 }
 
+// RegularizedEnergy::energy<3>, operation for operation.
+template <class Sqrt, bool Gradient>
+[[gnu::always_inline]] inline void energy_loop(const TetBlock& x, const double* reference_volume, double epsilon,
+                                               double theta, double* quality, TetBlock* gradient) {
+    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], v[kTetBlock], r[kTetBlock], chi[kTetBlock],
+        root[kTetBlock];
+    TetBlock dvolume;
+    for (int j = 0; j < kTetBlock; ++j) {
+        measure<Gradient>(x, j, volume, edge_sum, &dvolume);
+        v[j] = volume[j] / reference_volume[j];
+        r[j] = epsilon * epsilon + v[j] * v[j];
+    }
+    Sqrt::run(r, r);
+    for (int j = 0; j < kTetBlock; ++j) {
+        chi[j] = v[j] >= 0.0 ? 0.5 * (v[j] + r[j]) : 0.5 * epsilon * epsilon / (r[j] - v[j]);
+        root[j] = 9.0 * (reference_volume[j] * chi[j]) * (reference_volume[j] * chi[j]);
+    }
+    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
+    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double per_edge_sum = 1.0 / (12.0 * root[j]);
+        const double f1 = edge_sum[j] * per_edge_sum;
+        const double f2 = 0.5 * (v[j] * v[j] + 1.0) / chi[j];
+        quality[j] = -((1.0 - theta) * f1 + theta * f2);
+        if constexpr (Gradient) {
+            P c[4], de[4];
+            corners_of(x, j, c);
+            TetGeometry::tet_dedge_sum(c, de);
+            const double df_dv = -(1.0 - theta) * (2.0 / 3) * f1 / r[j] + theta * (v[j] / chi[j] - f2 / r[j]);
+            const double a = -df_dv / reference_volume[j], b = (1.0 - theta) * per_edge_sum;
+            for (int i = 0; i < 4; ++i) {
+                const P dv{dvolume.at[3 * i][j], dvolume.at[3 * i + 1][j], dvolume.at[3 * i + 2][j]};
+                const P g = a * dv - b * de[i];
+                gradient->at[3 * i][j] = g.x;
+                gradient->at[3 * i + 1][j] = g.y;
+                gradient->at[3 * i + 2][j] = g.z;
+            }
+        }
+    }
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void energy(const TetBlock& x, const double* reference_volume, double epsilon,
+                                          double theta, double* quality, TetBlock* gradient) {
+    if (gradient) energy_loop<Sqrt, true>(x, reference_volume, epsilon, theta, quality, gradient);
+    else energy_loop<Sqrt, false>(x, reference_volume, epsilon, theta, quality, nullptr);
+}
+
 void aspect_baseline(const TetBlock& x, double* quality, TetBlock* gradient) { aspect<Sqrt128>(x, quality, gradient); }
 void hybrid_baseline(const TetBlock& x, const double* reference_volume, double alpha, double* quality,
                      TetBlock* gradient) {
     hybrid<Sqrt128>(x, reference_volume, alpha, quality, gradient);
 }
+void energy_baseline(const TetBlock& x, const double* reference_volume, double epsilon, double theta, double* quality,
+                     TetBlock* gradient) {
+    energy<Sqrt128>(x, reference_volume, epsilon, theta, quality, gradient);
+}
 #ifdef PALOVERDE_X86
 // AVX2 without FMA: contraction is off anyway (ISO C++ mode), and this keeps it so.
+[[gnu::target("avx2")]] void energy_avx2(const TetBlock& x, const double* reference_volume, double epsilon,
+                                         double theta, double* quality, TetBlock* gradient) {
+    energy<Sqrt256>(x, reference_volume, epsilon, theta, quality, gradient);
+}
 [[gnu::target("avx2")]] void aspect_avx2(const TetBlock& x, double* quality, TetBlock* gradient) {
     aspect<Sqrt256>(x, quality, gradient);
 }
@@ -191,6 +251,14 @@ void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* ref
     if (path == BlockPath::avx2) return hybrid_avx2(corners, reference_volume, alpha, quality, gradient);
 #endif
     hybrid_baseline(corners, reference_volume, alpha, quality, gradient);
+}
+
+void tet_energy_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double epsilon,
+                      double theta, double* quality, TetBlock* gradient) {
+#ifdef PALOVERDE_X86
+    if (path == BlockPath::avx2) return energy_avx2(corners, reference_volume, epsilon, theta, quality, gradient);
+#endif
+    energy_baseline(corners, reference_volume, epsilon, theta, quality, gradient);
 }
 
 }  // namespace paloverde::metrics

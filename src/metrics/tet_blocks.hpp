@@ -32,4 +32,8 @@ void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, 
 void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
                       double* quality, TetBlock* gradient);
 
+// As RegularizedEnergy::tet() with epsilon, theta and the reference volume reference_volume[j].
+void tet_energy_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double epsilon,
+                      double theta, double* quality, TetBlock* gradient);
+
 }  // namespace paloverde::metrics

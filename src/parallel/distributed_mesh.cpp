@@ -412,6 +412,7 @@ std::vector<std::filesystem::path> piece_files(const std::filesystem::path& path
 PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind& kind) {
     ReadOptions options;
     options.fix_boundary = false;
+    options.orientation = OrientationMode::AsIs;  // decided over all pieces together, once assembled
     MeshFile piece = read_mesh(file, options);
     const Field* ids = piece.point_field(kGlobalIds);
     if (!ids) ids = piece.point_field("GLOBAL_ID");
@@ -455,6 +456,29 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
     return out;
 }
 
+// The orientation decision over all pieces: each rank measures the elements it counts, at one
+// scale for all, and the exact sums are added across ranks, so every rank decides the same.
+OrientationDecision orient_pieces(DistributedMesh& part, OrientationMode mode) {
+    const Reducer& reducer = part.reducer();
+    const bool oriented =
+        part.mesh.kind() == ElementKind::Tetrahedron || reducer.min(part.mesh.is_planar() ? 1.0 : 0.0) > 0.0;
+    double largest = 0.0;
+    for (double x : part.mesh.coordinates()) largest = std::max(largest, std::abs(x));
+    largest = reducer.max(largest);
+    SignedMeasure measure;
+    if (oriented)
+        measure = signed_measure(part.mesh, part.mesh.coordinates(), unit_scale_exponent(std::span<const double>(&largest, 1)),
+                                 part.plane_normal, part.counted);
+    std::array<ExactSum, 3> sums{measure.total, measure.magnitude, measure.rounding};
+    reducer.sum(sums);
+    const OrientationDecision d = decide_orientation(mode, oriented, {sums[0], sums[1], sums[2]});
+    if (d.flipped) {
+        part.mesh.flip_elements();
+        part.mesh.set_elements_flipped(true);
+    }
+    return d;
+}
+
 }  // namespace
 
 DistributedMesh::DistributedMesh()
@@ -473,7 +497,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
 
     auto start = Clock::now();
     WholeSplit split;
-    std::int64_t header[3] = {0, 0, 0};  // kind, global vertices, global elements
+    std::int64_t header[4] = {0, 0, 0, 0};  // kind, global vertices, global elements, elements flipped
     double normal[3] = {0.0, 0.0, 1.0};
     on_root_or_fail_everywhere(comm, out.rank, [&] {
         if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
@@ -482,11 +506,12 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
         header[0] = static_cast<std::int64_t>(whole->kind());
         header[1] = whole->num_vertices();
         header[2] = whole->num_elements();
+        header[3] = whole->elements_flipped() ? 1 : 0;
         normal[0] = whole->plane_normal()[0], normal[1] = whole->plane_normal()[1], normal[2] = whole->plane_normal()[2];
     });
     out.timings.partition = seconds_since(start);
     start = Clock::now();
-    MPI_Bcast(header, 3, MPI_INT64_T, 0, comm);
+    MPI_Bcast(header, 4, MPI_INT64_T, 0, comm);
     MPI_Bcast(normal, 3, MPI_DOUBLE, 0, comm);
     out.global_vertices = header[1];
     out.global_elements = header[2];
@@ -514,6 +539,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
         mine.element_order = receive_vector<std::int64_t>(0, 6, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
+    out.mesh.set_elements_flipped(header[3] != 0);
     out.timings.distribute = seconds_since(start);
     return out;
 }
@@ -607,6 +633,7 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
                 break;
             }
     agree(comm, failure);
+    out.orientation = orient_pieces(out, options.orientation);
     out.timings.distribute = seconds_since(start);
     return out;
 }
@@ -728,6 +755,7 @@ void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, con
                           std::vector<VertexId>(arrays.connectivity.begin(), arrays.connectivity.end()));
         piece.set_fixed(std::move(arrays.fixed));
         piece.set_global_ids(std::vector<GlobalId>(arrays.canonical.begin(), arrays.canonical.end()));
+        piece.set_elements_flipped(whole.elements_flipped());
         std::vector<std::uint8_t> counted(static_cast<std::size_t>(piece.num_elements()));
         for (ElementId e = 0; e < piece.num_elements(); ++e) {
             const auto corners = piece.element(e);

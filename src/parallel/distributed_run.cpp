@@ -60,6 +60,7 @@ DistributedRunReport run(MPI_Comm comm, const DistributedRunOptions& options,
         on_root(comm, rank, [&] {
             ReadOptions read;
             read.fix_boundary = options.fix_boundary;
+            read.orientation = options.distribute.orientation;
             whole = read_mesh(options.input, read).mesh;
         });
         report.read_seconds = seconds_since(start);

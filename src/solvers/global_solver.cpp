@@ -10,10 +10,9 @@
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
-#include "paloverde/mesh/orientation.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
 #include "checkpointer.hpp"
+#include "energy_untangle.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
 #include "workspace.hpp"
@@ -98,6 +97,7 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("p", o.objective_options.p)("shape_metric", o.shape_metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)
         ("untangle", o.untangle)("improve_shape", o.improve_shape)("termination", o.termination)
         ("untangle_termination", o.untangle_termination)("precondition_untangling", o.precondition_untangling)
+        ("untangling", o.untangling == GlobalSolverOptions::Untangling::Energy ? "energy" : "barrier")
         ("local_untangle_rounds", o.local_untangle_rounds)("steps_per_mu", o.steps_per_mu)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     return t.text();
@@ -121,14 +121,11 @@ public:
 
 private:
     Stats stats(std::span<const double> q) { return quality_stats(work_, q, counted_); }
-    // Exact sums of term(v, acc) over the owned vertices of all processes.
-    template <int K, class Term>
-    std::array<double, K> vertex_sums(Term term) const;
     double objective_value(std::span<const double> q) { return objective_.value(work_.counted(q, counted_), reducer_); }
     void damp_like_owners(std::vector<VertexId>& damped);
     bool line_search(double objective, double max_direction);
     void apply_preconditioner();
-    bool untangled() const;
+    bool untangled() const { return detail::untangled(work_, x_); }
     void record(const Stats& s, double objective, double step, double gain);
     PhaseResult end(TerminationReason reason, std::string message);
     // Every number the next iteration needs is finite (a NaN ends the phase on its best iterate).
@@ -169,26 +166,6 @@ private:
     int steps_at_mu_ = 0;
     std::vector<double> best_history_, measure_history_, bad_history_;
 };
-
-template <int K, class Term>
-std::array<double, K> Phase::vertex_sums(Term term) const {
-    const auto owned = work_.owned();
-    auto sums = detail::exact_sums<K>(owned.size(), [&](std::size_t v, auto& acc) {
-        if (owned[v]) term(v, acc);
-    });
-    reducer_.sum(sums);
-    std::array<double, K> out{};
-    for (int k = 0; k < K; ++k) out[k] = sums[k].value();
-    return out;
-}
-
-bool Phase::untangled() const {
-    const SimplexMesh& mesh = work_.mesh();
-    double tangled = 0.0;
-    for (ElementId e = 0; e < work_.movable_elements() && tangled == 0.0; ++e)
-        if (element_orientation(mesh, x_, e) <= 0) tangled = 1.0;
-    return reducer_.max(tangled) == 0.0;
-}
 
 // A distributed run: the owner of a vertex holds all its elements, so its decision to damp the
 // vertex is complete; ghosts take their owners' decisions.
@@ -270,7 +247,7 @@ bool Phase::line_search(double objective, double max_direction) {
         std::fill(stamp_.begin(), stamp_.end(), 0);
         if (blocked) continue;
         // The Armijo test uses the slope of the damped step actually taken.
-        const double slope = vertex_sums<1>([&](std::size_t v, auto& acc) {
+        const double slope = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             double d = 0.0;
             for (int c = 0; c < 3; ++c) d += gradient_[3 * v + c] * damping_[v] * direction_[3 * v + c];
             acc[0].add(d);
@@ -292,7 +269,7 @@ bool Phase::line_search(double objective, double max_direction) {
 // evens out the very different scales of elements and barrier weights.
 void Phase::apply_preconditioner() {
     const std::size_t n = x_.size() / 3;
-    const auto [trace_sum, counted] = vertex_sums<2>([&](std::size_t v, auto& acc) {
+    const auto [trace_sum, counted] = detail::owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
         const double* m = &curvature_[6 * v];
         const double trace = m[0] + m[3] + m[5];
         if (trace > 0.0) acc[0].add(trace), acc[1].add(1.0);
@@ -436,11 +413,9 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     for (int iteration = first_iteration;; ++iteration) {
         // Checkpoints and stops at the top of an iteration, where the state is complete. Every
         // process stops at the same iteration: a stop requested on any of them counts.
-        if (reducer_.max(stop_requested() ? 1.0 : 0.0) > 0.0) {
+        if (detail::stop_requested_anywhere(work_)) {
             if (checkpointer_.writes()) save_checkpoint(iteration);
-            return end(TerminationReason::Interrupted,
-                       "interrupted (a stop was requested) after " + std::to_string(summary_.iterations) +
-                           " iterations; the best iterate is handed back");
+            return end(TerminationReason::Interrupted, detail::interrupted_after(summary_.iterations));
         }
         if (checkpointer_.due(summary_.iterations)) save_checkpoint(iteration);
         if (iteration > stop_.max_iterations)
@@ -456,7 +431,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             work_.gradient(metric_, x_, weight_, gradient_);
         }
         ++summary_.gradient_passes;
-        const double g2 = vertex_sums<1>([&](std::size_t v, auto& acc) {
+        const double g2 = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             acc[0].add(gradient_[3 * v] * gradient_[3 * v] + gradient_[3 * v + 1] * gradient_[3 * v + 1] +
                        gradient_[3 * v + 2] * gradient_[3 * v + 2]);
         })[0];
@@ -475,7 +450,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // changes (mu) or the direction stops ascending.
         double beta = 0.0;
         if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart_) {
-            const auto sums = vertex_sums<2>([&](std::size_t v, auto& acc) {
+            const auto sums = detail::owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
                 double a = 0.0, b = 0.0;
                 for (std::size_t i = 3 * v; i < 3 * v + 3; ++i) {
                     a += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
@@ -487,7 +462,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
         }
         for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
-        const double slope = vertex_sums<1>([&](std::size_t v, auto& acc) {
+        const double slope = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             acc[0].add(gradient_[3 * v] * direction_[3 * v] + gradient_[3 * v + 1] * direction_[3 * v + 1] +
                        gradient_[3 * v + 2] * direction_[3 * v + 2]);
         })[0];
@@ -667,7 +642,28 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         // their elements' smallest volume is largest, and the barrier ascent resumes.
         std::optional<VertexColoring> colors;  // distributed runs; collective: made when first needed
         const int first_round = resume ? static_cast<int>(resume->number("round")) : 0;
-        for (int round = first_round;; ++round) {
+        // First the regularized energy, which needs no valid start; where it does not free every
+        // element, the barrier ascent on the hybrid metric and local rounds go on from its best
+        // iterate. (A run resumed from a checkpoint of the ascent goes straight back to it.)
+        result = {TerminationReason::Converged, "not untangled yet"};
+        const bool resume_energy = resume && resume->numbers.contains("energy");
+        if (options.untangling == GlobalSolverOptions::Untangling::Energy && (!resume || resume_energy)) {
+            const TerminationCriterion& limits = options.untangle_termination;
+            const auto energy = detail::energy_untangle(work, xyz, limits.max_iterations, limits.max_seconds, summary,
+                                                        observer, start, checkpointer, resume_energy ? &*resume : nullptr);
+            if (resume_energy) resume.reset();
+            result = {energy.reason, energy.message};
+            const bool out_of_budget =
+                result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
+            if (out_of_budget || result.reason == TerminationReason::Interrupted ||
+                result.reason == TerminationReason::NumericalFailure) {
+                copy_back(xyz);
+                return finish(out_of_budget ? TerminationReason::CannotUntangle : result.reason,
+                              out_of_budget ? "untangling stopped (" + result.message + ") with elements still inverted"
+                                            : "while untangling: " + result.message);
+            }
+        }
+        for (int round = first_round; result.reason != TerminationReason::TargetReached; ++round) {
             const detail::SolverState* here = resume && round == first_round ? &*resume : nullptr;
             TerminationCriterion stop = options.untangle_termination;
             stop.max_iterations = here ? static_cast<int>(here->number("budget"))

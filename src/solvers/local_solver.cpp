@@ -43,6 +43,8 @@ double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[
 std::string options_text(const LocalSolverOptions& o) {
     detail::OptionsText t;
     t("metric", o.metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)("untangle", o.untangle)
+        ("improve_shape", o.improve_shape)
+        ("untangling", o.untangling == LocalSolverOptions::Untangling::Energy ? "energy" : "volume")
         ("termination", o.termination)("untangle_termination", o.untangle_termination)
         ("coloring", o.coloring == ColoringOrder::SmallestLast ? "smallest_last" : "greedy")
         ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below);
@@ -249,6 +251,18 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     auto count_inverted = [&](std::span<const double> at) {
         return static_cast<long>(reducer.total(static_cast<double>(detail::count_not_positive(mesh, at, movable))));
     };
+    // Untangling by the energy: each element measured against its neighbourhood's size at the
+    // input (the global solver's local reference volumes), and the schedule's epsilon.
+    const bool by_energy = options_.untangling == LocalSolverOptions::Untangling::Energy;
+    std::vector<double> reference;
+    double epsilon = detail::kFirstUntangleEpsilon;
+    MetricScale local_scale = scale;
+    if (by_energy) {
+        reference = detail::local_reference_volumes(mesh, mesh.coordinates(), scale, domain.halo, mesh.num_elements());
+        local_scale.element_reference_volume = reference;
+    }
+    auto local_volume = make_metric("scaled_volume");
+    local_volume->set_scale(local_scale);
     auto elapsed = [&] { return reducer.max(seconds_since(start)); };
 
     const std::size_t n = static_cast<std::size_t>(mesh.num_vertices());
@@ -317,9 +331,10 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
                 VertexAscent shape(mesh, *metric, options_), untangle(mesh, *volume, options_);
+                detail::VertexEnergy energy(mesh, reference, scale, epsilon);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)
-                    moved += visit(members[static_cast<std::size_t>(i)], shape, untangle);
+                    moved += visit(members[static_cast<std::size_t>(i)], shape, untangle, energy);
             }
             domain.halo.update(xyz, 3);
         }
@@ -336,7 +351,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         state.numbers = {{"untangling", untangling ? 1.0 : 0.0}, {"sweep", next_sweep},
                          {"inverted", static_cast<double>(inverted)}, {"best", best},
                          {"best_inverted", static_cast<double>(best_inverted)}, {"best_worst", best_worst},
-                         {"now_inverted", static_cast<double>(now_inverted)}, {"now_worst", now_worst}};
+                         {"now_inverted", static_cast<double>(now_inverted)}, {"now_worst", now_worst},
+                         {"epsilon", epsilon}};
         state.lists = {{"inverted_history", inverted_history}, {"worst_history", worst_history}, {"best_history", best_history}};
         state.vertex_fields = {{"x", xyz}, {"best_x", best_xyz}};
         checkpointer.save(summary, state, seconds_since(start));
@@ -346,6 +362,41 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         const bool stop = reducer.max(stop_requested() ? 1.0 : 0.0) > 0.0;
         if (stop ? checkpointer.writes() : checkpointer.due(summary.iterations)) save(untangling, next_sweep);
         return stop;
+    };
+    // The whole mesh's energy at the current epsilon (exact sums: the same on any rank count).
+    auto total_energy = [&] {
+        auto energy = make_untangle_energy(epsilon, detail::kUntangleTheta);
+        energy->set_scale(local_scale);
+        detail::sweep_stats(*energy, mesh, xyz, movable, scratch);
+        ExactSum sum;
+        for (double q : scratch) sum.add(-q);
+        return reducer.total(sum);
+    };
+    // A sweep of the energy over the vertices within two rings of an inverted element (the
+    // others' elements are valid, and their moves would only smooth), then the next epsilon.
+    std::vector<double> near(n);
+    auto energy_sweep = [&] {
+        const double start_energy = total_energy();
+        std::fill(near.begin(), near.end(), 0.0);
+        // Every local element, counted here or not: an owned vertex sees all of its elements, a
+        // ghost takes its owner's mark.
+        for (ElementId e = 0; e < mesh.num_elements(); ++e)
+            if (element_orientation(mesh, xyz, e) <= 0)
+                for (VertexId w : mesh.element(e)) near[w] = 1.0;
+        domain.halo.update(near, 1);
+        const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent&, detail::VertexEnergy& energy) {
+            bool close = false;
+            for (ElementId e : mesh.elements_of(v))
+                for (VertexId w : mesh.element(e)) close = close || near[w] != 0.0;
+            return close && energy.improve(xyz, v) ? 1 : 0;
+        });
+        const double end_energy = total_energy();
+        const double worst = detail::sweep_stats(*local_volume, mesh, xyz, movable, scratch).worst;
+        const double next = detail::next_epsilon(epsilon, start_energy, end_energy,
+                                                 reducer.min(movable.empty() ? std::numeric_limits<double>::infinity() : worst));
+        // Below 1e-12 of an element's size the barrier is as sharp as it can usefully be.
+        epsilon = std::isfinite(next) ? std::max(next, 1e-12) : epsilon;
+        return moved;
     };
     const std::string interrupted = "interrupted (a stop was requested) after ";
     int first_sweep = 1;
@@ -361,6 +412,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         best_worst = resume->number("best_worst");
         now_inverted = static_cast<long>(resume->number("now_inverted"));
         now_worst = resume->number("now_worst");
+        epsilon = resume->number("epsilon");
         inverted_history = resume->list("inverted_history");
         worst_history = resume->list("worst_history");
         best_history = resume->list("best_history");
@@ -386,7 +438,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                                                                    " sweeps with elements still inverted");
             if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
                 return done(TerminationReason::TimeLimit, "time limit reached while untangling");
-            const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent) {
+            const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
                 bool touches_inverted = false;
                 for (ElementId e : mesh.elements_of(v))
                     if (element_orientation(mesh, xyz, e) <= 0) touches_inverted = true;
@@ -417,6 +469,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         }
         resume.reset();
     }
+    if (!options_.improve_shape)
+        return done(TerminationReason::TargetReached, "no element is inverted (improve_shape: false, no shape sweeps)");
 
     const TerminationCriterion& stop = options_.termination;
     if (!resume) {
@@ -435,7 +489,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
             return done(TerminationReason::TimeLimit, "time limit reached");
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
-        const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&) {
+        const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
             if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;
             return ascent.improve(xyz, v) ? 1 : 0;
         });

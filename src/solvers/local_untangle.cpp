@@ -6,6 +6,9 @@
 #include <limits>
 #include <vector>
 
+#include "paloverde/mesh/orientation.hpp"
+#include "run_support.hpp"
+
 namespace paloverde::detail {
 
 namespace {
@@ -99,6 +102,19 @@ std::pair<std::array<double, D>, double> max_min_linear(const std::vector<std::a
     return {y, s};
 }
 
+// Unit directions a free vertex moves in: all of space, or the plane of the triangles.
+std::vector<Vec3> move_basis(ElementKind kind, const MetricScale& scale) {
+    if (kind == ElementKind::Tetrahedron) return {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    const Vec3& n = scale.plane_normal;
+    Vec3 u = std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
+    const double along = u[0] * n[0] + u[1] * n[1] + u[2] * n[2];
+    for (int d = 0; d < 3; ++d) u[d] -= along * n[d];
+    const double length = std::hypot(u[0], u[1], u[2]);
+    for (double& x : u) x /= length;
+    const Vec3 w = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
+    return {u, w};
+}
+
 }  // namespace
 
 VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale) {
@@ -131,19 +147,9 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
     if (!(box > 0.0)) return result;
 
     // Directions v may move in, scaled by the box: all of space, or the plane of the triangles.
-    std::vector<Vec3> basis;
-    if (mesh.kind() == ElementKind::Tetrahedron) {
-        basis = {{box, 0, 0}, {0, box, 0}, {0, 0, box}};
-    } else {
-        const Vec3& n = scale.plane_normal;
-        Vec3 u = std::abs(n[0]) < 0.9 ? Vec3{1, 0, 0} : Vec3{0, 1, 0};
-        const double along = u[0] * n[0] + u[1] * n[1] + u[2] * n[2];
-        for (int d = 0; d < 3; ++d) u[d] -= along * n[d];
-        const double length = std::hypot(u[0], u[1], u[2]);
-        for (double& x : u) x /= length;
-        const Vec3 w = {n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
-        basis = {{box * u[0], box * u[1], box * u[2]}, {box * w[0], box * w[1], box * w[2]}};
-    }
+    std::vector<Vec3> basis = move_basis(mesh.kind(), scale);
+    for (Vec3& b : basis)
+        for (double& x : b) x *= box;
     auto project = [&](const std::array<double, 3>& gv, const Vec3& b) { return gv[0] * b[0] + gv[1] * b[1] + gv[2] * b[2]; };
     Vec3 move{0, 0, 0};
     double best = 0.0;
@@ -171,6 +177,207 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
     result.after = after;
     result.moved = true;
     return result;
+}
+
+std::vector<double> local_reference_volumes(const SimplexMesh& mesh, std::span<const double> xyz,
+                                            const MetricScale& scale, const Halo& halo, ElementId count) {
+    std::vector<double> volume(static_cast<std::size_t>(mesh.num_elements()));
+    MetricScale unit = scale;
+    unit.reference_volume = 1.0;
+    unit.element_reference_volume = {};
+    auto measure = make_metric("scaled_volume");
+    measure->set_scale(unit);
+    measure->evaluate(mesh, xyz, 0, mesh.num_elements(), volume.data());
+    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh.num_vertices()), 0.0);
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const auto elements = mesh.elements_of(v);
+        for (ElementId e : elements) vertex_mean[v] += std::abs(volume[e]);
+        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
+    }
+    // A ghost sees only some of its elements; its owner sees them all.
+    halo.update(vertex_mean, 1);
+    std::vector<double> out(static_cast<std::size_t>(count));
+    for (ElementId e = 0; e < count; ++e) {
+        double sum = 0.0;
+        for (VertexId v : mesh.element(e)) sum += vertex_mean[v];
+        const double local = sum / mesh.corners();
+        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
+        out[e] = local > 1e-12 * scale.reference_volume ? local : scale.reference_volume;
+    }
+    return out;
+}
+
+double regularized_volume(double v, double epsilon) {
+    const double r = std::sqrt(epsilon * epsilon + v * v);
+    return v >= 0.0 ? 0.5 * (v + r) : 0.5 * epsilon * epsilon / (r - v);
+}
+
+double next_epsilon(double epsilon, double energy_start, double energy_end, double worst) {
+    const double sigma = std::max(1.0 - energy_end / energy_start, 0.1);
+    // chi(worst, eps') = mu solves to eps' = 2 sqrt(mu (mu - worst)).
+    const double mu = (1.0 - sigma) * regularized_volume(worst, epsilon);
+    return worst < mu ? 2.0 * std::sqrt(mu * (mu - worst)) : 0.1 * epsilon;
+}
+
+namespace {
+
+// Newton steps per visit, and the forward-difference step in units of the vertex's local length.
+constexpr int kNewtonSteps = 4;
+constexpr double kDifference = 1e-6;
+
+// Solves the symmetric D x D system (H + tau I) z = r by Cholesky, raising tau from 0 until H + tau I
+// is positive definite: then z is a descent direction for r = -gradient.
+template <int D>
+std::array<double, D> shifted_solve(const std::array<std::array<double, D>, D>& h, const std::array<double, D>& r) {
+    double trace = 0.0;
+    for (int i = 0; i < D; ++i) trace += std::abs(h[i][i]);
+    for (double tau = 0.0;; tau = tau == 0.0 ? 1e-10 * std::max(trace, 1e-300) : 10.0 * tau) {
+        std::array<std::array<double, D>, D> l{};
+        bool ok = true;
+        for (int i = 0; i < D && ok; ++i)
+            for (int j = 0; j <= i && ok; ++j) {
+                double s = h[i][j] + (i == j ? tau : 0.0);
+                for (int k = 0; k < j; ++k) s -= l[i][k] * l[j][k];
+                if (i == j) {
+                    ok = s > 0.0 && std::isfinite(s);
+                    if (ok) l[i][i] = std::sqrt(s);
+                } else {
+                    l[i][j] = s / l[j][j];
+                }
+            }
+        if (!ok) {
+            if (!(tau < 1e300)) return {};
+            continue;
+        }
+        std::array<double, D> z{};
+        for (int i = 0; i < D; ++i) {
+            double s = r[i];
+            for (int k = 0; k < i; ++k) s -= l[i][k] * z[k];
+            z[i] = s / l[i][i];
+        }
+        for (int i = D - 1; i >= 0; --i) {
+            double s = z[i];
+            for (int k = i + 1; k < D; ++k) s -= l[k][i] * z[k];
+            z[i] = s / l[i][i];
+        }
+        return z;
+    }
+}
+
+// One damped Newton step in the D directions of `basis` (scaled by `length`): the direction,
+// from the gradient g at x and the gradients at x + h basis_i.
+template <int D>
+std::array<double, D> newton_direction(const std::array<double, 3>& g, const std::vector<std::array<double, 3>>& basis,
+                                       double length, const std::array<std::array<double, 3>, 3>& shifted) {
+    auto along = [&](const std::array<double, 3>& v, int i) {
+        return length * (v[0] * basis[i][0] + v[1] * basis[i][1] + v[2] * basis[i][2]);
+    };
+    std::array<std::array<double, D>, D> h{};
+    std::array<double, D> r{};
+    for (int i = 0; i < D; ++i) {
+        r[i] = -along(g, i);
+        for (int j = 0; j < D; ++j) h[i][j] = (along(shifted[j], i) - along(g, i)) / kDifference;
+    }
+    for (int i = 0; i < D; ++i)
+        for (int j = 0; j < i; ++j) h[i][j] = h[j][i] = 0.5 * (h[i][j] + h[j][i]);
+    return shifted_solve<D>(h, r);
+}
+
+}  // namespace
+
+VertexEnergy::VertexEnergy(const SimplexMesh& mesh, std::span<const double> reference, const MetricScale& scale,
+                           double epsilon)
+    : mesh_(mesh), reference_(reference), scale_(scale), metric_(make_untangle_energy(epsilon, kUntangleTheta)),
+      basis_(move_basis(mesh.kind(), scale)) {
+    scale_.element_reference_volume = {};
+}
+
+double VertexEnergy::energy(std::span<const double> xyz, VertexId v, std::array<double, 3>* gradient) {
+    double corners[12], g[12];
+    double sum = 0.0;
+    if (gradient) *gradient = {0.0, 0.0, 0.0};
+    MetricScale scale = scale_;
+    const int k = mesh_.corners();
+    for (ElementId e : mesh_.elements_of(v)) {
+        const auto element = mesh_.element(e);
+        int slot = 0;
+        for (int i = 0; i < k; ++i) {
+            if (element[i] == v) slot = i;
+            for (int d = 0; d < 3; ++d) corners[3 * i + d] = xyz[3 * static_cast<std::size_t>(element[i]) + d];
+        }
+        // Each element against its own size (the one-element calls use the metric's scale).
+        scale.reference_volume = reference_[static_cast<std::size_t>(e)];
+        metric_->set_scale(scale);
+        // The metric is minus the energy.
+        if (gradient) {
+            sum -= metric_->value_and_gradient(mesh_.kind(), corners, g);
+            for (int d = 0; d < 3; ++d) (*gradient)[d] -= g[3 * slot + d];
+        } else {
+            sum -= metric_->value(mesh_.kind(), corners);
+        }
+    }
+    return sum;
+}
+
+int VertexEnergy::inverted(std::span<const double> xyz, VertexId v) const {
+    int count = 0;
+    for (ElementId e : mesh_.elements_of(v)) count += element_orientation(mesh_, xyz, e) <= 0;
+    return count;
+}
+
+bool VertexEnergy::improve(std::span<double> xyz, VertexId v) {
+    if (mesh_.fixed()[v] || mesh_.elements_of(v).empty()) return false;
+    const double length = local_length(mesh_, xyz, v);
+    if (!(length > 0.0)) return false;
+    double* p = &xyz[3 * static_cast<std::size_t>(v)];
+    const int allowed = inverted(xyz, v);
+    const int dims = static_cast<int>(basis_.size());
+    std::array<double, 3> g{};
+    std::array<std::array<double, 3>, 3> shifted{};
+    double f = energy(xyz, v, &g);
+    if (!std::isfinite(f)) return false;
+    bool moved = false;
+    for (int step = 0; step < kNewtonSteps; ++step) {
+        const std::array<double, 3> origin = {p[0], p[1], p[2]};
+        for (int i = 0; i < dims; ++i) {
+            for (int d = 0; d < 3; ++d) p[d] = origin[d] + kDifference * length * basis_[i][d];
+            energy(xyz, v, &shifted[i]);
+        }
+        for (int d = 0; d < 3; ++d) p[d] = origin[d];
+        std::array<double, 3> y{};  // the step, in units of `length` along the basis
+        if (dims == 3) {
+            y = newton_direction<3>(g, basis_, length, shifted);
+        } else {
+            const auto y2 = newton_direction<2>(g, basis_, length, shifted);
+            y = {y2[0], y2[1], 0.0};
+        }
+        // A vertex never needs to travel more than a local length in one step.
+        const double norm = std::sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
+        if (!(norm > 0.0) || !std::isfinite(norm)) break;
+        if (norm > 1.0)
+            for (double& c : y) c /= norm;
+        std::array<double, 3> move{};
+        for (int i = 0; i < dims; ++i)
+            for (int d = 0; d < 3; ++d) move[d] += length * y[i] * basis_[i][d];
+        const double slope = g[0] * move[0] + g[1] * move[1] + g[2] * move[2];
+        if (!(slope < 0.0)) break;
+        bool accepted = false;
+        double trial = f;
+        for (double t = 1.0; t > 1e-9 && !accepted; t *= 0.5) {
+            for (int d = 0; d < 3; ++d) p[d] = origin[d] + t * move[d];
+            trial = energy(xyz, v, nullptr);
+            accepted = trial < f && trial <= f + 1e-4 * t * slope && inverted(xyz, v) <= allowed;
+        }
+        if (!accepted) {
+            for (int d = 0; d < 3; ++d) p[d] = origin[d];
+            break;
+        }
+        moved = true;
+        const double gain = f - trial;
+        f = energy(xyz, v, &g);
+        if (gain <= 1e-10 * std::abs(f)) break;
+    }
+    return moved;
 }
 
 }  // namespace paloverde::detail

@@ -7,8 +7,11 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/solvers/stop.hpp"
+#include "local_untangle.hpp"
 
 namespace paloverde::detail {
 
@@ -203,24 +206,7 @@ std::vector<double> Workspace::absolute_volumes() const {
 // Per vertex the mean absolute volume of its elements; per element the mean of that over its
 // corners: a local, scale-free size.
 std::vector<double> Workspace::local_reference_volumes() const {
-    const std::vector<double> volume = absolute_volumes();
-    std::vector<double> vertex_mean(static_cast<std::size_t>(mesh_.num_vertices()), 0.0);
-    for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
-        if (!owned_[v]) continue;
-        const auto elements = mesh_.elements_of(v);
-        for (ElementId e : elements) vertex_mean[v] += volume[e];
-        if (!elements.empty()) vertex_mean[v] /= static_cast<double>(elements.size());
-    }
-    halo_->update(vertex_mean, 1);
-    std::vector<double> out(static_cast<std::size_t>(movable_));
-    for (ElementId e = 0; e < movable_; ++e) {
-        double sum = 0.0;
-        for (VertexId v : mesh_.element(e)) sum += vertex_mean[v];
-        const double local = sum / mesh_.corners();
-        // Flat neighbourhoods have no size of their own: fall back on the mesh's.
-        out[e] = local > 1e-12 * scale_.reference_volume ? local : scale_.reference_volume;
-    }
-    return out;
+    return detail::local_reference_volumes(mesh_, mesh_.coordinates(), scale_, *halo_, movable_);
 }
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {
@@ -292,6 +278,34 @@ void Workspace::copy_back(std::span<const double> xyz, SimplexMesh& original) co
 
 void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) const {
     std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
+}
+
+double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
+    const auto owned = work.owned();
+    auto term = [&](std::size_t v) { return a[3 * v] * b[3 * v] + a[3 * v + 1] * b[3 * v + 1] + a[3 * v + 2] * b[3 * v + 2]; };
+    double largest = 0.0;
+    for (std::size_t v = 0; v < owned.size(); ++v)
+        if (owned[v]) largest = std::max(largest, std::abs(term(v)));
+    largest = work.reducer().max(largest);
+    auto sums = bounded_sums<1>(owned.size(), {largest}, [&](std::size_t v, auto& acc) {
+        if (owned[v]) acc[0].add(term(v));
+    });
+    work.reducer().sum(sums);
+    return sums[0].value();
+}
+
+bool untangled(const Workspace& work, std::span<const double> xyz) {
+    double tangled = 0.0;
+    for (ElementId e = 0; e < work.movable_elements() && tangled == 0.0; ++e)
+        if (element_orientation(work.mesh(), xyz, e) <= 0) tangled = 1.0;
+    return work.reducer().max(tangled) == 0.0;
+}
+
+bool stop_requested_anywhere(const Workspace& work) { return work.reducer().max(stop_requested() ? 1.0 : 0.0) > 0.0; }
+
+std::string interrupted_after(int iterations) {
+    return "interrupted (a stop was requested) after " + std::to_string(iterations) +
+           " iterations; the best iterate is handed back";
 }
 
 }  // namespace paloverde::detail

@@ -8,10 +8,13 @@
 // vertex sum runs over the vertex's elements in canonical order, grouped in blocks of the
 // canonical element order that are the same for every split of the mesh, so the owner of a
 // vertex computes bit for bit the gradient the serial run computes.
+#include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "core/exact_sums.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/halo.hpp"
@@ -105,6 +108,32 @@ private:
     std::vector<double> lane_gradient_;   // 3 per lane vertex
     std::vector<double> lane_curvature_;  // 6 per lane vertex, allocated on first use
 };
+
+// Exact sums of term(v, acc) over the vertices this process owns, then over all processes: the
+// same bits for any number of threads and processes.
+template <int K, class Term>
+std::array<double, K> owned_sums(const Workspace& work, Term term) {
+    const auto owned = work.owned();
+    auto sums = exact_sums<K>(owned.size(), [&](std::size_t v, auto& acc) {
+        if (owned[v]) term(v, acc);
+    });
+    work.reducer().sum(sums);
+    std::array<double, K> out{};
+    for (int k = 0; k < K; ++k) out[k] = sums[k].value();
+    return out;
+}
+
+// The dot product of two vertex fields (3 doubles per vertex) over the owned vertices of all
+// processes: bounded sums (core/exact_sums.hpp) under the largest term, the same bits for any
+// number of threads and processes, with additions only (faster than owned_sums' ExactSum).
+double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b);
+
+// Every movable element is positively oriented (decided exactly), over all processes.
+bool untangled(const Workspace& work, std::span<const double> xyz);
+// A stop was requested (stop.hpp) on any process: every process stops at the same iteration.
+bool stop_requested_anywhere(const Workspace& work);
+// What a phase stopped that way says.
+std::string interrupted_after(int iterations);
 
 // Canonical element order: for each element its position when all are sorted by their sorted
 // vertex ids (`vertex_key` per vertex, e.g. canonical or global ids).

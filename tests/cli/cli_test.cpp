@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "paloverde/io/mesh_io.hpp"
+#include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -197,6 +198,86 @@ BOOST_AUTO_TEST_CASE(improve_and_run_name_the_input_in_their_errors_and_failures
     const auto usage = run_cli("improve " + quoted(dir / "one_tet.vtk") + " -o " + quoted(dir / "out.vtk") + " --iterations -4");
     BOOST_TEST(usage.exit_code == 2);
     BOOST_TEST(has(usage.output, "paloverde: " + tet + ": --iterations"), usage.output);
+}
+
+// A tangled mesh and its mirror (the other orientation convention): the mirror is read flipped,
+// has the same inverted count, is untangled and improved to the same coordinates, and the mesh
+// written from it keeps the mirror's element order.
+BOOST_AUTO_TEST_CASE(improve_treats_a_mirrored_file_as_the_original) {
+    const pv::test::ScratchDir dir("cli_mirror");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    BOOST_TEST_REQUIRE(run_cli("perturb -q " + quoted(input) + " -o " + quoted(dir / "p.vtk") +
+                               " --fraction 0.2 --amount 1 --seed 7").exit_code == 0);
+    const auto mirror = pv::test::mirrored(pv::read_mesh(dir / "p.vtk").mesh);
+    pv::write_mesh(dir / "m.vtk", mirror);
+    nlohmann::json summary[2];
+    const char* names[2] = {"p", "m"};
+    for (int i = 0; i < 2; ++i) {
+        const std::string name = names[i];
+        const auto result = run_cli("improve " + quoted(dir / (name + ".vtk")) + " -o " + quoted(dir / (name + "_out.vtk")) +
+                                    " --iterations 20 --threads 1 --summary " + quoted(dir / (name + ".json")));
+        BOOST_TEST_INFO(result.output);
+        BOOST_TEST_REQUIRE(result.exit_code == 0);
+        BOOST_TEST(has(result.output, "elements flipped") == (i == 1));
+        summary[i] = nlohmann::json::parse(read_text(dir / (name + ".json")));
+    }
+    BOOST_TEST(!summary[0]["input_orientation"]["flipped"].get<bool>());
+    BOOST_TEST(summary[1]["input_orientation"]["flipped"].get<bool>());
+    BOOST_TEST(summary[1]["input_orientation"]["sign"].get<int>() == -1);
+    BOOST_TEST(summary[0]["inverted_before"].get<int>() > 0);
+    for (const char* key : {"inverted_before", "inverted_after", "worst_after", "iterations"})
+        BOOST_TEST(summary[0][key] == summary[1][key], key);
+    pv::ReadOptions as_is;
+    as_is.orientation = pv::OrientationMode::AsIs;
+    const auto p_out = pv::read_mesh(dir / "p_out.vtk").mesh, m_out = pv::read_mesh(dir / "m_out.vtk", as_is).mesh;
+    BOOST_TEST(std::equal(m_out.connectivity().begin(), m_out.connectivity().end(), mirror.connectivity().begin(),
+                          mirror.connectivity().end()));
+    BOOST_TEST(std::equal(m_out.coordinates().begin(), m_out.coordinates().end(), p_out.coordinates().begin(),
+                          p_out.coordinates().end()));
+    // Forced: as_is counts the mirror's elements as they are, flipped inverts the original's.
+    const auto counted = [&](const std::string& file, const std::string& mode) {
+        const auto r = run_cli("quality --json --orientation " + mode + " " + quoted(dir / file));
+        BOOST_TEST_REQUIRE(r.exit_code == 0);
+        return nlohmann::json::parse(r.output);
+    };
+    const int inverted = summary[0]["inverted_before"].get<int>();
+    const int degenerate = counted("p.vtk", "auto")["degenerate"].get<int>();
+    BOOST_TEST(counted("m.vtk", "auto")["inverted"].get<int>() == inverted);
+    BOOST_TEST(counted("m.vtk", "as_is")["inverted"].get<int>() == mirror.num_elements() - inverted - degenerate);
+    BOOST_TEST(counted("p.vtk", "flipped")["inverted"].get<int>() == mirror.num_elements() - inverted - degenerate);
+    BOOST_TEST(counted("p.vtk", "flipped")["input_orientation"]["mode"] == "flipped");
+    const auto config = run_cli("improve " + quoted(dir / "m.vtk") + " -o x.vtk --orientation as_is --print-config");
+    BOOST_TEST(has(config.output, "orientation: as_is"));
+    BOOST_TEST(run_cli("improve " + quoted(dir / "m.vtk") + " -o x.vtk --orientation sideways").exit_code == 2);
+}
+
+// --untangle stops once no element is inverted, with either solver that untangles; Laplace
+// smoothing does not untangle, and says so.
+BOOST_AUTO_TEST_CASE(untangle_only_works_for_global_and_local) {
+    const pv::test::ScratchDir dir("cli_untangle");
+    const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
+    for (const std::string method : {"global", "local"}) {
+        const auto result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --method " +
+                                    method + " --untangle --summary " + quoted(dir / "s.json"));
+        BOOST_TEST_INFO(method << ": " << result.output);
+        BOOST_TEST_REQUIRE(result.exit_code == 0);
+        const auto s = nlohmann::json::parse(read_text(dir / "s.json"));
+        BOOST_TEST(s["inverted_before"].get<int>() == 9);
+        BOOST_TEST(s["inverted_after"].get<int>() == 0);
+        BOOST_TEST(s["iterations"] == s["untangle_iterations"]);  // no shape iterations
+        BOOST_TEST(s["untangle_iterations"].get<int>() > 0);
+    }
+    // The same through a config: an untangle step with the local solver.
+    pv::test::write_file(dir / "run.yaml", "input: {mesh: " + input.string() + "}\nqueue: [untangle: local]\n");
+    const auto run = run_cli("run --json " + quoted(dir / "run.yaml"));
+    BOOST_TEST_REQUIRE(run.exit_code == 0, run.output);
+    BOOST_TEST(nlohmann::json::parse(run.output)["inverted_after"].get<int>() == 0);
+    for (const std::string method : {"laplace", "smart_laplace"}) {
+        const auto result = run_cli("improve " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --method " + method +
+                                    " --untangle");
+        BOOST_TEST(result.exit_code == 2);
+        BOOST_TEST(has(result.output, "does not untangle"), result.output);
+    }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

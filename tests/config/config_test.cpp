@@ -270,7 +270,7 @@ BOOST_AUTO_TEST_CASE(a_config_run_untangles_a_shared_mesh) {
     BOOST_TEST(summary["status"].get<std::string>() == "done");
     BOOST_TEST(summary["steps"].size() == 4u);
     BOOST_TEST(has(pv::test::read_text(dir / "h.csv"), "method,improver,iteration,phase,worst_quality"));
-    BOOST_TEST(has(pv::test::read_text(dir / "h.csv"), "run,untangle,0,untangle,"));
+    BOOST_TEST(has(pv::test::read_text(dir / "h.csv"), "run,untangle,0,untangle_energy,"));
     BOOST_TEST(has(pv::test::read_text(dir / "p.svg"), "<polyline"));
 }
 
@@ -497,7 +497,7 @@ BOOST_AUTO_TEST_CASE(progress_only_on_a_terminal) {
         return out;
     };
     const std::string shown = terminal("");
-    BOOST_TEST(has(shown, "\rglobal [untangle]  iteration 0  worst "));
+    BOOST_TEST(has(shown, "\rglobal [untangle_energy]  iteration 0  worst "));
     BOOST_TEST(has(shown, "inverted "));
     BOOST_TEST(!has(terminal(" --quiet"), "\r"));
 }

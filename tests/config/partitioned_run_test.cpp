@@ -21,6 +21,7 @@
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "support/io_checks.hpp"
+#include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -470,6 +471,43 @@ BOOST_AUTO_TEST_CASE(mpirun_improve_from_pieces_writes_one_file) {
     const auto dropped = mpirun_cli(dir, "improve " + quoted(tire) + " -o " + quoted(dir / "out.pvtu") + options + " --json");
     BOOST_TEST(dropped.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
     BOOST_TEST(nlohmann::json::parse(dropped.out)["parallel"]["whole_mesh_on_rank_0"].get<std::string>() == "dropped");
+}
+
+// A file of the mirror convention under mpirun: split by rank 0 or read as pieces, it is flipped
+// (one decision for all ranks), untangled like the original, and written back in its own order.
+BOOST_AUTO_TEST_CASE(mpirun_flips_a_mirrored_input_and_writes_it_back_mirrored) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_mirror_np" + std::to_string(ranks));
+    const auto mirror = pv::test::mirrored(pv::read_mesh(tangled()).mesh);
+    pv::write_mesh(dir / "m.vtk", mirror);
+    pv::ReadOptions as_is;
+    as_is.orientation = pv::OrientationMode::AsIs;
+    const auto whole = mpirun_cli(dir, "improve " + quoted(dir / "m.vtk") + " -q --untangle --threads 1 -o " +
+                                           quoted(dir / "out.vtu") + " --summary " + quoted(dir / "whole.json"));
+    BOOST_TEST_INFO(whole.err);
+    BOOST_TEST(whole.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    const auto split = run_cli("partition " + quoted(dir / "m.vtk") + " -n " + std::to_string(ranks) + " -o " +
+                               quoted(dir / "in.pvtu"));
+    BOOST_TEST_REQUIRE(split.exit_code == 0, split.output);
+    const auto pieces = mpirun_cli(dir, "improve " + quoted(dir / "in.pvtu") + " -q --untangle --threads 1 -o " +
+                                            quoted(dir / "out.pvtu") + " --summary " + quoted(dir / "pieces.json"));
+    BOOST_TEST_INFO(pieces.err);
+    BOOST_TEST(pieces.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    for (const char* name : {"whole.json", "pieces.json"}) {
+        const auto s = nlohmann::json::parse(pv::test::read_text(dir / name));
+        BOOST_TEST(s["input_orientation"]["flipped"].get<bool>(), name);
+        BOOST_TEST(s["inverted_before"].get<int>() == 9, name);
+        BOOST_TEST(s["inverted_after"].get<int>() == 0, name);
+    }
+    // Written in the file's order: read as it is, the untangled mesh has every element inverted.
+    const auto out = pv::read_mesh(dir / "out.vtu", as_is).mesh;
+    BOOST_TEST(std::equal(out.connectivity().begin(), out.connectivity().end(), mirror.connectivity().begin(),
+                          mirror.connectivity().end()));
+    BOOST_TEST(pv::count_orientations(out).inverted == out.num_elements());
+    for (int p = 0; p < ranks; ++p) {
+        const auto piece = pv::read_mesh(dir / "out" / ("out_" + std::to_string(p) + ".vtu"), as_is).mesh;
+        BOOST_TEST(pv::count_orientations(piece).inverted == piece.num_elements(), p);
+    }
 }
 
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {

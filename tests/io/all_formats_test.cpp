@@ -5,6 +5,8 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -51,6 +53,37 @@ BOOST_DATA_TEST_CASE(shared_meshes_round_trip_through_every_format, bdata::make(
                                   mesh.connectivity().begin()));
             if (target.keeps_fixed || !original.fixed_from_file)
                 BOOST_TEST(std::equal(copy.mesh.fixed().begin(), copy.mesh.fixed().end(), mesh.fixed().begin()));
+        }
+    }
+}
+
+// A file of the mirror convention (corners 2 and 3 of every tet swapped) is flipped on reading in
+// every format, and what is written from it has the file's order again.
+BOOST_AUTO_TEST_CASE(a_mirrored_file_is_flipped_on_reading_and_written_back_as_it_was) {
+    const auto original = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    const auto mirror = pv::test::mirrored(original);
+    const auto swapped = mirror.connectivity();
+    const pv::test::ScratchDir dir("mirrored_formats");
+    pv::ReadOptions as_is;
+    as_is.orientation = pv::OrientationMode::AsIs;
+    for (const Target& target : kTargets) {
+        BOOST_TEST_CONTEXT(target.name) {
+            pv::WriteOptions options;
+            options.encoding = target.encoding;
+            pv::write_mesh(dir / target.name, mirror, options);
+            const auto read = pv::read_mesh(dir / target.name);
+            BOOST_TEST(read.orientation.flipped);
+            BOOST_TEST(read.mesh.elements_flipped());
+            BOOST_TEST(std::equal(read.mesh.connectivity().begin(), read.mesh.connectivity().end(),
+                                  original.connectivity().begin(), original.connectivity().end()));
+            BOOST_TEST(pv::count_orientations(read.mesh).inverted == 0);
+            BOOST_TEST(pv::count_orientations(pv::read_mesh(dir / target.name, as_is).mesh).inverted ==
+                       original.num_elements());
+            const std::string again = std::string("again_") + target.name;
+            pv::write_mesh(dir / again, read.mesh, options);
+            const auto written = pv::read_mesh(dir / again, as_is).mesh;
+            BOOST_TEST(std::equal(written.connectivity().begin(), written.connectivity().end(), swapped.begin(),
+                                  swapped.end()));
         }
     }
 }

@@ -419,14 +419,14 @@ BOOST_AUTO_TEST_CASE(zero_volume_elements_are_read_as_they_are) {
             BOOST_TEST(signed_volume(file.mesh, 0) > 0.0);
             BOOST_TEST(signed_volume(file.mesh, 1) == 0.0);
             BOOST_TEST(signed_volume(file.mesh, 2) == 0.0);
-            BOOST_TEST(!file.reoriented);
+            BOOST_TEST(!file.orientation.flipped);
         }
     }
     // Only flat tetrahedra: TetGen's orientation by total volume has nothing to go on, and keeps
     // the file's order.
     for (const fs::path& path : write_everywhere(dir, "all_flat", points, {{0, 1, 2, 3}, {5, 6, 7, 8}})) {
         const MeshFile file = read_mesh(path);
-        BOOST_TEST(!file.reoriented);
+        BOOST_TEST(!file.orientation.flipped);
         BOOST_TEST(file.mesh.element(0)[3] == 3);
     }
     const std::vector<Point> line = {{0, 0, 0}, {1, 0, 0}, {2, 0, 0}, {3, 0, 0}};
@@ -509,7 +509,7 @@ BOOST_AUTO_TEST_CASE(coordinates_near_1e300_and_1e_minus_300) {
             write_file(dir / "stellar.node", files.node);
             write_file(dir / "stellar.ele", files.ele);
             const MeshFile stellar = read_mesh(dir / "stellar.node");
-            BOOST_TEST(stellar.reoriented);
+            BOOST_TEST(stellar.orientation.flipped);
             const std::vector<VertexId> flipped = {0, 2, 3, 1, 2, 1, 4, 3};
             BOOST_TEST(std::equal(flipped.begin(), flipped.end(), stellar.mesh.connectivity().begin(),
                                   stellar.mesh.connectivity().end()));

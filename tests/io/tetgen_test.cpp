@@ -65,7 +65,7 @@ BOOST_AUTO_TEST_CASE(house2_reads_through_either_file) {
                           by_ele.mesh.connectivity().begin()));
     // Stellar wrote house2 with Shewchuk's orient3d > 0, the opposite of Paloverde's convention;
     // the reader sees the negative total volume and flips every tetrahedron (corners 2 and 3).
-    BOOST_TEST(by_node.reoriented);
+    BOOST_TEST(by_node.orientation.flipped);
     BOOST_TEST(count_tets(by_node.mesh, false) == 0);
     BOOST_TEST(count_tets(by_node.mesh, true) == 1389);
     // First tetrahedron of house2.ele: 1 75 175 52 (1-based), corners 2 and 3 swapped.

@@ -37,10 +37,16 @@ std::vector<double> corners_of(const pv::SimplexMesh& mesh, pv::ElementId e) {
     return x;
 }
 
+// The untangling energy (outside the catalogue) at a mid-run epsilon, or a catalogue metric.
+constexpr double kEpsilon = 0.05, kTheta = 1.0 / 128.0;
+std::unique_ptr<pv::QualityMetric> metric_named(const std::string& name) {
+    return name == "untangle_energy" ? pv::make_untangle_energy(kEpsilon, kTheta) : pv::make_metric(name);
+}
+
 // Rates `elements` (12 doubles each) with the block kernel of `name` on each path and compares
 // with the metric's scalar value_and_gradient.
 void check_blocks(const std::string& name, const std::vector<std::vector<double>>& elements, double reference_volume) {
-    auto metric = pv::make_metric(name);
+    auto metric = metric_named(name);
     pv::MetricScale scale;
     scale.reference_volume = reference_volume;
     metric->set_scale(scale);
@@ -56,6 +62,8 @@ void check_blocks(const std::string& name, const std::vector<std::vector<double>
             for (double& r : reference) r = reference_volume;
             for (const bool gradient : {false, true}) {
                 if (name == "aspect_ratio") pm::tet_aspect_block(path, x, q, gradient ? &g : nullptr);
+                else if (name == "untangle_energy")
+                    pm::tet_energy_block(path, x, reference, kEpsilon, kTheta, q, gradient ? &g : nullptr);
                 else pm::tet_hybrid_block(path, x, reference, alpha, q, gradient ? &g : nullptr);
                 for (std::size_t j = 0; j < count; ++j) {
                     double expected_gradient[12];
@@ -91,6 +99,7 @@ BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_a_real_mesh) {
     const double reference = pv::MetricScale::of(mesh).reference_volume;
     check_blocks("aspect_ratio", elements, reference);
     check_blocks("untangle_hybrid", elements, reference);
+    check_blocks("untangle_energy", elements, reference);
 }
 
 BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degenerate_elements) {
@@ -109,6 +118,7 @@ BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degen
     for (const auto& e : {regular, inverted, flat, point, tiny, huge, infinite, nan}) elements.push_back(e);
     check_blocks("aspect_ratio", elements, 0.1);
     check_blocks("untangle_hybrid", elements, 0.1);
+    check_blocks("untangle_energy", elements, 0.1);
 }
 
 // The batch calls (which take the block path for tetrahedra) against the one-element calls:
@@ -124,9 +134,9 @@ BOOST_AUTO_TEST_CASE(batch_passes_equal_element_by_element_sums) {
         curvature_weight[e] = e % 5 == 0 ? 0.0 : 0.5 + e % 3;
         local_volume[e] = 0.001 * (1.0 + e % 13);
     }
-    for (const std::string name : {"aspect_ratio", "untangle_hybrid"}) {
+    for (const std::string name : {"aspect_ratio", "untangle_hybrid", "untangle_energy"}) {
         for (const bool per_element_scale : {false, true}) {
-            auto metric = pv::make_metric(name);
+            auto metric = metric_named(name);
             pv::MetricScale scale = pv::MetricScale::of(mesh);
             if (per_element_scale) scale.element_reference_volume = local_volume;
             metric->set_scale(scale);
@@ -143,7 +153,7 @@ BOOST_AUTO_TEST_CASE(batch_passes_equal_element_by_element_sums) {
             metric->accumulate_gradient(mesh, mesh.coordinates(), first, last, target);
 
             std::vector<double> expected_gradient(3 * n, 0.0), expected_curvature(6 * n, 0.0);
-            auto one = pv::make_metric(name);
+            auto one = metric_named(name);
             bool qualities_equal = true;
             for (pv::ElementId e = first; e < last; ++e) {
                 pv::MetricScale s = scale;

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "paloverde/metrics/quality_metric.hpp"
+#include "support/test_support.hpp"
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
@@ -18,14 +19,8 @@ namespace {
 
 using Corners = std::vector<double>;
 
-// The regular simplex with unit edges, positively oriented.
-Corners ideal(pv::ElementKind kind) {
-    if (kind == pv::ElementKind::Triangle) return {0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0};
-    return {0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0, 0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)};
-}
-double ideal_volume(pv::ElementKind kind) {
-    return kind == pv::ElementKind::Triangle ? std::sqrt(3.0) / 4 : std::sqrt(2.0) / 12;
-}
+Corners ideal(pv::ElementKind kind) { return pv::test::regular_simplex(kind); }
+double ideal_volume(pv::ElementKind kind) { return pv::test::regular_simplex_volume(kind); }
 
 // A valid but distorted element: the ideal one with every coordinate moved by up to `amount`.
 Corners distorted(pv::ElementKind kind, std::mt19937& rng, double amount) {

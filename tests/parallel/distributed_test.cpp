@@ -154,6 +154,36 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
     }
 }
 
+// A heavy tangle (every interior vertex moved by up to 1.5 local edge lengths), which the barrier
+// ascent alone leaves tangled: the regularized energy frees it, and takes the same steps on any
+// number of ranks as serially.
+BOOST_AUTO_TEST_CASE(energy_untangling_gives_the_serial_answer) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 21, 1.5);
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 5;
+    pv::SimplexMesh serial = input;
+    const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+    BOOST_TEST_MESSAGE("serial: " << serial_summary.brief_report());
+    BOOST_TEST_REQUIRE(serial_summary.after.inverted == 0);
+    BOOST_TEST(std::any_of(serial_summary.history.begin(), serial_summary.history.end(),
+                           [](const auto& r) { return r.phase == "untangle_energy"; }));
+
+    pv::SimplexMesh gathered = input;
+    auto part = scatter(input);
+    const auto summary = pv::GlobalSolver(options).improve(part);
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    BOOST_TEST(summary.iterations == serial_summary.iterations);
+    BOOST_TEST(summary.untangle_iterations == serial_summary.untangle_iterations);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after == serial_summary.worst_after);
+    if (rank() == 0) {
+        const double difference = relative_difference(gathered, serial);
+        BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report() << "; relative difference " << difference);
+        BOOST_TEST(difference == 0.0);
+    }
+    pv::test::check_never_worse(summary);
+}
+
 // Where the barrier ascent stalls with elements still inverted, sweeps of local untangling take
 // over. A distributed run sweeps color by color, its colors from the global ids, so it makes the
 // same moves on any number of ranks: the run on all ranks ends as the run of each rank alone.
@@ -161,6 +191,7 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
 BOOST_AUTO_TEST_CASE(local_untangling_where_the_ascent_stalls_gives_the_same_answer_on_any_rank_count) {
     const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.3, 2);
     pv::GlobalSolverOptions options;
+    options.untangling = pv::GlobalSolverOptions::Untangling::Barrier;  // the ascent, whose stalls need local rounds
     options.untangle_termination.progress_window = 5;  // call the ascent stalled early
     options.untangle_termination.min_progress = 0.01;
     options.termination.max_iterations = 5;
@@ -320,6 +351,46 @@ BOOST_AUTO_TEST_CASE(pieces_written_then_read_give_the_serial_answer) {
     }
 }
 
+// Pieces of a mirrored tangled mesh: the decision is taken over all pieces together, so every
+// rank flips; the count and the solve are those of the original, and pieces written back keep
+// the mirror's order.
+BOOST_AUTO_TEST_CASE(mirrored_pieces_are_flipped_alike_on_every_rank) {
+    const auto tangled = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.2, 7);
+    const auto mirror = pv::test::mirrored(tangled);
+    const auto path = scratch("mirror.pvtu");
+    if (rank() == 0) pv::DistributedMesh::write_partitioned(mirror, ranks(), path);
+    MPI_Barrier(MPI_COMM_WORLD);
+    auto part = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path);
+    BOOST_TEST(part.orientation.flipped);
+    BOOST_TEST(part.orientation.sign == -1);
+    BOOST_TEST(part.mesh.elements_flipped());
+    const pv::QualityAssessor assessor;
+    BOOST_TEST(assessor.assess(part).inverted == pv::count_orientations(tangled).inverted);
+    // The same solve as on the pieces of the original, to the bit.
+    const auto original_path = scratch("original.pvtu");
+    if (rank() == 0) pv::DistributedMesh::write_partitioned(tangled, ranks(), original_path);
+    MPI_Barrier(MPI_COMM_WORLD);
+    auto original = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, original_path);
+    BOOST_TEST(!original.orientation.flipped);
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 5;
+    const auto summary = pv::GlobalSolver(options).improve(part);
+    const auto original_summary = pv::GlobalSolver(options).improve(original);
+    BOOST_TEST(summary.after.inverted == original_summary.after.inverted);
+    BOOST_TEST(summary.worst_after == original_summary.worst_after);
+    BOOST_TEST(std::equal(part.mesh.coordinates().begin(), part.mesh.coordinates().end(),
+                          original.mesh.coordinates().begin(), original.mesh.coordinates().end()));
+    const auto again_path = scratch("mirror_again.pvtu");
+    part.write_pieces(again_path);
+    pv::DistributeOptions as_is;
+    as_is.orientation = pv::OrientationMode::AsIs;
+    auto again = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, again_path, as_is);
+    BOOST_TEST(!again.orientation.flipped);
+    BOOST_TEST(again.orientation.sign == -1);
+    const auto now = assessor.assess(original);
+    BOOST_TEST(assessor.assess(again).inverted == tangled.num_elements() - now.inverted - now.degenerate);
+}
+
 BOOST_AUTO_TEST_CASE(the_wrong_number_of_pieces_is_an_error_on_every_rank) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
     const auto path = scratch("wrong_count.pvtu");
@@ -407,6 +478,31 @@ BOOST_AUTO_TEST_CASE(untangles_and_never_makes_the_worst_element_worse) {
     std::vector<double> xyz(part.mesh.coordinates().begin(), part.mesh.coordinates().end());
     part.halo().update(xyz, 3);
     BOOST_TEST(std::equal(xyz.begin(), xyz.end(), part.mesh.coordinates().begin()));
+}
+
+// A heavy tangle (every interior vertex moved by up to 1.5 local edge lengths): the energy
+// sweeps free it with the same moves on any number of ranks (colors from global ids, exact sums
+// for the schedule's epsilon).
+BOOST_AUTO_TEST_CASE(energy_untangling_gives_the_one_rank_answer) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 21, 1.5);
+    pv::LocalSolverOptions options;
+    options.improve_shape = false;
+    auto part = scatter(input);
+    const auto summary = pv::LocalSolver(options).improve(part);
+    BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted > 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    pv::test::check_never_worse(summary);
+    auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input);
+    const auto alone_summary = pv::LocalSolver(options).improve(alone);
+    BOOST_TEST(summary.iterations == alone_summary.iterations);
+    pv::SimplexMesh from_one = input, from_all = input;
+    alone.gather_coordinates(&from_one);
+    part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
+    if (rank() == 0) {
+        BOOST_TEST(pv::count_orientations(from_all).inverted == 0);
+        BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
+    }
 }
 
 BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {

@@ -97,13 +97,15 @@ BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_unin
     BOOST_TEST(files == 3u);
 }
 
-// Untangling (barrier ascent stalls, local sweeps finish it), then the shape phase: checkpoints
-// in either phase and just before the local sweeps.
+// Untangling by the barrier ascent (it stalls, local sweeps finish it), then the shape phase:
+// checkpoints in either phase and just before the local sweeps. (Untangling by the energy is
+// resumed in a_stopped_run_resumes_from_the_checkpoint_it_wrote_when_stopped.)
 BOOST_AUTO_TEST_CASE(global_untangling_run_resumed_in_either_phase_ends_as_the_uninterrupted_run) {
     const StopRequestCleared cleared;
     const pv::test::ScratchDir dir("checkpoint_global_untangle");
     const auto input = pv::test::perturbed_shared_mesh("stellar/house2.node", 0.3, 3);
     pv::GlobalSolverOptions options;
+    options.untangling = pv::GlobalSolverOptions::Untangling::Barrier;
     options.termination.max_iterations = 30;
     const auto reference = run<pv::GlobalSolver>(input, options);
     BOOST_TEST(reference.summary.after.inverted == 0);
@@ -134,7 +136,13 @@ BOOST_AUTO_TEST_CASE(a_stopped_run_resumes_from_the_checkpoint_it_wrote_when_sto
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 40;
     const auto reference = run<pv::GlobalSolver>(input, options);
-    for (const int k : {3, reference.summary.untangle_iterations + 5}) {
+    // Stopped while the energy untangles (in its first round, between rounds and in a later one),
+    // then in the shape phase.
+    // Stopped at 7, the run stops where the energy's second round starts (its epsilon changes).
+    const auto& h = reference.summary.history;
+    BOOST_TEST_REQUIRE(h[12].phase == "untangle_energy");
+    BOOST_TEST_REQUIRE((h[3].mu == h[7].mu && h[8].mu < h[7].mu && h[12].mu == h[8].mu));
+    for (const int k : {3, 7, 12, reference.summary.untangle_iterations + 5}) {
         BOOST_TEST_CONTEXT("stopped at iteration " << k) {
             pv::clear_stop_request();
             const fs::path file = dir / ("stop" + std::to_string(k) + ".ckpt");

@@ -131,6 +131,75 @@ BOOST_DATA_TEST_CASE(perturbed_shared_meshes,
     }
 }
 
+// Every interior vertex moved by up to 1.5 local edge lengths: the volume sweeps (one linear
+// program per vertex) leave such tangles inverted; the energy sweeps free them, and a cluster no
+// single position of one vertex can fix is freed by its neighbours' moves.
+BOOST_DATA_TEST_CASE(energy_sweeps_untangle_heavy_tangles,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "mesquite/tris/tri_20258.vtk"}),
+                     name) {
+    const auto input = pv::test::perturbed_shared_mesh(name, 1.0, 7, 1.5);
+    const auto tangled = pv::count_orientations(input).inverted;
+    const std::vector<double> before(input.coordinates().begin(), input.coordinates().end());
+    auto options = quick_local(3);
+    options.improve_shape = false;
+    auto mesh = input;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE(name << ": " << tangled << " inverted; " << summary.brief_report());
+    BOOST_TEST(summary.before.inverted == tangled);
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+    BOOST_TEST(summary.success());
+    BOOST_TEST(std::any_of(summary.history.begin(), summary.history.end(), [](const auto& r) { return r.phase == "untangle"; }));
+    check_never_worse(summary);
+    check_fixed_unchanged(mesh, before);
+    // Within the untangling sweeps the count of inverted elements never rises.
+    long last = tangled;
+    for (const auto& r : summary.history) {
+        BOOST_TEST(r.inverted <= last);
+        last = r.inverted;
+    }
+    // The volume sweeps, kept as an option, do not get there (checked on the smallest mesh).
+    if (name == std::string("mesquite/tets/tire.vtk")) {
+        options.untangling = pv::LocalSolverOptions::Untangling::Volume;
+        auto by_volume = input;
+        const auto volume_summary = pv::LocalSolver(options).improve(by_volume);
+        BOOST_TEST_MESSAGE("  by volume: " << volume_summary.brief_report());
+        BOOST_TEST(volume_summary.after.inverted > 0);
+        check_never_worse(volume_summary);
+    }
+}
+
+// The energy sweeps are scale-free: the same tangle in units 1e4 times smaller or larger is
+// untangled in the same number of sweeps.
+BOOST_AUTO_TEST_CASE(energy_untangling_does_not_depend_on_the_units) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 5, 1.5);
+    auto options = quick_local(1);
+    options.improve_shape = false;
+    auto mesh = input;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    BOOST_TEST_REQUIRE(summary.after.inverted == 0);
+    for (double factor : {1e-4, 1e4}) {
+        auto scaled = input;
+        for (double& x : scaled.coordinates()) x *= factor;
+        const auto scaled_summary = pv::LocalSolver(options).improve(scaled);
+        BOOST_TEST_MESSAGE("x" << factor << ": " << scaled_summary.brief_report());
+        BOOST_TEST(scaled_summary.after.inverted == 0);
+        BOOST_TEST(scaled_summary.untangle_iterations == summary.untangle_iterations);
+    }
+}
+
+// The shape sweeps follow the energy's untangling, and the run as a whole is never worse.
+BOOST_AUTO_TEST_CASE(energy_untangling_then_shape_sweeps_raise_the_worst_element) {
+    auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 1.0, 11, 1.5);
+    const auto summary = pv::LocalSolver(quick_local(5)).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.untangle_iterations > 0);
+    BOOST_TEST(summary.iterations > summary.untangle_iterations);
+    BOOST_TEST(summary.worst_after > 0.0);
+    check_never_worse(summary);
+}
+
 BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
     auto one = shared_mesh("mesquite/tets/cube-clip-5.vtk");
     pv::PerturbOptions perturb;

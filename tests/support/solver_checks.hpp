@@ -3,6 +3,7 @@
 #include <boost/test/unit_test.hpp>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "paloverde/core/error.hpp"
@@ -14,14 +15,33 @@
 
 namespace paloverde::test {
 
-inline SimplexMesh shared_mesh(const std::string& name) { return read_mesh(shared_data(name)).mesh; }
+inline SimplexMesh shared_mesh(const std::string& name, OrientationMode orientation = OrientationMode::Auto) {
+    ReadOptions read;
+    read.orientation = orientation;
+    return read_mesh(shared_data(name), read).mesh;
+}
 
-// A shared mesh with `fraction` of its interior vertices moved by up to one local edge length;
-// requires that it came out tangled.
-inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed) {
+// The same mesh with corners i and j of every element swapped, as a tool with the other
+// orientation convention would write it (not marked flipped: what such a file holds), its
+// coordinates times `scale`.
+inline SimplexMesh mirrored(const SimplexMesh& mesh, int i = 2, int j = 3, double scale = 1.0) {
+    std::vector<VertexId> connectivity(mesh.connectivity().begin(), mesh.connectivity().end());
+    const auto k = static_cast<std::size_t>(mesh.corners());
+    for (std::size_t first = 0; first < connectivity.size(); first += k)
+        std::swap(connectivity[first + static_cast<std::size_t>(i)], connectivity[first + static_cast<std::size_t>(j)]);
+    std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
+    for (double& x : xyz) x *= scale;
+    SimplexMesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
+    out.set_fixed(std::vector<std::uint8_t>(mesh.fixed().begin(), mesh.fixed().end()));
+    return out;
+}
+
+// A shared mesh with `fraction` of its interior vertices moved by up to `amount` local edge
+// lengths; requires that it came out tangled.
+inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed, double amount = 1.0) {
     auto mesh = shared_mesh(name);
     PerturbOptions perturb;
-    perturb.amount = 1.0;
+    perturb.amount = amount;
     perturb.fraction = fraction;
     perturb.seed = static_cast<std::uint64_t>(seed);
     paloverde::perturb(mesh, perturb);

@@ -1,6 +1,7 @@
 #include "support/test_support.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <stdexcept>
@@ -40,6 +41,15 @@ CommandResult run_cli(const std::string& arguments) {
     const int status = ::pclose(pipe);
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return result;
+}
+
+std::vector<double> regular_simplex(ElementKind kind) {
+    if (kind == ElementKind::Triangle) return {0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0};
+    return {0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0, 0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)};
+}
+
+double regular_simplex_volume(ElementKind kind) {
+    return kind == ElementKind::Triangle ? std::sqrt(3.0) / 4 : std::sqrt(2.0) / 12;
 }
 
 }  // namespace paloverde::test

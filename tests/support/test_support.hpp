@@ -2,6 +2,9 @@
 // Helpers shared by the tests: where the shared meshes are, scratch directories, running the CLI.
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include "paloverde/core/types.hpp"
 
 namespace paloverde::test {
 
@@ -29,5 +32,10 @@ struct CommandResult {
 };
 // Runs the paloverde command line with the given arguments (shell-quoted by the caller).
 CommandResult run_cli(const std::string& arguments);
+
+// The regular simplex with unit edges, positively oriented (triangles in the xy plane), 3
+// coordinates per corner, and its volume (area).
+std::vector<double> regular_simplex(ElementKind kind);
+double regular_simplex_volume(ElementKind kind);
 
 }  // namespace paloverde::test

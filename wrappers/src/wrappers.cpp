@@ -29,6 +29,7 @@ InstructionQueue shape_improvement(GlobalSolverOptions options) {
 }
 
 InstructionQueue local_shape_improvement(LocalSolverOptions options) {
+    options.improve_shape = true;
     return around(std::make_unique<LocalSolver>(options));
 }
 

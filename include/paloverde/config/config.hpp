@@ -44,6 +44,7 @@ struct InputSpec {
     MeshFormat format = MeshFormat::FromExtension;
     FixedVertices fixed = FixedVertices::Auto;
     std::vector<long long> fixed_vertices;  // fixed as well: 0-based vertex ids in file order
+    OrientationMode orientation = OrientationMode::Auto;  // the file's convention (orientation.hpp)
     void validate() const;                // throws OptionError naming the field
 };
 

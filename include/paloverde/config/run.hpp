@@ -62,13 +62,19 @@ struct ParallelReport {
 
 struct RunResult {
     std::string input;
+    ElementKind kind = ElementKind::Tetrahedron;
+    // How the input's element order was taken (input.orientation): whether it was flipped and why.
+    OrientationDecision orientation;
     std::vector<MethodResult> methods;
     RunStatus status = RunStatus::Done;  // the worst over methods: Interrupted, Failed, then TargetNotReached
     std::optional<ParallelReport> parallel;  // set by a partitioned run
 
     int exit_code() const { return static_cast<int>(status); }
-    std::string report() const;       // text: per method its steps, then a comparison for a study
-    // Run keys, "methods": [...]; one method's keys also at the top; a partitioned run adds
+    // Text: the input's orientation when it is news (flipped, forced, or undecided), per method its
+    // steps, then a comparison for a study.
+    std::string report() const;
+    // Run keys ("input_orientation": mode, flipped, sign, share, oriented), "methods": [...]; one
+    // method's keys also at the top; a partitioned run adds
     // "parallel" (ranks, exchange, colors, ghost_copies, messages_per_exchange, seconds: read,
     // partition, distribute, schedule, solve, write), as DistributedRunReport::to_json does.
     std::string to_json() const;
@@ -82,6 +88,10 @@ struct RunHooks {
     // When a method's queue has finished.
     std::function<void(const MethodResult&)> on_method_done;
 };
+
+// How the input's element order was taken, as the summary's "input_orientation" object (JSON
+// text): mode, flipped, oriented, sign, share. `paloverde quality --json` prints the same.
+std::string to_json(const OrientationDecision& orientation);
 
 // The queue the steps describe; each solver uses `threads`.
 InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);

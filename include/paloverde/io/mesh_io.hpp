@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 
 namespace paloverde {
@@ -31,6 +32,9 @@ struct ReadOptions {
     MeshFormat format = MeshFormat::FromExtension;
     // Without a `fixed` point field in the file, fix the boundary vertices (else all are free).
     bool fix_boundary = true;
+    // The file's orientation convention (orientation.hpp): auto flips the elements when their
+    // total signed volume is negative. Written meshes get the file's order back.
+    OrientationMode orientation = OrientationMode::Auto;
 };
 
 struct WriteOptions {
@@ -48,7 +52,7 @@ struct MeshFile {
     std::vector<Field> point_fields;  // as read, including `fixed` if present
     std::vector<Field> cell_fields;   // one tuple per element of `mesh`
     bool fixed_from_file = false;     // whether a `fixed` point field set the fixed flags
-    bool reoriented = false;          // every element was flipped: the file used the opposite orientation
+    OrientationDecision orientation;  // whether every element was flipped, and why
 
     const Field* point_field(std::string_view name) const;
     const Field* cell_field(std::string_view name) const;
@@ -59,7 +63,8 @@ struct MeshFile {
 MeshFile read_mesh(const std::filesystem::path& path, const ReadOptions& options = {});
 
 // Writes to a temporary file beside `path` and renames it over `path` only once complete, so a
-// failure never leaves a partial file or destroys an existing one.
+// failure never leaves a partial file or destroys an existing one. A mesh whose elements were
+// flipped on reading (SimplexMesh::elements_flipped()) is written in its file's order.
 void write_mesh(const std::filesystem::path& path,
                 const SimplexMesh& mesh,
                 const WriteOptions& options = {},

@@ -64,6 +64,16 @@ public:
     bool is_planar() const noexcept { return planar_; }
     const Vec3& plane_normal() const noexcept { return plane_normal_; }
 
+    // Swaps the last two corners of every element, which reverses each one's orientation. A planar
+    // triangle mesh's normal turns with its triangles (as if found anew), so their orientation
+    // about it is unchanged. Adjacency, fixed flags and ids stay as they are.
+    void flip_elements();
+    // Whether the elements are held flipped relative to the file they came from (orient() flipped
+    // them because the file uses the mirror convention): writers swap the corners back, so that an
+    // output keeps the convention of its input. Copies keep the mark.
+    bool elements_flipped() const noexcept { return elements_flipped_; }
+    void set_elements_flipped(bool flipped) noexcept { elements_flipped_ = flipped; }
+
     // Mesh interface.
     ElementKind element_kind() const override { return kind_; }
     std::size_t vertex_count() const override { return static_cast<std::size_t>(num_vertices()); }
@@ -86,6 +96,7 @@ private:
     std::vector<GlobalId> global_ids_;
     bool planar_ = false;
     Vec3 plane_normal_{0.0, 0.0, 1.0};
+    bool elements_flipped_ = false;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

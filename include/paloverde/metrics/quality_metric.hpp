@@ -85,5 +85,9 @@ struct MetricOptions {
 // untangle_hybrid, min_dihedral_deg (tetrahedra), min_angle_deg (triangles).
 std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options = {});
 const std::vector<std::string>& metric_names();
+// The regularized untangling energy (docs/metrics.md), negated so that larger is better. Not in
+// the catalogue above: it rates every element below zero, and its epsilon belongs to the
+// untangling phase, which lowers it as the mesh untangles. theta weighs its volume term.
+std::unique_ptr<QualityMetric> make_untangle_energy(double epsilon, double theta);
 
 }  // namespace paloverde

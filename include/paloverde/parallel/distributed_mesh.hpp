@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
@@ -43,6 +44,10 @@ struct ExchangeSchedule {
 
 struct DistributeOptions {
     ExchangeMode exchange = ExchangeMode::Colored;
+    // read_pieces: the pieces' orientation convention, decided over all of them together (one
+    // total signed volume, summed across ranks), so that every rank flips alike. (A whole file
+    // read by improve_distributed is read with it too.)
+    OrientationMode orientation = OrientationMode::Auto;
     void validate() const {}
 };
 
@@ -98,6 +103,9 @@ public:
     std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank
     GlobalId global_vertices = 0, global_elements = 0;
     Vec3 plane_normal{0.0, 0.0, 1.0};     // triangle meshes: the whole mesh's plane
+    // read_pieces: whether the elements were flipped, and why (the same on every rank). scatter()
+    // takes the whole mesh's orientation as it is; the parts keep its elements_flipped() mark.
+    OrientationDecision orientation;
     // Partners and send/receive lists. (Held on the heap: the halo refers to it, and a moved
     // DistributedMesh must keep working.)
     const ExchangeSchedule& schedule() const { return *schedule_; }

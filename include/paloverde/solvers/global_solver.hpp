@@ -1,8 +1,9 @@
 #pragma once
 // The global solver: all free vertices move together along one search direction of an
 // objective over the whole mesh (by default the log-barrier of Sastry & Shontz). A tangled mesh
-// is first untangled with the hybrid volume/shape metric; once every element is valid the
-// shape metric takes over and no element is ever allowed to invert again. A stop request
+// is first untangled (the regularized energy of Garanzha et al., then where needed the barrier
+// ascent on the hybrid volume/shape metric); once every element is valid the shape metric takes
+// over and no element is ever allowed to invert again. A stop request
 // (stop.hpp) or a NaN ends the run on its best iterate.
 #include <string>
 
@@ -23,6 +24,10 @@ struct GlobalSolverOptions {
     std::string shape_metric = "aspect_ratio";
     MetricOptions metric_options;
     bool untangle = true;             // untangle first when movable elements are inverted
+    // Energy: minimize the regularized untangling energy first (docs/global_solver.md), and go on
+    // with the barrier ascent where it leaves elements inverted. Barrier: the ascent alone.
+    enum class Untangling { Energy, Barrier };
+    Untangling untangling = Untangling::Energy;
     bool improve_shape = true;        // run the shape phase
     TerminationCriterion termination; // shape phase
     TerminationCriterion untangle_termination = TerminationCriterion::for_untangling();

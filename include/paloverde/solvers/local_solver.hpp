@@ -3,8 +3,8 @@
 // sweep visits every free vertex once, one color at a time; a vertex moves to raise the smallest
 // quality of its own elements with its neighbours held still. Vertices of one color share no
 // element, so they move in parallel and the result does not depend on the thread count.
-// A tangled mesh is first untangled by the same sweeps on the vertices of inverted elements,
-// maximizing their elements' smallest signed volume.
+// A tangled mesh is first untangled by the same sweeps near inverted elements, each vertex
+// lowering the regularized energy of its elements (or raising their smallest signed volume).
 #include <string>
 
 #include "paloverde/metrics/quality_metric.hpp"
@@ -25,6 +25,13 @@ struct LocalSolverOptions {
     std::string metric = "aspect_ratio";
     MetricOptions metric_options;
     bool untangle = true;
+    bool improve_shape = true;         // false: stop once no element is inverted (no shape sweeps)
+    // How a vertex of an inverted element moves while untangling. Energy: to the minimum of the
+    // regularized energy of its elements (the per-vertex form of the global solver's; epsilon
+    // shrinks between sweeps; docs/local_solver.md). Volume: to where the smallest signed volume
+    // of its elements is largest (a small linear program), else up the smallest volume.
+    enum class Untangling { Energy, Volume };
+    Untangling untangling = Untangling::Energy;
     TerminationCriterion termination;  // shape sweeps (an iteration is a sweep)
     TerminationCriterion untangle_termination = TerminationCriterion::for_untangling();
     ColoringOrder coloring = ColoringOrder::SmallestLast;
