@@ -839,6 +839,7 @@ SimplexMesh DistributedMesh::gather_whole() const {
     std::vector<std::int64_t>().swap(all_records);  // before the mesh builds its adjacency
     SimplexMesh whole(mesh.kind(), std::move(coordinates), std::move(connectivity));
     whole.set_fixed(std::move(fixed));
+    whole.set_elements_flipped(mesh.elements_flipped());  // written back in the pieces' convention
     return whole;
 }
 

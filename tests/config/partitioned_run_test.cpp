@@ -508,6 +508,14 @@ BOOST_AUTO_TEST_CASE(mpirun_flips_a_mirrored_input_and_writes_it_back_mirrored) 
         const auto piece = pv::read_mesh(dir / "out" / ("out_" + std::to_string(p) + ".vtu"), as_is).mesh;
         BOOST_TEST(pv::count_orientations(piece).inverted == piece.num_elements(), p);
     }
+    // From pieces to one file: the mesh rank 0 builds from the parts keeps the convention too.
+    const auto gathered = mpirun_cli(dir, "improve " + quoted(dir / "in.pvtu") + " -q --untangle --threads 1 -o " +
+                                              quoted(dir / "whole.vtu"));
+    BOOST_TEST_INFO(gathered.err);
+    BOOST_TEST(gathered.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    const auto whole_out = pv::read_mesh(dir / "whole.vtu", as_is).mesh;
+    BOOST_TEST(whole_out.num_elements() == mirror.num_elements());
+    BOOST_TEST(pv::count_orientations(whole_out).inverted == whole_out.num_elements());
 }
 
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {
