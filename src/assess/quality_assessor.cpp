@@ -51,9 +51,13 @@ QualityStatistics statistics(std::span<const double> q, std::span<const std::uin
 
 }  // namespace
 
-QualityAssessor::QualityAssessor()
-    : QualityAssessor({"aspect_ratio", "mean_ratio", "inverse_condition", "edge_ratio", "scaled_volume",
-                       "min_dihedral_deg", "min_angle_deg"}) {}
+const std::vector<std::string>& QualityAssessor::default_metrics() {
+    static const std::vector<std::string> names{"aspect_ratio",  "mean_ratio",       "inverse_condition", "edge_ratio",
+                                                "scaled_volume", "min_dihedral_deg", "min_angle_deg"};
+    return names;
+}
+
+QualityAssessor::QualityAssessor() : QualityAssessor(default_metrics()) {}
 
 QualityAssessor::QualityAssessor(const std::vector<std::string>& metric_names, int histogram_bins)
     : names_(metric_names), bins_(histogram_bins) {

@@ -11,27 +11,6 @@ namespace paloverde::config {
 namespace detail {
 namespace {
 
-// What each metric is (docs/metrics.md has the details).
-const std::vector<std::pair<std::string, std::string>>& metric_help() {
-    static const std::vector<std::pair<std::string, std::string>> help{
-        {"aspect_ratio", "72 sqrt(3) V / L^(3/2) (triangles: 4 sqrt(3) A / L), L the sum of squared edge lengths; "
-                         "range [-1, 1], ideal 1 (regular simplex), <= 0 when inverted. The seed paper's metric."},
-        {"mean_ratio", "sign(V) 12 (3|V|)^(2/3) / L (triangles: as aspect_ratio); range [-1, 1], ideal 1."},
-        {"inverse_condition", "3 det S / (|S|_F |adj S|_F), S the map from the regular element; range [-1, 1], ideal 1."},
-        {"edge_ratio", "sign(V) l_min / l_max; range [-1, 1], ideal 1; not smooth where two edges tie."},
-        {"scaled_volume", "V / V_ref, V_ref the mean absolute element volume (area) of the mesh; any value, no ideal (1: an "
-                          "element of average size)."},
-        {"untangle_hybrid", "w v + (1 - w) q, v = V / V_ref, q the aspect ratio, w = 1 / (1 + e^(hybrid_sharpness v)); "
-                            "> 0 exactly when valid, 1 for the regular element of reference size. The untangling metric."},
-        {"min_dihedral_deg", "smallest dihedral angle in degrees, negative if inverted; tetrahedra; range [-70.53, 70.53], ideal 70.53. "
-                             "No gradient: for assessments and smart Laplace."},
-        {"min_angle_deg", "smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal 60. No gradient: for "
-                          "assessments and smart Laplace."},
-    };
-    return help;
-}
-
-
 const std::vector<std::pair<std::string, std::string>>& objective_help() {
     static const std::vector<std::pair<std::string, std::string>> help{
         {"log_barrier", "F(mu, t) = t + mu sum_i log(q_i - t), t < min q (Sastry & Shontz): t climbs to the worst "
@@ -440,7 +419,7 @@ void set_threads(SolverOptions& options, int threads) {
 std::vector<ObjectInfo> object_infos() {
     const Tables& t = tables();
     std::vector<ObjectInfo> out;
-    for (const auto& [name, help] : metric_help()) out.push_back({"metric", name, help, t.metric.describe({})});
+    for (const auto& m : metric_catalogue()) out.push_back({"metric", m.name, m.help, t.metric.describe({})});
     for (const auto& [name, help] : objective_help())
         out.push_back({"objective", name, help, t.objective_table(name).describe({})});
     out.push_back({"termination", "termination",
@@ -476,11 +455,14 @@ std::vector<ObjectInfo> object_infos() {
 }  // namespace detail
 
 const std::vector<ObjectInfo>& registry() {
-    static const std::vector<ObjectInfo> all = [] {
-        auto out = detail::object_infos();
-        for (auto& s : detail::section_infos()) out.push_back(std::move(s));
-        return out;
-    }();
+    // Built on first use, and again when a program has registered a metric since.
+    static std::vector<ObjectInfo> all;
+    static std::size_t metrics_seen = 0;
+    if (all.empty() || metrics_seen != metric_catalogue().size()) {
+        all = detail::object_infos();
+        for (auto& s : detail::section_infos()) all.push_back(std::move(s));
+        metrics_seen = metric_catalogue().size();
+    }
     return all;
 }
 

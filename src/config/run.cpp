@@ -26,18 +26,12 @@ std::string_view to_string(RunStatus status) {
 
 namespace detail {
 
-namespace {
-// QualityAssessor()'s set, which `metrics: []` stands for.
-const std::vector<std::string> kDefaultMetrics{"aspect_ratio", "mean_ratio", "inverse_condition", "edge_ratio",
-                                               "scaled_volume", "min_dihedral_deg", "min_angle_deg"};
-}  // namespace
-
 QualityAssessor assessor_of(const AssessSpec& a) {
-    return QualityAssessor(a.metrics.empty() ? kDefaultMetrics : a.metrics, a.histogram_bins);
+    return QualityAssessor(a.metrics.empty() ? QualityAssessor::default_metrics() : a.metrics, a.histogram_bins);
 }
 
 QualityAssessor report_assessor(const std::string& metric) {
-    std::vector<std::string> names = kDefaultMetrics;
+    std::vector<std::string> names = QualityAssessor::default_metrics();
     if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
     return QualityAssessor(names);
 }

@@ -17,6 +17,78 @@ constexpr bool assessment_only() {
     return false;
 }
 
+// Adds one corner's weighted gradient (and curvature) to the target: the one place where every
+// pass adds, so that they add alike, bit for bit.
+template <bool Curvature>
+void add_corner(const QualityMetric::GradientTarget& target, std::size_t v, double w, double cw, const double* gi) {
+    for (int d = 0; d < 3; ++d) target.gradient[3 * v + d] += w * gi[d];
+    if constexpr (Curvature) {
+        double* m = target.curvature + 6 * v;
+        m[0] += cw * gi[0] * gi[0];
+        m[1] += cw * gi[0] * gi[1];
+        m[2] += cw * gi[0] * gi[2];
+        m[3] += cw * gi[1] * gi[1];
+        m[4] += cw * gi[1] * gi[2];
+        m[5] += cw * gi[2] * gi[2];
+    }
+}
+
+// The element-by-element passes, for kernels and for a program's own metrics alike: each
+// element's K corners gathered into a small buffer, rated by rate(kind tag, e, corners, gradient
+// or nullptr), and its weighted gradient scattered.
+template <int K, class Rate>
+void rate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
+               Rate& rate) {
+    const VertexId* conn = mesh.connectivity().data();
+    const double* coords = xyz.data();
+    double x[3 * K];
+    for (ElementId e = first; e < last; ++e) {
+        const VertexId* c = conn + static_cast<std::size_t>(e) * K;
+        for (int i = 0; i < K; ++i)
+            for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+        quality[e - first] = rate(std::integral_constant<int, K>{}, e, x, nullptr);
+    }
+}
+
+template <int K, bool Curvature, class Rate>
+void accumulate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                     const QualityMetric::GradientTarget& target, Rate& rate) {
+    const VertexId* conn = mesh.connectivity().data();
+    const double* coords = xyz.data();
+    double x[3 * K], g[3 * K];
+    for (ElementId e = first; e < last; ++e) {
+        const double w = target.weight[e - first];
+        const double cw = Curvature ? target.curvature_weight[e - first] : 0.0;
+        if (w == 0.0 && cw == 0.0) continue;
+        const VertexId* c = conn + static_cast<std::size_t>(e) * K;
+        for (int i = 0; i < K; ++i)
+            for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+        rate(std::integral_constant<int, K>{}, e, x, g);
+        for (int i = 0; i < K; ++i) add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, g + 3 * i);
+    }
+}
+
+// The two passes over any mesh: K from its kind, curvature when the target asks for it.
+template <class Rate>
+void evaluate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
+                   Rate&& rate) {
+    if (mesh.kind() == ElementKind::Tetrahedron) rate_each<4>(mesh, xyz, first, last, quality, rate);
+    else rate_each<3>(mesh, xyz, first, last, quality, rate);
+}
+
+template <class Rate>
+void accumulate_gradient_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                              const QualityMetric::GradientTarget& target, Rate&& rate) {
+    const bool curvature = target.curvature && target.curvature_weight;
+    if (mesh.kind() == ElementKind::Tetrahedron) {
+        if (curvature) accumulate_each<4, true>(mesh, xyz, first, last, target, rate);
+        else accumulate_each<4, false>(mesh, xyz, first, last, target, rate);
+    } else {
+        if (curvature) accumulate_each<3, true>(mesh, xyz, first, last, target, rate);
+        else accumulate_each<3, false>(mesh, xyz, first, last, target, rate);
+    }
+}
+
 // Gathers each element's corners into a small buffer, calls the inlined kernel, and scatters the
 // weighted gradient: one virtual call per batch, none per element.
 template <class Kernel>
@@ -50,10 +122,10 @@ public:
         if constexpr (kHasBlocks) {
             if (blocks_pay(mesh, first, last)) return evaluate_blocks(mesh, xyz, first, last, quality);
         }
-        if (mesh.kind() == ElementKind::Tetrahedron)
-            evaluate_kind<4>(mesh, xyz, first, last, quality);
-        else
-            evaluate_kind<3>(mesh, xyz, first, last, quality);
+        MetricScale local = scale_;
+        evaluate_each(mesh, xyz, first, last, quality, [&](auto k, ElementId e, const double* x, double* g) {
+            return kernel<decltype(k)::value>(x, g, scale_of(e, local));
+        });
     }
 
     void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
@@ -67,13 +139,10 @@ public:
                 return;
             }
         }
-        if (mesh.kind() == ElementKind::Tetrahedron) {
-            if (curvature) accumulate_kind<4, true>(mesh, xyz, first, last, target);
-            else accumulate_kind<4, false>(mesh, xyz, first, last, target);
-        } else {
-            if (curvature) accumulate_kind<3, true>(mesh, xyz, first, last, target);
-            else accumulate_kind<3, false>(mesh, xyz, first, last, target);
-        }
+        MetricScale local = scale_;
+        accumulate_gradient_each(mesh, xyz, first, last, target, [&](auto k, ElementId e, const double* x, double* g) {
+            return kernel<decltype(k)::value>(x, g, scale_of(e, local));
+        });
     }
 
 private:
@@ -109,57 +178,6 @@ private:
         return local;
     }
 
-    template <int K>
-    void evaluate_kind(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
-                       double* quality) const {
-        const VertexId* conn = mesh.connectivity().data();
-        const double* coords = xyz.data();
-        double x[3 * K];
-        MetricScale local = scale_;
-        for (ElementId e = first; e < last; ++e) {
-            const VertexId* c = conn + static_cast<std::size_t>(e) * K;
-            for (int i = 0; i < K; ++i)
-                for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-            quality[e - first] = kernel<K>(x, nullptr, scale_of(e, local));
-        }
-    }
-
-    template <int K, bool Curvature>
-    void accumulate_kind(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
-                         const GradientTarget& target) const {
-        const VertexId* conn = mesh.connectivity().data();
-        const double* coords = xyz.data();
-        double x[3 * K], g[3 * K];
-        MetricScale local = scale_;
-        for (ElementId e = first; e < last; ++e) {
-            const double w = target.weight[e - first];
-            const double cw = Curvature ? target.curvature_weight[e - first] : 0.0;
-            if (w == 0.0 && cw == 0.0) continue;
-            const VertexId* c = conn + static_cast<std::size_t>(e) * K;
-            for (int i = 0; i < K; ++i)
-                for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-            kernel<K>(x, g, scale_of(e, local));
-            for (int i = 0; i < K; ++i)
-                add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, g + 3 * i);
-        }
-    }
-
-    // Adds one corner's weighted gradient (and curvature) to the target: the one place where both
-    // passes add, so that they add alike, bit for bit.
-    template <bool Curvature>
-    static void add_corner(const GradientTarget& target, std::size_t v, double w, double cw, const double* gi) {
-        for (int d = 0; d < 3; ++d) target.gradient[3 * v + d] += w * gi[d];
-        if constexpr (Curvature) {
-            double* m = target.curvature + 6 * v;
-            m[0] += cw * gi[0] * gi[0];
-            m[1] += cw * gi[0] * gi[1];
-            m[2] += cw * gi[0] * gi[2];
-            m[3] += cw * gi[1] * gi[1];
-            m[4] += cw * gi[1] * gi[2];
-            m[5] += cw * gi[2] * gi[2];
-        }
-    }
-
     // Block passes over tetrahedra: gather the corners of kTetBlock elements (and their reference
     // volumes), rate them in one vectorized call, and scatter. Padding lanes of a last, partial
     // block hold a degenerate element at the origin, which rates 0 without trouble.
@@ -183,7 +201,7 @@ private:
         }
     }
 
-    // Adds to the target in the order accumulate_kind does: bit for bit the same sums.
+    // Adds to the target in the order accumulate_each does: bit for bit the same sums.
     template <bool Curvature>
     void accumulate_blocks(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                            const GradientTarget& target) const {
@@ -240,25 +258,90 @@ void MetricOptions::validate() const {
         throw OptionError("hybrid_sharpness must be a positive number (got " + std::to_string(hybrid_sharpness) + ")");
 }
 
-const std::vector<std::string>& metric_names() {
-    static const std::vector<std::string> names{"aspect_ratio", "mean_ratio",      "inverse_condition",
-                                                "edge_ratio",   "scaled_volume",   "untangle_hybrid",
-                                                "min_dihedral_deg", "min_angle_deg"};
-    return names;
+void ElementMetric::evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                             double* quality) const {
+    const ElementKind kind = mesh.kind();
+    metrics::evaluate_each(mesh, xyz, first, last, quality,
+                           [&](auto, ElementId, const double* x, double*) { return value(kind, x); });
+}
+
+void ElementMetric::accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first,
+                                        ElementId last, const GradientTarget& target) const {
+    if (!has_gradient()) throw OptionError("metric '" + std::string(name()) + "' has no gradient");
+    const ElementKind kind = mesh.kind();
+    metrics::accumulate_gradient_each(mesh, xyz, first, last, target, [&](auto, ElementId, const double* x, double* g) {
+        return value_and_gradient(kind, x, g);
+    });
+}
+
+namespace {
+
+template <class Kernel, class... Args>
+MetricInfo built_in(std::string help, Args... args) {
+    return {std::string(Kernel::name), std::move(help), [=](const MetricOptions&) -> std::unique_ptr<QualityMetric> {
+                return std::make_unique<metrics::KernelMetric<Kernel>>(Kernel{args...});
+            }};
+}
+
+// The catalogue and its names, kept side by side: metric_names() hands out a reference.
+struct Catalogue {
+    std::vector<MetricInfo> metrics;
+    std::vector<std::string> names;
+};
+
+Catalogue& catalogue() {
+    using namespace metrics;
+    static Catalogue c = [] {
+        Catalogue out;
+        out.metrics = {
+            built_in<AspectRatio>("72 sqrt(3) V / L^(3/2) (triangles: 4 sqrt(3) A / L), L the sum of squared edge lengths; "
+                                  "range [-1, 1], ideal 1 (regular simplex), <= 0 when inverted. The seed paper's metric."),
+            built_in<MeanRatio>("sign(V) 12 (3|V|)^(2/3) / L (triangles: as aspect_ratio); range [-1, 1], ideal 1."),
+            built_in<InverseCondition>(
+                "3 det S / (|S|_F |adj S|_F), S the map from the regular element; range [-1, 1], ideal 1."),
+            built_in<EdgeRatio>("sign(V) l_min / l_max; range [-1, 1], ideal 1; not smooth where two edges tie."),
+            built_in<ScaledVolume>("V / V_ref, V_ref the mean absolute element volume (area) of the mesh; any value, no "
+                                   "ideal (1: an element of average size)."),
+            {std::string(UntangleHybrid::name),
+             "w v + (1 - w) q, v = V / V_ref, q the aspect ratio, w = 1 / (1 + e^(hybrid_sharpness v)); > 0 exactly when "
+             "valid, 1 for the regular element of reference size. The untangling metric.",
+             [](const MetricOptions& o) -> std::unique_ptr<QualityMetric> {
+                 return std::make_unique<KernelMetric<UntangleHybrid>>(UntangleHybrid{o.hybrid_sharpness});
+             }},
+            built_in<MinDihedralAngle>("smallest dihedral angle in degrees, negative if inverted; tetrahedra; range "
+                                       "[-70.53, 70.53], ideal 70.53. No gradient: for assessments and smart Laplace."),
+            built_in<MinCornerAngle>("smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal "
+                                     "60. No gradient: for assessments and smart Laplace."),
+        };
+        for (const auto& m : out.metrics) out.names.push_back(m.name);
+        return out;
+    }();
+    return c;
+}
+
+}  // namespace
+
+const std::vector<MetricInfo>& metric_catalogue() { return catalogue().metrics; }
+const std::vector<std::string>& metric_names() { return catalogue().names; }
+
+void register_metric(MetricInfo metric) {
+    if (metric.name.empty()) throw OptionError("a registered metric needs a name");
+    if (!metric.make) throw OptionError("metric '" + metric.name + "' has no factory");
+    Catalogue& c = catalogue();
+    if (std::find(c.names.begin(), c.names.end(), metric.name) != c.names.end())
+        throw OptionError("a metric named '" + metric.name + "' is already in the catalogue");
+    c.names.push_back(metric.name);
+    c.metrics.push_back(std::move(metric));
 }
 
 std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options) {
-    using namespace metrics;
     options.validate();
-    if (name == AspectRatio::name) return std::make_unique<KernelMetric<AspectRatio>>();
-    if (name == MeanRatio::name) return std::make_unique<KernelMetric<MeanRatio>>();
-    if (name == InverseCondition::name) return std::make_unique<KernelMetric<InverseCondition>>();
-    if (name == EdgeRatio::name) return std::make_unique<KernelMetric<EdgeRatio>>();
-    if (name == ScaledVolume::name) return std::make_unique<KernelMetric<ScaledVolume>>();
-    if (name == UntangleHybrid::name)
-        return std::make_unique<KernelMetric<UntangleHybrid>>(UntangleHybrid{options.hybrid_sharpness});
-    if (name == MinDihedralAngle::name) return std::make_unique<KernelMetric<MinDihedralAngle>>();
-    if (name == MinCornerAngle::name) return std::make_unique<KernelMetric<MinCornerAngle>>();
+    for (const auto& m : metric_catalogue())
+        if (m.name == name) {
+            auto metric = m.make(options);
+            if (!metric) throw OptionError("metric '" + m.name + "': its factory made nothing");
+            return metric;
+        }
     std::string known;
     for (const auto& n : metric_names()) known += (known.empty() ? "" : ", ") + n;
     throw OptionError("unknown quality metric '" + std::string(name) + "' (known: " + known + ")");

@@ -48,9 +48,10 @@ struct QualityReport {
 
 class QualityAssessor {
 public:
-    // The default set for the mesh's kind: the shape metrics, scaled volume, and the minimum
-    // dihedral angle (tetrahedra) or minimum angle (triangles).
+    // The default set (default_metrics()): the shape metrics, scaled volume, and the minimum
+    // dihedral angle (tetrahedra) or minimum angle (triangles), each where the mesh's kind has it.
     QualityAssessor();
+    static const std::vector<std::string>& default_metrics();
     explicit QualityAssessor(const std::vector<std::string>& metric_names, int histogram_bins = 10);
 
     // Metrics that do not support the mesh's element kind are left out of the report.

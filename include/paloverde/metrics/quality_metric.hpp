@@ -3,6 +3,7 @@
 // metrics) for the regular simplex, <= 0 for inverted elements of the orientation-aware ones.
 // Solvers use the batch calls, one virtual call per block of elements; the one-element calls
 // are for tests, local patches and users.
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -75,16 +76,40 @@ protected:
     MetricScale scale_;
 };
 
+// A metric written one element at a time, as a program's own metric is: give name(), value()
+// and value_and_gradient() (or has_gradient() false, for assessments only); the batch calls go
+// through them element by element. The built-in metrics are inlined kernels instead, with one
+// virtual call per batch. The scale (set_scale) holds the mesh's reference volume.
+class ElementMetric : public QualityMetric {
+public:
+    void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first, ElementId last,
+                  double* quality) const final;
+    void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+                             ElementId last, const GradientTarget& target) const final;
+};
+
 struct MetricOptions {
     // Steepness of the logistic blend in the untangling metric, per unit of scale-free volume.
     double hybrid_sharpness = 10.0;
     void validate() const;  // throws OptionError
 };
 
-// Names: aspect_ratio, mean_ratio, inverse_condition, edge_ratio, scaled_volume,
-// untangle_hybrid, min_dihedral_deg (tetrahedra), min_angle_deg (triangles).
-std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options = {});
+// The metric catalogue: every metric a name can choose, in configs, on the command line, in
+// assessments and in make_metric(). The built-in ones come first (aspect_ratio, mean_ratio,
+// inverse_condition, edge_ratio, scaled_volume, untangle_hybrid, min_dihedral_deg for
+// tetrahedra, min_angle_deg for triangles), then those a program registered.
+struct MetricInfo {
+    std::string name;
+    std::string help;  // formula, range, ideal value: shown by `paloverde run --describe`
+    std::function<std::unique_ptr<QualityMetric>(const MetricOptions&)> make;
+};
+const std::vector<MetricInfo>& metric_catalogue();
 const std::vector<std::string>& metric_names();
+// Adds a program's own metric to the catalogue, before the runs that name it (not while a run is
+// going on). Throws OptionError for an empty or taken name or a missing factory.
+void register_metric(MetricInfo metric);
+// The metric of that name; throws OptionError listing the known names.
+std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOptions& options = {});
 // The regularized untangling energy (docs/metrics.md), negated so that larger is better. Not in
 // the catalogue above: it rates every element below zero, and its epsilon belongs to the
 // untangling phase, which lowers it as the mesh untangles. theta weighs its volume term.
