@@ -15,38 +15,62 @@ namespace paloverde {
 
 namespace {
 
-// Two passes (range, then sums and histogram) over the selected elements that this process
-// counts. Sums are exact, so the result depends on nothing but the mesh, however it is split.
-QualityStatistics statistics(std::span<const double> q, std::span<const std::uint8_t> selected, int bins,
-                             const Reducer& reducer, bool distributed) {
-    QualityStatistics s;
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    long count = 0;
+// One metric's statistics over the elements this process counts, in three groups: all, movable
+// (group 1: a free vertex) and frozen (group 2). Two passes: the ranges, then the sums and the
+// histograms. Sums are exact, so the result depends on nothing but the mesh, however it is split:
+// those of "all" are the two groups' added exactly, and the histograms count in integers.
+void statistics(std::span<const double> q, std::span<const std::uint8_t> group, int bins, const Reducer& reducer,
+                bool distributed, MetricReport& report) {
+    QualityStatistics* s[3] = {&report.all, &report.movable, &report.frozen};
+    double low[3], high[3];
+    long count[3] = {0, 0, 0};
+    std::fill(low, low + 3, std::numeric_limits<double>::infinity());
+    std::fill(high, high + 3, -std::numeric_limits<double>::infinity());
     for (std::size_t e = 0; e < q.size(); ++e) {
-        if (!selected[e]) continue;
-        ++count;
-        if (q[e] < low) low = q[e], s.worst_element = static_cast<ElementId>(e);
-        high = std::max(high, q[e]);
+        const int g = group[e];
+        if (!g) continue;
+        for (int k : {0, g}) {
+            ++count[k];
+            if (q[e] < low[k]) low[k] = q[e], s[k]->worst_element = static_cast<ElementId>(e);
+            high[k] = std::max(high[k], q[e]);
+        }
     }
-    s.count = static_cast<ElementId>(reducer.total(static_cast<double>(count)));
-    if (distributed) s.worst_element = -1;  // a local index means nothing to the caller
-    if (s.count == 0) return s;
-    s.min = reducer.min(low);
-    s.max = reducer.max(high);
-    std::vector<ExactSum> sums(2 + static_cast<std::size_t>(bins));  // sum, squares, histogram
-    const double width = (s.max - s.min) / bins;
+    double width[3] = {0.0, 0.0, 0.0};
+    for (int k = 0; k < 3; ++k) {
+        s[k]->count = static_cast<ElementId>(reducer.total(static_cast<double>(count[k])));
+        if (distributed) s[k]->worst_element = -1;  // a local index means nothing to the caller
+        if (s[k]->count == 0) continue;
+        s[k]->min = reducer.min(low[k]);
+        s[k]->max = reducer.max(high[k]);
+        width[k] = (s[k]->max - s[k]->min) / bins;
+    }
+    const auto b = static_cast<std::size_t>(bins);
+    std::vector<std::int64_t> counts(3 * b, 0);
+    std::vector<ExactSum> sums(4 + 3 * b);  // sum and squares of movable, then of frozen; the histograms
     for (std::size_t e = 0; e < q.size(); ++e) {
-        if (!selected[e]) continue;
-        sums[0].add(q[e]);
-        sums[1].add(q[e] * q[e]);
-        const int bin = width > 0.0 ? static_cast<int>((q[e] - s.min) / width) : 0;
-        sums[2 + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))].add(1.0);
+        const int g = group[e];
+        if (!g) continue;
+        sums[2 * static_cast<std::size_t>(g - 1)].add(q[e]);
+        sums[2 * static_cast<std::size_t>(g - 1) + 1].add(q[e] * q[e]);
+        for (int k : {0, g}) {
+            const int bin = width[k] > 0.0 ? static_cast<int>((q[e] - s[k]->min) / width[k]) : 0;
+            ++counts[static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))];
+        }
     }
+    for (std::size_t i = 0; i < counts.size(); ++i) sums[4 + i].add(static_cast<double>(counts[i]));
     reducer.sum(sums);
-    s.mean = sums[0].value() / s.count;
-    s.rms = std::sqrt(sums[1].value() / s.count);
-    for (int b = 0; b < bins; ++b) s.histogram.push_back(static_cast<ElementId>(sums[2 + static_cast<std::size_t>(b)].value()));
-    return s;
+    ExactSum total = sums[0], squares = sums[1];
+    total += sums[2];
+    squares += sums[3];
+    const ExactSum* sum_of[3] = {&total, &sums[0], &sums[2]};
+    const ExactSum* squares_of[3] = {&squares, &sums[1], &sums[3]};
+    for (int k = 0; k < 3; ++k) {
+        if (s[k]->count == 0) continue;
+        s[k]->mean = sum_of[k]->value() / s[k]->count;
+        s[k]->rms = std::sqrt(squares_of[k]->value() / s[k]->count);
+        for (std::size_t i = 0; i < b; ++i)
+            s[k]->histogram.push_back(static_cast<ElementId>(sums[4 + static_cast<std::size_t>(k) * b + i].value()));
+    }
 }
 
 }  // namespace
@@ -145,8 +169,6 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     const double volume = totals[7].value();
     if (volume > 0.0 && std::isfinite(volume) && report.elements > 0) scale.reference_volume = volume / report.elements;
 
-    std::vector<std::uint8_t> all(m), movable(m), frozen(m);
-    for (std::size_t e = 0; e < m; ++e) all[e] = group[e] != 0, movable[e] = group[e] == 1, frozen[e] = group[e] == 2;
     for (const auto& name : names_) {
         auto metric = make_metric(name);
         if (!metric->supports(mesh.kind())) continue;
@@ -154,9 +176,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         metric->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
         MetricReport r;
         r.name = name;
-        r.all = statistics(q, all, bins_, reducer, distributed);
-        r.movable = statistics(q, movable, bins_, reducer, distributed);
-        r.frozen = statistics(q, frozen, bins_, reducer, distributed);
+        statistics(q, group, bins_, reducer, distributed, r);
         report.metrics.push_back(std::move(r));
     }
     return report;

@@ -9,23 +9,24 @@ VertexGraph vertex_graph(const SimplexMesh& mesh) {
     VertexGraph graph;
     const VertexId n = mesh.num_vertices();
     graph.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
-    std::vector<VertexId> scratch;
-    // Two passes over the incident elements: count the distinct neighbours, then fill them.
-    for (int pass = 0; pass < 2; ++pass) {
-        if (pass == 1) {
-            std::partial_sum(graph.offsets.begin(), graph.offsets.end(), graph.offsets.begin());
-            graph.neighbours.resize(static_cast<std::size_t>(graph.offsets.back()));
-        }
-        for (VertexId v = 0; v < n; ++v) {
-            scratch.clear();
-            for (ElementId e : mesh.elements_of(v))
-                for (VertexId w : mesh.element(e))
-                    if (w != v) scratch.push_back(w);
-            std::sort(scratch.begin(), scratch.end());
-            scratch.erase(std::unique(scratch.begin(), scratch.end()), scratch.end());
-            if (pass == 0) graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(scratch.size());
-            else std::copy(scratch.begin(), scratch.end(), graph.neighbours.begin() + graph.offsets[v]);
-        }
+    // One pass: each vertex's distinct neighbours, sorted, appended in vertex order. By Euler's
+    // formula a mesh has about as many edges as vertices and elements together (plus half its
+    // boundary faces), and each edge is listed twice.
+    graph.neighbours.reserve(2 * (static_cast<std::size_t>(n) + static_cast<std::size_t>(mesh.num_elements())) +
+                             static_cast<std::size_t>(n) / 2);
+    // seen[w] == v + 1 once w is listed for v: each neighbour is kept once, and only the short
+    // list of distinct ones is sorted.
+    std::vector<VertexId> seen(static_cast<std::size_t>(n), 0);
+    for (VertexId v = 0; v < n; ++v) {
+        const auto begin = graph.neighbours.size();
+        for (ElementId e : mesh.elements_of(v))
+            for (VertexId w : mesh.element(e))
+                if (w != v && seen[w] != v + 1) {
+                    seen[w] = v + 1;
+                    graph.neighbours.push_back(w);
+                }
+        std::sort(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(begin), graph.neighbours.end());
+        graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(graph.neighbours.size());
     }
     return graph;
 }

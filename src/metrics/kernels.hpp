@@ -285,14 +285,20 @@ struct MinDihedralAngle {
     static constexpr double ideal = 70.528779365509308631;  // acos(1/3) in degrees
     double tet(const double* x, double* g, const MetricScale&) const {
         const TetGeometry t(x);
-        double smallest = INFINITY;
-        // dvolume[k] is the inward normal of the face opposite corner k.
+        // dvolume[k] is the inward normal of the face opposite corner k; the dihedral angle at
+        // the edge those faces share has cosine -n_k . n_l / (|n_k| |n_l|). The smallest angle has
+        // the largest cosine: one atan2 for it rather than one per edge. (A face of no area makes
+        // the volume 0, and with it the result.)
+        double length[4];
+        for (int k = 0; k < 4; ++k) length[k] = norm(t.dvolume[k]);
+        int a = 0, b = 1;
+        double largest = -INFINITY;
         for (int k = 0; k < 4; ++k)
             for (int l = k + 1; l < 4; ++l) {
-                const double angle =
-                    std::atan2(norm(cross(t.dvolume[k], t.dvolume[l])), -dot(t.dvolume[k], t.dvolume[l]));
-                smallest = std::min(smallest, angle);
+                const double cosine = -dot(t.dvolume[k], t.dvolume[l]) / (length[k] * length[l]);
+                if (cosine > largest) largest = cosine, a = k, b = l;
             }
+        const double smallest = std::atan2(norm(cross(t.dvolume[a], t.dvolume[b])), -dot(t.dvolume[a], t.dvolume[b]));
         if (g) std::fill(g, g + 12, 0.0);
         return sign_of(t.volume) * smallest * (180.0 / std::numbers::pi);
     }
