@@ -49,6 +49,8 @@ struct Summary {
     double seconds = 0.0;
     std::string quality_metric;       // the metric worst_* refer to
     double worst_before = 0.0, worst_after = 0.0;  // over elements with a free vertex
+    // The counts, and the statistics of the solver's metric and the aspect ratio (QualityAssessor has
+    // every metric, for a full report of the mesh).
     QualityReport before, after;
     std::vector<IterationRecord> history;
 
