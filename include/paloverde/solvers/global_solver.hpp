@@ -9,12 +9,13 @@
 
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/objectives/objective_function.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
 
 namespace paloverde {
+
+class DistributedMesh;  // paloverde/parallel/distributed_mesh.hpp (MPI): only a distributed run needs it
 
 struct GlobalSolverOptions {
     enum class Direction { SteepestAscent, ConjugateGradient };

@@ -11,10 +11,11 @@
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/termination.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
 
 namespace paloverde {
+
+class DistributedMesh;  // paloverde/parallel/distributed_mesh.hpp (MPI): only a distributed run needs it
 
 namespace detail {
 class SolverRun;
