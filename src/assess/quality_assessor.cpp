@@ -15,6 +15,9 @@ namespace paloverde {
 
 namespace {
 
+// Below this many elements an assessment stays on one thread.
+constexpr std::ptrdiff_t kParallelElements = 32768;
+
 // One metric's statistics over the elements this process counts, in three groups: all, movable
 // (group 1: a free vertex) and frozen (group 2). Two passes: the ranges, then the sums and the
 // histograms. Sums are exact, so the result depends on nothing but the mesh, however it is split:
@@ -22,39 +25,71 @@ namespace {
 void statistics(std::span<const double> q, std::span<const std::uint8_t> group, int bins, const Reducer& reducer,
                 bool distributed, MetricReport& report) {
     QualityStatistics* s[3] = {&report.all, &report.movable, &report.frozen};
-    double low[3], high[3];
-    long count[3] = {0, 0, 0};
-    std::fill(low, low + 3, std::numeric_limits<double>::infinity());
-    std::fill(high, high + 3, -std::numeric_limits<double>::infinity());
-    for (std::size_t e = 0; e < q.size(); ++e) {
-        const int g = group[e];
-        if (!g) continue;
-        for (int k : {0, g}) {
-            ++count[k];
-            if (q[e] < low[k]) low[k] = q[e], s[k]->worst_element = static_cast<ElementId>(e);
-            high[k] = std::max(high[k], q[e]);
+    // Pass 1, by thread: each group's range and its first element of least quality (the serial
+    // scan's: the smallest index among the least), then combined.
+    struct Range {
+        double low = std::numeric_limits<double>::infinity(), high = -std::numeric_limits<double>::infinity();
+        long count = 0;
+        ElementId worst = -1;
+    };
+    Range range[3];
+    const auto n = static_cast<std::ptrdiff_t>(q.size());
+#pragma omp parallel if (n >= kParallelElements)
+    {
+        Range mine[3];
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t e = 0; e < n; ++e) {
+            const int g = group[static_cast<std::size_t>(e)];
+            if (!g) continue;
+            const double qe = q[static_cast<std::size_t>(e)];
+            for (int k : {0, g}) {
+                ++mine[k].count;
+                if (qe < mine[k].low) mine[k].low = qe, mine[k].worst = static_cast<ElementId>(e);
+                mine[k].high = std::max(mine[k].high, qe);
+            }
+        }
+#pragma omp critical(paloverde_assess_range)
+        for (int k = 0; k < 3; ++k) {
+            Range& r = range[k];
+            r.count += mine[k].count;
+            if (mine[k].worst >= 0 && (mine[k].low < r.low || (mine[k].low == r.low && mine[k].worst < r.worst) || r.worst < 0))
+                r.low = mine[k].low, r.worst = mine[k].worst;
+            r.high = std::max(r.high, mine[k].high);
         }
     }
     double width[3] = {0.0, 0.0, 0.0};
     for (int k = 0; k < 3; ++k) {
-        s[k]->count = static_cast<ElementId>(reducer.total(static_cast<double>(count[k])));
-        if (distributed) s[k]->worst_element = -1;  // a local index means nothing to the caller
+        s[k]->count = static_cast<ElementId>(reducer.total(static_cast<double>(range[k].count)));
+        s[k]->worst_element = distributed ? -1 : range[k].worst;  // a local index means nothing to the caller
         if (s[k]->count == 0) continue;
-        s[k]->min = reducer.min(low[k]);
-        s[k]->max = reducer.max(high[k]);
+        s[k]->min = reducer.min(range[k].low);
+        s[k]->max = reducer.max(range[k].high);
         width[k] = (s[k]->max - s[k]->min) / bins;
     }
+    // Pass 2, by thread: exact sums and integer counts, added together (exactly: in any order).
     const auto b = static_cast<std::size_t>(bins);
     std::vector<std::int64_t> counts(3 * b, 0);
     std::vector<ExactSum> sums(4 + 3 * b);  // sum and squares of movable, then of frozen; the histograms
-    for (std::size_t e = 0; e < q.size(); ++e) {
-        const int g = group[e];
-        if (!g) continue;
-        sums[2 * static_cast<std::size_t>(g - 1)].add(q[e]);
-        sums[2 * static_cast<std::size_t>(g - 1) + 1].add(q[e] * q[e]);
-        for (int k : {0, g}) {
-            const int bin = width[k] > 0.0 ? static_cast<int>((q[e] - s[k]->min) / width[k]) : 0;
-            ++counts[static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))];
+#pragma omp parallel if (n >= kParallelElements)
+    {
+        std::vector<std::int64_t> my_counts(3 * b, 0);
+        std::vector<ExactSum> my_sums(4);
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t e = 0; e < n; ++e) {
+            const int g = group[static_cast<std::size_t>(e)];
+            if (!g) continue;
+            const double qe = q[static_cast<std::size_t>(e)];
+            my_sums[2 * static_cast<std::size_t>(g - 1)].add(qe);
+            my_sums[2 * static_cast<std::size_t>(g - 1) + 1].add(qe * qe);
+            for (int k : {0, g}) {
+                const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
+                ++my_counts[static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))];
+            }
+        }
+#pragma omp critical(paloverde_assess_sums)
+        {
+            for (std::size_t i = 0; i < 4; ++i) sums[i] += my_sums[i];
+            for (std::size_t i = 0; i < counts.size(); ++i) counts[i] += my_counts[i];
         }
     }
     for (std::size_t i = 0; i < counts.size(); ++i) sums[4 + i].add(static_cast<double>(counts[i]));
@@ -71,6 +106,15 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
         for (std::size_t i = 0; i < b; ++i)
             s[k]->histogram.push_back(static_cast<ElementId>(sums[4 + static_cast<std::size_t>(k) * b + i].value()));
     }
+}
+
+// Every element's quality, in chunks over the threads (each element's value is its own).
+void evaluate_all(const QualityMetric& metric, const SimplexMesh& mesh, std::span<const double> xyz, std::vector<double>& q) {
+    const ElementId m = mesh.num_elements();
+    constexpr ElementId kChunk = 4096;
+#pragma omp parallel for schedule(static) if (m >= kParallelElements)
+    for (ElementId first = 0; first < m; first += kChunk)
+        metric.evaluate(mesh, xyz, first, std::min(m, first + kChunk), q.data() + first);
 }
 
 }  // namespace
@@ -126,6 +170,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen.
     std::vector<std::uint8_t> group(m, 0);
     long counts[5] = {0, 0, 0, 0, 0};  // elements, frozen, inverted, inverted frozen, degenerate
+#pragma omp parallel for schedule(static) reduction(+ : counts[:5]) if (mesh.num_elements() >= kParallelElements)
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
         if (!is_counted(static_cast<std::size_t>(e))) continue;
         group[e] = 2;
@@ -151,10 +196,17 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     {
         auto unit = make_metric("scaled_volume");
         unit->set_scale(scale);
-        unit->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
+        evaluate_all(*unit, mesh, xyz, q);
         ExactSum volume;
-        for (std::size_t e = 0; e < m; ++e)
-            if (group[e]) volume.add(std::abs(q[e]));
+#pragma omp parallel if (mesh.num_elements() >= kParallelElements)
+        {
+            ExactSum mine;
+#pragma omp for schedule(static) nowait
+            for (std::size_t e = 0; e < m; ++e)
+                if (group[e]) mine.add(std::abs(q[e]));
+#pragma omp critical(paloverde_assess_volume)
+            volume += mine;
+        }
         totals.push_back(volume);
     }
     reducer.sum(totals);
@@ -173,7 +225,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         auto metric = make_metric(name);
         if (!metric->supports(mesh.kind())) continue;
         metric->set_scale(scale);
-        metric->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
+        evaluate_all(*metric, mesh, xyz, q);
         MetricReport r;
         r.name = name;
         statistics(q, group, bins_, reducer, distributed, r);

@@ -11,6 +11,7 @@
 #include "config/registry_internal.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/solvers/stop.hpp"
+#include "solvers/run_support.hpp"
 
 namespace paloverde::config {
 
@@ -293,6 +294,7 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
     if (spec.partitioned() || detail::world_size() > 1) return detail::run_partitioned(spec, hooks);
     const auto methods = spec.methods();
     for (const auto& m : methods) build(m.queue, spec.threads);  // every option checked before the mesh is read
+    const paloverde::detail::ThreadScope threads(spec.threads);   // the assessments' threads too
 
     MeshFile file = detail::read_input(spec);
     RunResult result;
