@@ -5,8 +5,6 @@
 #include <boost/test/unit_test.hpp>
 
 #include "paloverde/assess/quality_assessor.hpp"
-#include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/perturb.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -16,12 +14,7 @@ BOOST_AUTO_TEST_SUITE(assessor_threads)
 BOOST_AUTO_TEST_CASE(the_report_is_the_same_on_one_two_and_three_threads) {
     // 112,393 tets: above the size where the assessment goes parallel. Tangled, so that the
     // inverted counts and the negative qualities are exercised too.
-    auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/cub_wedge_like.vtk")).mesh;
-    pv::PerturbOptions moves;
-    moves.fraction = 0.3;
-    moves.amount = 1.0;
-    moves.seed = 5;
-    pv::perturb(mesh, moves);
+    const auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cub_wedge_like.vtk", 0.3, 1.0, 5);
     const int saved = omp_get_max_threads();
     std::string reports[3];
     for (int threads = 1; threads <= 3; ++threads) {

@@ -9,8 +9,6 @@
 #include <vector>
 
 #include "paloverde/core/error.hpp"
-#include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/perturb.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
@@ -43,15 +41,7 @@ void register_once() {
     (void)done;
 }
 
-pv::SimplexMesh perturbed_tire() {
-    auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
-    pv::PerturbOptions moves;
-    moves.fraction = 0.5;
-    moves.amount = 0.3;
-    moves.seed = 3;
-    pv::perturb(mesh, moves);
-    return mesh;
-}
+pv::SimplexMesh perturbed_tire() { return pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.5, 0.3, 3); }
 
 // The coordinates `input` is moved to by a solver with these options.
 template <class Solver, class Options>
