@@ -8,11 +8,10 @@
 
 #include <algorithm>
 #include <chrono>
-#include <exception>
-#include <limits>
 
 #include "config/partitioned_run.hpp"
 #include "config/registry_internal.hpp"
+#include "parallel/collective.hpp"
 #include "io/xml_reader.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
@@ -40,38 +39,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 
 bool is_pvtu(const std::string& path) { return std::filesystem::path(path).extension() == ".pvtu"; }
 
-// Runs `work` where `here` is true (rank 0 alone, or every rank). When it throws anywhere, it
-// throws on every rank: the lowest failing rank rethrows its own exception, the others an
-// exception of the same kind (a usage error or not: the exit code) with the same message.
-template <class Work>
-void together(MPI_Comm comm, bool here, Work&& work) {
-    std::exception_ptr failure;
-    std::string message;
-    int kind = 0;  // 0: none, 1: usage (OptionError, ConfigError), 2: anything else
-    if (here) {
-        try {
-            work();
-        } catch (const OptionError& e) {
-            failure = std::current_exception(), message = e.what(), kind = 1;
-        } catch (const std::exception& e) {
-            failure = std::current_exception(), message = e.what(), kind = 2;
-        } catch (...) {
-            failure = std::current_exception(), message = "unknown error", kind = 2;
-        }
-    }
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
-    int lowest = kind != 0 ? rank : std::numeric_limits<int>::max();
-    MPI_Allreduce(MPI_IN_PLACE, &lowest, 1, MPI_INT, MPI_MIN, comm);
-    if (lowest == std::numeric_limits<int>::max()) return;
-    int header[2] = {kind, static_cast<int>(message.size())};
-    MPI_Bcast(header, 2, MPI_INT, lowest, comm);
-    message.resize(static_cast<std::size_t>(header[1]));
-    MPI_Bcast(message.data(), header[1], MPI_CHAR, lowest, comm);
-    if (rank == lowest) std::rethrow_exception(failure);
-    if (header[0] == 1) throw OptionError(message);
-    throw Error(message);
-}
+using parallel::together;
 
 ConfigError config_error(const RunSpec& spec, const std::string& key, const std::string& message) {
     return ConfigError(origin(spec, key), key, message);

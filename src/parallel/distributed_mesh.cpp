@@ -17,7 +17,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
-#include "solvers/workspace.hpp"
+#include "parallel/collective.hpp"
 
 namespace paloverde {
 
@@ -49,33 +49,6 @@ std::vector<T> receive_vector(int from, int tag, MPI_Comm comm) {
     return data;
 }
 
-// Runs `work` on rank 0; if it throws, every rank throws the same message (no rank is left
-// waiting for a message that will never come).
-template <class Work>
-void on_root_or_fail_everywhere(MPI_Comm comm, int rank, Work work) {
-    std::string failure;
-    int kind = 0;  // 1 option error, 2 mesh error, 3 other
-    if (rank == 0) {
-        try {
-            work();
-        } catch (const OptionError& e) {
-            failure = e.what(), kind = 1;
-        } catch (const MeshError& e) {
-            failure = e.what(), kind = 2;
-        } catch (const std::exception& e) {
-            failure = e.what(), kind = 3;
-        }
-    }
-    MPI_Bcast(&kind, 1, MPI_INT, 0, comm);
-    if (kind == 0) return;
-    int length = static_cast<int>(failure.size());
-    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
-    failure.resize(static_cast<std::size_t>(length));
-    MPI_Bcast(failure.data(), length, MPI_CHAR, 0, comm);
-    if (kind == 1) throw OptionError(failure);
-    if (kind == 2) throw MeshError(failure);
-    throw Error(failure);
-}
 
 // Collective: each rank's values, concatenated in rank order on rank 0, with each rank's count.
 template <class T = std::int64_t>
@@ -334,7 +307,7 @@ WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
     std::vector<ElementId>().swap(order.old_element);  // elements get the canonical order instead
     std::vector<GlobalId> canonical(static_cast<std::size_t>(whole.num_vertices()));
     for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
-    const auto element_order = detail::canonical_element_positions(whole, canonical);
+    const auto element_order = canonical_element_positions(whole, canonical);
     const auto part = partition_vertices(whole, ranks);
     return {split(whole, canonical, element_order, part, ranks), std::move(order.old_vertex)};
 }
@@ -499,7 +472,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
     WholeSplit split;
     std::int64_t header[4] = {0, 0, 0, 0};  // kind, global vertices, global elements, elements flipped
     double normal[3] = {0.0, 0.0, 1.0};
-    on_root_or_fail_everywhere(comm, out.rank, [&] {
+    parallel::together(comm, out.rank == 0, [&] {
         if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
         split = split_whole(*whole, ranks);
         out.original_vertex_ = std::move(split.original_vertex);

@@ -6,6 +6,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "parallel/collective.hpp"
 
 namespace paloverde {
 
@@ -13,25 +14,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// Runs `work` on rank 0; a failure there is thrown on every rank.
-template <class Work>
-void on_root(MPI_Comm comm, int rank, Work work) {
-    std::string failure;
-    if (rank == 0) {
-        try {
-            work();
-        } catch (const std::exception& e) {
-            failure = e.what();
-            if (failure.empty()) failure = "unknown error";
-        }
-    }
-    int length = static_cast<int>(failure.size());
-    MPI_Bcast(&length, 1, MPI_INT, 0, comm);
-    if (length == 0) return;
-    failure.resize(static_cast<std::size_t>(length));
-    MPI_Bcast(failure.data(), length, MPI_CHAR, 0, comm);
-    throw Error(failure);
-}
 }  // namespace
 
 void DistributedRunOptions::validate() const {
@@ -57,7 +39,7 @@ DistributedRunReport run(MPI_Comm comm, const DistributedRunOptions& options,
         part = DistributedMesh::read_pieces(comm, options.input, options.distribute);
         report.read_seconds = part.timings.distribute;  // reading and checking the pieces
     } else {
-        on_root(comm, rank, [&] {
+        parallel::together(comm, rank == 0, [&] {
             ReadOptions read;
             read.fix_boundary = options.fix_boundary;
             read.orientation = options.distribute.orientation;
@@ -89,7 +71,7 @@ DistributedRunReport run(MPI_Comm comm, const DistributedRunOptions& options,
                 throw OptionError("a run from pieces writes pieces: give an output ending in .pvtu (got '" +
                                   options.output.string() + "')");
             part.gather_coordinates(rank == 0 ? &whole : nullptr);
-            on_root(comm, rank, [&] { write_mesh(options.output, whole); });
+            parallel::together(comm, rank == 0, [&] { write_mesh(options.output, whole); });
         }
     }
     report.write_seconds = part.reducer().max(seconds_since(start));

@@ -15,6 +15,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "parallel/collective.hpp"
 
 namespace paloverde {
 
@@ -181,20 +182,7 @@ IterationRecord get_record(Reader& r) {
 template <class Work>
 void on_root(const DistributedMesh* part, Work&& work) {
     if (!part) return work();
-    std::string failure;
-    if (part->rank == 0) {
-        try {
-            work();
-        } catch (const std::exception& e) {
-            failure = e.what();
-            if (failure.empty()) failure = "failed";
-        }
-    }
-    std::uint64_t size = failure.size();
-    MPI_Bcast(&size, 1, MPI_UINT64_T, 0, part->comm);
-    failure.resize(size);
-    MPI_Bcast(failure.data(), static_cast<int>(size), MPI_CHAR, 0, part->comm);
-    if (!failure.empty()) throw Error(failure);
+    parallel::together(part->comm, part->rank == 0, work);
 }
 
 }  // namespace

@@ -28,24 +28,6 @@ bool has_free_vertex(const SimplexMesh& mesh, ElementId e) {
 }
 }  // namespace
 
-std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key) {
-    const ElementId m = mesh.num_elements();
-    const int k = mesh.corners();
-    std::vector<std::array<GlobalId, 4>> keys(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
-        auto& key = keys[e];
-        key.fill(-1);
-        for (int i = 0; i < k; ++i) key[i] = vertex_key[mesh.element(e)[i]];
-        std::sort(key.begin(), key.begin() + k);
-    }
-    std::vector<ElementId> sorted(static_cast<std::size_t>(m));
-    std::iota(sorted.begin(), sorted.end(), ElementId{0});
-    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) { return keys[a] < keys[b]; });
-    std::vector<GlobalId> position(static_cast<std::size_t>(m));
-    for (ElementId i = 0; i < m; ++i) position[sorted[i]] = i;
-    return position;
-}
-
 Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
     if (renumber) {
         Renumbering order = locality_order(mesh);

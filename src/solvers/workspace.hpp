@@ -135,8 +135,4 @@ bool stop_requested_anywhere(const Workspace& work);
 // What a phase stopped that way says.
 std::string interrupted_after(int iterations);
 
-// Canonical element order: for each element its position when all are sorted by their sorted
-// vertex ids (`vertex_key` per vertex, e.g. canonical or global ids).
-std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key);
-
 }  // namespace paloverde::detail

@@ -28,4 +28,9 @@ struct VertexGraph {
 };
 VertexGraph vertex_graph(const SimplexMesh& mesh);
 
+// The canonical element order, the same however a mesh is numbered or split: each element's
+// position when all are sorted by their sorted vertex keys (`vertex_key` per vertex: canonical or
+// global ids).
+std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key);
+
 }  // namespace paloverde
