@@ -8,21 +8,11 @@
 
 #include "paloverde/core/error.hpp"
 #include "parallel/collective.hpp"
+#include "world.hpp"
 
 namespace pv = paloverde;
 
 namespace {
-
-int world_rank() {
-    int r = 0;
-    MPI_Comm_rank(MPI_COMM_WORLD, &r);
-    return r;
-}
-int world_size() {
-    int n = 1;
-    MPI_Comm_size(MPI_COMM_WORLD, &n);
-    return n;
-}
 
 // What `together` throws on this rank when `fail` throws on the ranks it picks: the message and
 // which kind was caught ("option", "mesh", "error"), or "none".
@@ -45,7 +35,7 @@ std::pair<std::string, std::string> outcome(bool here, Fail&& fail) {
 BOOST_AUTO_TEST_SUITE(collective)
 
 BOOST_AUTO_TEST_CASE(a_failure_anywhere_is_the_same_failure_everywhere) {
-    const int rank = world_rank(), last = world_size() - 1;
+    const int rank = pv::test::rank(), last = pv::test::ranks() - 1;
     // Nothing fails: nothing is thrown, and work runs only where asked.
     int ran = 0;
     BOOST_TEST(outcome(rank == 0, [&] { ++ran; }).first == "none");

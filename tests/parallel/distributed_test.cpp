@@ -20,6 +20,7 @@
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "support/solver_checks.hpp"
+#include "world.hpp"
 
 namespace pv = paloverde;
 
@@ -30,16 +31,8 @@ struct MpiSession {
     ~MpiSession() { MPI_Finalize(); }
 };
 
-int rank() {
-    int r = 0;
-    MPI_Comm_rank(MPI_COMM_WORLD, &r);
-    return r;
-}
-int ranks() {
-    int n = 1;
-    MPI_Comm_size(MPI_COMM_WORLD, &n);
-    return n;
-}
+using paloverde::test::rank;
+using paloverde::test::ranks;
 
 pv::DistributedMesh scatter(const pv::SimplexMesh& whole, pv::ExchangeMode mode = pv::ExchangeMode::Colored) {
     pv::DistributeOptions options;
