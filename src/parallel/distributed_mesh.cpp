@@ -82,20 +82,10 @@ std::vector<std::int64_t> scatter_from_root(MPI_Comm comm, const std::vector<std
     return mine;
 }
 
-// Collective: when any rank failed (a non-empty message), every rank throws the message of the
-// lowest failing rank.
+// Collective: when a check failed on any rank (a non-empty message), it fails on every rank as a
+// MeshError, with the lowest failing rank's message.
 void agree(MPI_Comm comm, const std::string& failure) {
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
-    int first = failure.empty() ? std::numeric_limits<int>::max() : rank;
-    MPI_Allreduce(MPI_IN_PLACE, &first, 1, MPI_INT, MPI_MIN, comm);
-    if (first == std::numeric_limits<int>::max()) return;
-    std::string message = failure;
-    int length = static_cast<int>(message.size());
-    MPI_Bcast(&length, 1, MPI_INT, first, comm);
-    message.resize(static_cast<std::size_t>(length));
-    MPI_Bcast(message.data(), length, MPI_CHAR, first, comm);
-    throw MeshError(message);
+    parallel::together(comm, !failure.empty(), [&] { throw MeshError(failure); });
 }
 
 // The pieces of one rank's part, as rank 0 sends them or a piece file holds them.
@@ -527,17 +517,13 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
     const auto start = Clock::now();
     PartArrays mine;
     ElementKind kind = ElementKind::Tetrahedron;
-    std::string failure;
-    try {
+    parallel::together(comm, true, [&] {
         const auto files = piece_files(path, out.ranks);
         if (static_cast<int>(files.size()) != out.ranks)
             throw OptionError(path.string() + " has " + std::to_string(files.size()) + " pieces; run it on as many " +
                               "processes (got " + std::to_string(out.ranks) + ")");
         mine = read_piece(files[static_cast<std::size_t>(out.rank)], out.ranks, kind);
-    } catch (const std::exception& e) {
-        failure = e.what();
-    }
-    agree(comm, failure);
+    });
     int kinds[2] = {static_cast<int>(kind), -static_cast<int>(kind)};
     MPI_Allreduce(MPI_IN_PLACE, kinds, 2, MPI_INT, MPI_MAX, comm);
     agree(comm, kinds[0] != -kinds[1] ? "the pieces of " + path.string() + " mix triangles and tetrahedra" : "");
@@ -559,7 +545,7 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
     const auto all_keys = gather_to_root(comm, element_keys);
     std::vector<std::int64_t> positions_flat;
     std::vector<int> key_counts;
-    failure.clear();
+    std::string failure;
     if (out.rank == 0) {
         std::vector<std::int64_t> ids = all_owned.values;
         std::sort(ids.begin(), ids.end());
@@ -704,15 +690,11 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
 }
 
 void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
-    std::string failure;
-    try {
+    parallel::together(comm, true, [&] {
         if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, rank).parent_path());
         write_piece(piece_path(path, rank), mesh, vertex_owner, counted, rank, path.extension() != ".pvtu");
         if (rank == 0 && path.extension() == ".pvtu") write_pvtu(path, ranks);
-    } catch (const std::exception& e) {
-        failure = e.what();
-    }
-    agree(comm, failure);
+    });
 }
 
 void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path) {

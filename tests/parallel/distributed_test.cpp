@@ -384,13 +384,14 @@ BOOST_AUTO_TEST_CASE(mirrored_pieces_are_flipped_alike_on_every_rank) {
     BOOST_TEST(assessor.assess(again).inverted == tangled.num_elements() - now.inverted - now.degenerate);
 }
 
+// A usage error (run it on as many processes as pieces): OptionError, exit code 2, on every rank.
 BOOST_AUTO_TEST_CASE(the_wrong_number_of_pieces_is_an_error_on_every_rank) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
     const auto path = scratch("wrong_count.pvtu");
     if (rank() == 0) pv::DistributedMesh::write_partitioned(input, ranks() + 1, path);
     MPI_Barrier(MPI_COMM_WORLD);
-    BOOST_CHECK_EXCEPTION(pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path), pv::MeshError,
-                          [](const pv::MeshError& e) { return std::string(e.what()).find("pieces") != std::string::npos; });
+    BOOST_CHECK_EXCEPTION(pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path), pv::OptionError,
+                          [](const pv::OptionError& e) { return std::string(e.what()).find("pieces") != std::string::npos; });
 }
 
 BOOST_AUTO_TEST_CASE(a_vertex_owned_twice_is_an_error_on_every_rank) {
