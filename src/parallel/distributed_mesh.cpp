@@ -4,228 +4,33 @@
 #include <array>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <limits>
-#include <numeric>
-#include <set>
 #include <string>
 #include <type_traits>
 
-#include "io/xml_reader.hpp"
 #include "paloverde/core/error.hpp"
-#include "paloverde/io/atomic_file.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
-#include "parallel/collective.hpp"
+#include "parallel/exchange.hpp"
+#include "parallel/mpi_support.hpp"
+#include "parallel/parts.hpp"
+#include "parallel/pieces.hpp"
 
 namespace paloverde {
 
 namespace {
 
+using namespace parallel;
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-template <class T>
-MPI_Datatype mpi_type();
-template <> MPI_Datatype mpi_type<double>() { return MPI_DOUBLE; }
-template <> MPI_Datatype mpi_type<std::int32_t>() { return MPI_INT32_T; }
-template <> MPI_Datatype mpi_type<std::int64_t>() { return MPI_INT64_T; }
-template <> MPI_Datatype mpi_type<std::uint8_t>() { return MPI_UINT8_T; }
-
-template <class T>
-void send_vector(const std::vector<T>& data, int to, int tag, MPI_Comm comm) {
-    const std::int64_t size = static_cast<std::int64_t>(data.size());
-    MPI_Send(&size, 1, MPI_INT64_T, to, tag, comm);
-    if (size > 0) MPI_Send(data.data(), static_cast<int>(size), mpi_type<T>(), to, tag, comm);
-}
-
-template <class T>
-std::vector<T> receive_vector(int from, int tag, MPI_Comm comm) {
-    std::int64_t size = 0;
-    MPI_Recv(&size, 1, MPI_INT64_T, from, tag, comm, MPI_STATUS_IGNORE);
-    std::vector<T> data(static_cast<std::size_t>(size));
-    if (size > 0) MPI_Recv(data.data(), static_cast<int>(size), mpi_type<T>(), from, tag, comm, MPI_STATUS_IGNORE);
-    return data;
-}
 
 
-// Collective: each rank's values, concatenated in rank order on rank 0, with each rank's count.
-template <class T = std::int64_t>
-struct Gathered {
-    std::vector<T> values;
-    std::vector<int> counts;
-};
-template <class T>
-Gathered<T> gather_to_root(MPI_Comm comm, const std::vector<T>& mine) {
-    int rank = 0, ranks = 1;
-    MPI_Comm_rank(comm, &rank);
-    MPI_Comm_size(comm, &ranks);
-    Gathered<T> out;
-    int count = static_cast<int>(mine.size());
-    if (rank == 0) out.counts.resize(static_cast<std::size_t>(ranks));
-    MPI_Gather(&count, 1, MPI_INT, out.counts.data(), 1, MPI_INT, 0, comm);
-    std::vector<int> offsets(out.counts.size(), 0);
-    for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + out.counts[p - 1];
-    if (rank == 0) out.values.resize(static_cast<std::size_t>(offsets.back() + out.counts.back()));
-    MPI_Gatherv(mine.data(), count, mpi_type<T>(), out.values.data(), out.counts.data(), offsets.data(), mpi_type<T>(), 0, comm);
-    return out;
-}
-// The inverse: rank 0's values cut by `counts`, `expected` of them to each rank.
-std::vector<std::int64_t> scatter_from_root(MPI_Comm comm, const std::vector<std::int64_t>& values,
-                                            const std::vector<int>& counts, std::size_t expected) {
-    std::vector<int> offsets(counts.size(), 0);
-    for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + counts[p - 1];
-    std::vector<std::int64_t> mine(expected);
-    MPI_Scatterv(values.data(), counts.data(), offsets.data(), MPI_INT64_T, mine.data(), static_cast<int>(expected),
-                 MPI_INT64_T, 0, comm);
-    return mine;
-}
 
-// Collective: when a check failed on any rank (a non-empty message), it fails on every rank as a
-// MeshError, with the lowest failing rank's message.
-void agree(MPI_Comm comm, const std::string& failure) {
-    parallel::together(comm, !failure.empty(), [&] { throw MeshError(failure); });
-}
 
-// The pieces of one rank's part, as rank 0 sends them or a piece file holds them.
-struct PartArrays {
-    std::vector<double> coordinates;
-    std::vector<std::uint8_t> fixed;
-    std::vector<std::int64_t> canonical;  // per vertex
-    std::vector<std::int32_t> owner;      // per vertex
-    std::vector<std::int32_t> connectivity;
-    std::vector<std::int64_t> element_order;
-};
 
-class MpiReducer final : public Reducer {
-public:
-    explicit MpiReducer(MPI_Comm comm) : comm_(comm) {}
-    void sum(std::span<ExactSum> sums) const override {
-        if (sums.empty()) return;
-        std::vector<std::int64_t> digits(sums.size() * ExactSum::kDigits);
-        std::vector<std::int64_t> special(sums.size());
-        for (std::size_t i = 0; i < sums.size(); ++i) {
-            sums[i].normalize();
-            std::copy(sums[i].digits().begin(), sums[i].digits().end(), digits.begin() + i * ExactSum::kDigits);
-            special[i] = sums[i].special();
-        }
-        MPI_Allreduce(MPI_IN_PLACE, digits.data(), static_cast<int>(digits.size()), MPI_INT64_T, MPI_SUM, comm_);
-        MPI_Allreduce(MPI_IN_PLACE, special.data(), static_cast<int>(special.size()), MPI_INT64_T, MPI_BOR, comm_);
-        for (std::size_t i = 0; i < sums.size(); ++i) {
-            std::copy(digits.begin() + i * ExactSum::kDigits, digits.begin() + (i + 1) * ExactSum::kDigits,
-                      sums[i].digits().begin());
-            sums[i].special() = special[i];
-        }
-    }
-    double min(double value) const override {
-        MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MIN, comm_);
-        return value;
-    }
-    double max(double value) const override {
-        MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MAX, comm_);
-        return value;
-    }
 
-private:
-    MPI_Comm comm_;
-};
 
-class MpiHalo final : public Halo {
-public:
-    MpiHalo(MPI_Comm comm, int rank, int ranks, const ExchangeSchedule& schedule)
-        : comm_(comm), rank_(rank), ranks_(ranks), schedule_(schedule) {}
-
-    void update(std::span<double> values, int width) const override {
-        if (schedule_.mode == ExchangeMode::Colored) colored(values, width);
-        else root_relayed(values, width);
-    }
-
-private:
-    static std::vector<double> pack(std::span<const double> values, int width, const std::vector<VertexId>& list) {
-        std::vector<double> out(list.size() * static_cast<std::size_t>(width));
-        for (std::size_t i = 0; i < list.size(); ++i)
-            for (int c = 0; c < width; ++c) out[i * width + c] = values[static_cast<std::size_t>(list[i]) * width + c];
-        return out;
-    }
-    static void unpack(std::span<double> values, int width, const std::vector<VertexId>& list, const double* in) {
-        for (std::size_t i = 0; i < list.size(); ++i)
-            for (int c = 0; c < width; ++c) values[static_cast<std::size_t>(list[i]) * width + c] = in[i * width + c];
-    }
-
-    // Color by color, each rank trades with at most one partner per color.
-    void colored(std::span<double> values, int width) const {
-        std::vector<double> incoming;
-        for (const ExchangePartner& p : schedule_.partners) {
-            const auto outgoing = pack(values, width, p.send);
-            incoming.resize(p.receive.size() * static_cast<std::size_t>(width));
-            MPI_Sendrecv(outgoing.data(), static_cast<int>(outgoing.size()), MPI_DOUBLE, p.rank, p.color,
-                         incoming.data(), static_cast<int>(incoming.size()), MPI_DOUBLE, p.rank, p.color, comm_,
-                         MPI_STATUS_IGNORE);
-            unpack(values, width, p.receive, incoming.data());
-        }
-    }
-
-    // Every rank sends all its outgoing values to rank 0, which forwards each block to its
-    // destination: the paper's baseline.
-    void root_relayed(std::span<double> values, int width) const {
-        std::vector<int> counts(static_cast<std::size_t>(ranks_), 0);  // doubles to each destination
-        std::vector<double> outgoing;
-        for (int to = 0; to < ranks_; ++to)
-            for (const ExchangePartner& p : schedule_.partners)
-                if (p.rank == to) {
-                    const auto block = pack(values, width, p.send);
-                    outgoing.insert(outgoing.end(), block.begin(), block.end());
-                    counts[to] = static_cast<int>(block.size());
-                }
-        std::vector<int> all_counts(rank_ == 0 ? static_cast<std::size_t>(ranks_) * ranks_ : 0);
-        MPI_Gather(counts.data(), ranks_, MPI_INT, all_counts.data(), ranks_, MPI_INT, 0, comm_);
-        std::vector<int> gathered_sizes(rank_ == 0 ? ranks_ : 0), gathered_offsets(rank_ == 0 ? ranks_ : 0);
-        std::vector<double> gathered;
-        if (rank_ == 0) {
-            int offset = 0;
-            for (int from = 0; from < ranks_; ++from) {
-                gathered_offsets[from] = offset;
-                gathered_sizes[from] = std::accumulate(all_counts.begin() + from * ranks_, all_counts.begin() + (from + 1) * ranks_, 0);
-                offset += gathered_sizes[from];
-            }
-            gathered.resize(static_cast<std::size_t>(offset));
-        }
-        MPI_Gatherv(outgoing.data(), static_cast<int>(outgoing.size()), MPI_DOUBLE, gathered.data(),
-                    gathered_sizes.data(), gathered_offsets.data(), MPI_DOUBLE, 0, comm_);
-        // Rank 0 regroups by destination, sources in rank order.
-        std::vector<double> forward;
-        std::vector<int> forward_sizes(rank_ == 0 ? ranks_ : 0), forward_offsets(rank_ == 0 ? ranks_ : 0);
-        if (rank_ == 0) {
-            for (int to = 0; to < ranks_; ++to) {
-                forward_offsets[to] = static_cast<int>(forward.size());
-                for (int from = 0; from < ranks_; ++from) {
-                    int within = 0;
-                    for (int d = 0; d < to; ++d) within += all_counts[from * ranks_ + d];
-                    const double* block = gathered.data() + gathered_offsets[from] + within;
-                    forward.insert(forward.end(), block, block + all_counts[from * ranks_ + to]);
-                }
-                forward_sizes[to] = static_cast<int>(forward.size()) - forward_offsets[to];
-            }
-        }
-        std::size_t expected = 0;
-        for (const ExchangePartner& p : schedule_.partners) expected += p.receive.size() * static_cast<std::size_t>(width);
-        std::vector<double> incoming(expected);
-        MPI_Scatterv(forward.data(), forward_sizes.data(), forward_offsets.data(), MPI_DOUBLE, incoming.data(),
-                     static_cast<int>(incoming.size()), MPI_DOUBLE, 0, comm_);
-        std::size_t offset = 0;
-        for (int from = 0; from < ranks_; ++from)
-            for (const ExchangePartner& p : schedule_.partners)
-                if (p.rank == from) {
-                    unpack(values, width, p.receive, incoming.data() + offset);
-                    offset += p.receive.size() * static_cast<std::size_t>(width);
-                }
-    }
-
-    MPI_Comm comm_;
-    int rank_, ranks_;
-    const ExchangeSchedule& schedule_;
-};
 
 // Rank 0: splits the whole mesh (canonical numbering given by `canonical`) into the ranks' parts.
 std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId> canonical,
@@ -302,122 +107,6 @@ WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
     return {split(whole, canonical, element_order, part, ranks), std::move(order.old_vertex)};
 }
 
-// Piece files: the part's mesh with its global ids, owners and which elements it counts.
-const char* const kGlobalIds = "GlobalNodeIds";
-const char* const kOwner = "OwnerRank";
-const char* const kGhostCells = "vtkGhostType";  // 1: counted by another piece (ParaView hides those)
-const char* const kPartition = "PartitionId";
-
-void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
-                 std::span<const std::uint8_t> counted, int piece, bool mesquite_names) {
-    std::vector<Field> points(2), cells(2);
-    points[0].name = mesquite_names ? "GLOBAL_ID" : kGlobalIds;
-    points[1].name = mesquite_names ? "PROCESSOR_ID" : kOwner;
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
-        points[0].values.push_back(static_cast<double>(mesh.global_ids()[v]));
-        points[1].values.push_back(owner[v]);
-    }
-    cells[0].name = kPartition;
-    cells[1].name = kGhostCells;
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        cells[0].values.push_back(piece);
-        cells[1].values.push_back(counted[e] ? 0.0 : 1.0);
-    }
-    write_mesh(path, mesh, {}, points, cells);
-}
-
-// Where piece p of `path` lives: OUT.pvtu -> OUT/OUT_p.vtu; OUT.vtk (Mesquite style) -> OUT_p.vtk.
-std::filesystem::path piece_path(const std::filesystem::path& path, int piece) {
-    const std::string stem = path.stem().string(), number = std::to_string(piece);
-    if (path.extension() == ".pvtu") return path.parent_path() / stem / (stem + "_" + number + ".vtu");
-    return path.parent_path() / (stem + "_" + number + path.extension().string());
-}
-
-void write_pvtu(const std::filesystem::path& path, int pieces) {
-    std::string text =
-        "<?xml version=\"1.0\"?>\n"
-        "<VTKFile type=\"PUnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">\n"
-        "  <PUnstructuredGrid GhostLevel=\"1\">\n"
-        "    <PPointData>\n";
-    for (const char* name : {"fixed", kGlobalIds, kOwner})
-        text += "      <PDataArray type=\"Float64\" Name=\"" + std::string(name) + "\"/>\n";
-    text += "    </PPointData>\n    <PCellData>\n";
-    for (const char* name : {kPartition, kGhostCells})
-        text += "      <PDataArray type=\"Float64\" Name=\"" + std::string(name) + "\"/>\n";
-    text += "    </PCellData>\n    <PPoints>\n      <PDataArray type=\"Float64\" NumberOfComponents=\"3\"/>\n    </PPoints>\n";
-    for (int p = 0; p < pieces; ++p)
-        text += "    <Piece Source=\"" + piece_path(path.filename(), p).generic_string() + "\"/>\n";
-    text += "  </PUnstructuredGrid>\n</VTKFile>\n";
-    write_text_file(path, text);
-}
-
-// The piece files a .pvtu lists (relative to its folder), or the per-rank files of a pattern.
-std::vector<std::filesystem::path> piece_files(const std::filesystem::path& path, int ranks) {
-    std::vector<std::filesystem::path> files;
-    if (path.extension() != ".pvtu") {
-        for (int p = 0; p < ranks; ++p) files.push_back(piece_path(path, p));
-        return files;
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw FileError(path.string(), 0, "cannot open the .pvtu file");
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const io::XmlDocument doc = io::parse_xml(text, path.string(), "AppendedData");
-    for (const io::XmlElement& e : doc.elements)
-        if (e.name == "Piece") {
-            const std::string* source = e.attribute("Source");
-            if (!source) throw FileError(path.string(), e.line, "<Piece> has no Source attribute");
-            files.push_back(path.parent_path() / *source);
-        }
-    return files;
-}
-
-// One rank's piece file as part arrays, vertices sorted by global id.
-PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind& kind) {
-    ReadOptions options;
-    options.fix_boundary = false;
-    options.orientation = OrientationMode::AsIs;  // decided over all pieces together, once assembled
-    MeshFile piece = read_mesh(file, options);
-    const Field* ids = piece.point_field(kGlobalIds);
-    if (!ids) ids = piece.point_field("GLOBAL_ID");
-    const Field* owners = piece.point_field(kOwner);
-    if (!owners) owners = piece.point_field("PROCESSOR_ID");
-    if (!ids || !owners)
-        throw FileError(file.string(), 0, "a piece needs the point fields GlobalNodeIds (or GLOBAL_ID) and OwnerRank "
-                                          "(or PROCESSOR_ID); write pieces with `paloverde partition`");
-    if (!piece.fixed_from_file)
-        throw FileError(file.string(), 0, "a piece needs a `fixed` point field: a piece alone cannot tell the "
-                                          "boundary of the whole mesh");
-    const SimplexMesh& mesh = piece.mesh;
-    kind = mesh.kind();
-    const VertexId n = mesh.num_vertices();
-    for (VertexId v = 0; v < n; ++v) {
-        const double id = ids->values[v], owner = owners->values[v];
-        if (!(id >= 0.0 && id < 9e15 && id == std::floor(id)))
-            throw FileError(file.string(), 0, "vertex " + std::to_string(v) + " has global id " + std::to_string(id) +
-                                                  ", not a non-negative integer");
-        if (!(owner >= 0.0 && owner < ranks && owner == std::floor(owner)))
-            throw FileError(file.string(), 0, "vertex " + std::to_string(v) + " has owner " + std::to_string(owner) +
-                                                  ", not a rank in [0, " + std::to_string(ranks) + ")");
-    }
-    std::vector<VertexId> order(static_cast<std::size_t>(n));
-    std::iota(order.begin(), order.end(), VertexId{0});
-    std::sort(order.begin(), order.end(), [&](VertexId a, VertexId b) { return ids->values[a] < ids->values[b]; });
-    std::vector<VertexId> local(static_cast<std::size_t>(n));
-    PartArrays out;
-    for (VertexId i = 0; i < n; ++i) {
-        const VertexId v = order[i];
-        local[v] = i;
-        if (i > 0 && ids->values[v] == ids->values[order[i - 1]])
-            throw FileError(file.string(), 0, "global id " + std::to_string(static_cast<GlobalId>(ids->values[v])) +
-                                                  " appears twice in the piece");
-        for (int c = 0; c < 3; ++c) out.coordinates.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]);
-        out.fixed.push_back(mesh.fixed()[v]);
-        out.canonical.push_back(static_cast<std::int64_t>(ids->values[v]));
-        out.owner.push_back(static_cast<std::int32_t>(owners->values[v]));
-    }
-    for (VertexId v : mesh.connectivity()) out.connectivity.push_back(local[v]);
-    return out;
-}
 
 // The orientation decision over all pieces: each rank measures the elements it counts, at one
 // scale for all, and the exact sums are added across ranks, so every rank decides the same.
@@ -614,79 +303,9 @@ void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode
     }
     const auto start = Clock::now();
     build_schedule(mode);
-    reducer_ = std::make_unique<MpiReducer>(comm);
-    halo_ = std::make_unique<MpiHalo>(comm, rank, ranks, *schedule_);
+    reducer_ = parallel::make_mpi_reducer(comm);
+    halo_ = parallel::make_mpi_halo(comm, rank, ranks, *schedule_);
     timings.schedule = seconds_since(start);
-}
-void DistributedMesh::build_schedule(ExchangeMode mode) {
-    ExchangeSchedule& schedule = *schedule_;
-    schedule = {};
-    schedule.mode = mode;
-    const auto ids = mesh.global_ids();
-    // Ghosts, grouped by owner (in canonical order within each group).
-    std::vector<std::vector<VertexId>> receive(static_cast<std::size_t>(ranks));
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (vertex_owner[v] != rank) receive[vertex_owner[v]].push_back(v);
-    // Tell each owner which of its vertices this rank holds.
-    std::vector<int> request_counts(static_cast<std::size_t>(ranks)), offer_counts(static_cast<std::size_t>(ranks));
-    for (int p = 0; p < ranks; ++p) request_counts[p] = static_cast<int>(receive[p].size());
-    MPI_Alltoall(request_counts.data(), 1, MPI_INT, offer_counts.data(), 1, MPI_INT, comm);
-    std::vector<int> request_offsets(static_cast<std::size_t>(ranks), 0), offer_offsets(static_cast<std::size_t>(ranks), 0);
-    std::partial_sum(request_counts.begin(), request_counts.end() - 1, request_offsets.begin() + 1);
-    std::partial_sum(offer_counts.begin(), offer_counts.end() - 1, offer_offsets.begin() + 1);
-    std::vector<std::int64_t> requested;
-    for (const auto& list : receive)
-        for (VertexId v : list) requested.push_back(ids[v]);
-    std::vector<std::int64_t> offered(static_cast<std::size_t>(offer_offsets.back() + offer_counts.back()));
-    MPI_Alltoallv(requested.data(), request_counts.data(), request_offsets.data(), MPI_INT64_T, offered.data(),
-                  offer_counts.data(), offer_offsets.data(), MPI_INT64_T, comm);
-
-    std::vector<std::pair<int, int>> my_edges;
-    std::string failure;
-    for (int p = 0; p < ranks; ++p) {
-        if (receive[p].empty() && offer_counts[p] == 0) continue;
-        ExchangePartner partner;
-        partner.rank = p;
-        partner.receive = receive[p];
-        for (int i = 0; i < offer_counts[p]; ++i) {
-            const GlobalId id = offered[offer_offsets[p] + i];
-            const auto it = std::lower_bound(ids.begin(), ids.end(), id);
-            if (it == ids.end() || *it != id || vertex_owner[it - ids.begin()] != rank) {
-                if (failure.empty())
-                    failure = "rank " + std::to_string(p) + " holds vertex " + std::to_string(id) + " as owned by rank " +
-                              std::to_string(rank) + ", which does not own it";
-                continue;
-            }
-            partner.send.push_back(static_cast<VertexId>(it - ids.begin()));
-        }
-        schedule.partners.push_back(std::move(partner));
-        my_edges.push_back({std::min(rank, p), std::max(rank, p)});
-    }
-    agree(comm, failure);
-    // The whole process graph on every rank, colored the same way everywhere.
-    int mine = static_cast<int>(my_edges.size());
-    std::vector<int> edge_counts(static_cast<std::size_t>(ranks));
-    MPI_Allgather(&mine, 1, MPI_INT, edge_counts.data(), 1, MPI_INT, comm);
-    std::vector<int> edge_offsets(static_cast<std::size_t>(ranks), 0);
-    for (int p = 1; p < ranks; ++p) edge_offsets[p] = edge_offsets[p - 1] + 2 * edge_counts[p - 1];
-    std::vector<int> flat;
-    for (const auto& [a, b] : my_edges) flat.push_back(a), flat.push_back(b);
-    std::vector<int> flat_counts(static_cast<std::size_t>(ranks));
-    for (int p = 0; p < ranks; ++p) flat_counts[p] = 2 * edge_counts[p];
-    std::vector<int> all_flat(static_cast<std::size_t>(edge_offsets.back() + flat_counts.back()));
-    MPI_Allgatherv(flat.data(), static_cast<int>(flat.size()), MPI_INT, all_flat.data(), flat_counts.data(),
-                   edge_offsets.data(), MPI_INT, comm);
-    std::set<std::pair<int, int>> edge_set;
-    for (std::size_t i = 0; i + 1 < all_flat.size(); i += 2) edge_set.insert({all_flat[i], all_flat[i + 1]});
-    const std::vector<std::pair<int, int>> edges(edge_set.begin(), edge_set.end());
-    const auto colors = color_process_graph(ranks, edges);
-    schedule.colors = colors.empty() ? 0 : *std::max_element(colors.begin(), colors.end()) + 1;
-    for (ExchangePartner& p : schedule.partners) {
-        const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(rank, p.rank), std::max(rank, p.rank)});
-        p.color = colors[static_cast<std::size_t>(it - edges.begin())];
-    }
-    std::sort(schedule.partners.begin(), schedule.partners.end(),
-              [](const ExchangePartner& a, const ExchangePartner& b) { return a.color < b.color; });
 }
 
 void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
