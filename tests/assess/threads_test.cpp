@@ -5,7 +5,7 @@
 #include <boost/test/unit_test.hpp>
 
 #include "paloverde/assess/quality_assessor.hpp"
-#include "support/test_support.hpp"
+#include "support/solver_checks.hpp"
 
 namespace pv = paloverde;
 
@@ -14,7 +14,7 @@ BOOST_AUTO_TEST_SUITE(assessor_threads)
 BOOST_AUTO_TEST_CASE(the_report_is_the_same_on_one_two_and_three_threads) {
     // 112,393 tets: above the size where the assessment goes parallel. Tangled, so that the
     // inverted counts and the negative qualities are exercised too.
-    const auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cub_wedge_like.vtk", 0.3, 1.0, 5);
+    const auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cub_wedge_like.vtk", 0.3, 5);
     const int saved = omp_get_max_threads();
     std::string reports[3];
     for (int threads = 1; threads <= 3; ++threads) {

@@ -7,8 +7,6 @@
 #include <stdexcept>
 #include <sys/wait.h>
 
-#include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/perturb.hpp"
 
 namespace paloverde::test {
 
@@ -53,16 +51,6 @@ std::vector<double> regular_simplex(ElementKind kind) {
 
 double regular_simplex_volume(ElementKind kind) {
     return kind == ElementKind::Triangle ? std::sqrt(3.0) / 4 : std::sqrt(2.0) / 12;
-}
-
-SimplexMesh perturbed_shared_mesh(const std::string& relative, double fraction, double amount, std::uint64_t seed) {
-    auto mesh = read_mesh(shared_data(relative)).mesh;
-    PerturbOptions moves;
-    moves.fraction = fraction;
-    moves.amount = amount;
-    moves.seed = seed;
-    perturb(mesh, moves);
-    return mesh;
 }
 
 }  // namespace paloverde::test

@@ -1,12 +1,10 @@
 #pragma once
 // Helpers shared by the tests: where the shared meshes are, scratch directories, running the CLI.
-#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
 
 #include "paloverde/core/types.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
 
 namespace paloverde::test {
 
@@ -24,10 +22,6 @@ public:
 private:
     std::filesystem::path path_;
 };
-
-// A shared mesh (relative to ../shared/data) with a fraction of its interior vertices moved by up
-// to `amount` local edge lengths (paloverde::perturb).
-SimplexMesh perturbed_shared_mesh(const std::string& relative, double fraction, double amount, std::uint64_t seed);
 
 // Writes `text` to `path` (for hand-made bad inputs).
 void write_file(const std::filesystem::path& path, const std::string& text);
