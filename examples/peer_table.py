@@ -3,6 +3,7 @@
 minimum dihedral angle of the tetrahedra with a free vertex, minimum and mean aspect ratio, time.
 
     python3 examples/peer_table.py [--paloverde build/bin/paloverde] [--data ../shared/data]
+                                   [--method global|local] [--metric aspect_ratio|dihedral_sine|...]
 """
 import argparse
 import json
@@ -17,6 +18,8 @@ parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 parser.add_argument("--paloverde", default="build/bin/paloverde")
 parser.add_argument("--data", default="../shared/data")
 parser.add_argument("--threads", default="1")
+parser.add_argument("--method", default="global")
+parser.add_argument("--metric", default="aspect_ratio", help="the metric the solver raises (the table shows dihedral and aspect)")
 args = parser.parse_args()
 
 print("| mesh | tets | min dihedral before | after | min aspect before | after | mean aspect before | after | iterations | time (s) |")
@@ -25,7 +28,8 @@ with tempfile.TemporaryDirectory() as scratch:
     for mesh in MESHES:
         summary_file = os.path.join(scratch, "summary.json")
         subprocess.run([args.paloverde, "improve", os.path.join(args.data, mesh), "-o", os.path.join(scratch, "out.vtu"),
-                        "--summary", summary_file, "--threads", args.threads, "-q"], check=True)
+                        "--summary", summary_file, "--threads", args.threads, "--method", args.method,
+                        "--metric", args.metric, "-q"], check=True)
         s = json.load(open(summary_file))
         before, after = s["before"]["metrics"], s["after"]["metrics"]
         row = [os.path.basename(mesh), s["before"]["elements"],

@@ -188,7 +188,7 @@ Tables::Tables() {
         [](const std::string& n, const ObjectiveOptions& o) { make_objective(n, o); });
 
     global.add(metric_field(&GlobalSolverOptions::shape_metric, &GlobalSolverOptions::metric_options,
-                            "Shape metric to raise (one with a gradient: aspect_ratio, mean_ratio, inverse_condition, edge_ratio)."))
+                            "Shape metric to raise (one with a gradient: aspect_ratio, mean_ratio, inverse_condition, edge_ratio, dihedral_sine)."))
         .add(objective_field)
         .choice("direction", &GlobalSolverOptions::direction,
                 {{"conjugate_gradient", GlobalSolverOptions::Direction::ConjugateGradient},

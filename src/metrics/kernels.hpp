@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 #include <string_view>
+#include <utility>
 
 #include "geometry.hpp"
 #include "tet_blocks.hpp"
@@ -273,6 +274,107 @@ struct RegularizedEnergy {
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);
         return energy<2>(t.area, t.edge_sum, t.darea, t.dedge_sum, g, s);
+    }
+};
+
+// The smallest sine of an element's angles over the regular element's: the six dihedral angles
+// of a tetrahedron (sin at edge ij = 3 V l_ij / (2 A_k A_l), A_k and A_l the areas of the two
+// faces that meet there, those opposite the other corners k and l; regular: 2 sqrt(2) / 3), the
+// three corner angles of a triangle (sin at corner i = 2 A / (l l'), the two edges at i;
+// regular: sqrt(3) / 2). Signed by the volume (area), so inverted elements rate below 0 (the
+// most negative term: minus the largest sine, -1 for a mirrored regular element). A sine
+// is small for angles near 0 and near 180 degrees alike: the slivers and caps that stall a
+// simulation. The element's value is its smallest term; the gradient is that term's (where two
+// tie, one of them: a subgradient of the minimum).
+struct DihedralSine {
+    static constexpr std::string_view name = "dihedral_sine";
+    // 1 / (2 sqrt(2) / 3) times the 3/2 of the formula; 1 / (sqrt(3) / 2) times its 2.
+    static constexpr double kTet = 9.0 / (4.0 * std::numbers::sqrt2), kTri = 4.0 / std::numbers::sqrt3;
+
+    double tet(const double* x, double* g, const MetricScale&) const {
+        static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};  // opposite corner k
+        P c[4];
+        for (int i = 0; i < 4; ++i) c[i] = load(x, i);
+        double area[4];
+        P normal[4];  // unit normals of the faces (any orientation: only |n| and its gradient are used)
+        for (int k = 0; k < 4; ++k) {
+            const P a = c[kFace[k][0]], n = cross(c[kFace[k][1]] - a, c[kFace[k][2]] - a);
+            const double length = norm(n);
+            area[k] = 0.5 * length;
+            normal[k] = length > 0.0 ? (1.0 / length) * n : P{0.0, 0.0, 0.0};
+        }
+        const P e1 = c[1] - c[0], e2 = c[2] - c[0], e3 = c[3] - c[0];
+        const double volume = dot(e1, cross(e2, e3)) / 6.0;
+        double smallest = INFINITY;
+        int at = 0;
+        for (int m = 0; m < 6; ++m) {
+            const auto [i, j] = kTetEdges[m];
+            const auto [k, l] = other_two(i, j);
+            const double faces = area[k] * area[l];
+            const double term = faces > 0.0 ? kTet * volume * norm(c[i] - c[j]) / faces : 0.0;
+            if (term < smallest) smallest = term, at = m;
+        }
+        if (!g) return smallest;
+        std::fill(g, g + 12, 0.0);
+        const auto [i, j] = kTetEdges[at];
+        const auto [k, l] = other_two(i, j);
+        const double faces = area[k] * area[l], length = norm(c[i] - c[j]);
+        if (!(faces > 0.0) || !(length > 0.0)) return smallest;
+        // d term = kTet (L dV + V dL) / (A_k A_l) - term (dA_k / A_k + dA_l / A_l)
+        P grad[4] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+        const P dvolume[4] = {-(1.0 / 6.0) * (cross(e2, e3) + cross(e3, e1) + cross(e1, e2)), (1.0 / 6.0) * cross(e2, e3),
+                              (1.0 / 6.0) * cross(e3, e1), (1.0 / 6.0) * cross(e1, e2)};
+        for (int v = 0; v < 4; ++v) grad[v] = (kTet * length / faces) * dvolume[v];
+        const P dl = (kTet * volume / faces / length) * (c[i] - c[j]);
+        grad[i] = grad[i] + dl;
+        grad[j] = grad[j] - dl;
+        for (int face : {k, l}) {
+            // dA = (1/2) d|n|, n = (q - p) x (r - p): d|n|/dq = (r - p) x n^, d|n|/dr = n^ x (q - p).
+            const int p0 = kFace[face][0], q0 = kFace[face][1], r0 = kFace[face][2];
+            const P u = normal[face];
+            const double w = -smallest / area[face] * 0.5;
+            const P dq = cross(c[r0] - c[p0], u), dr = cross(u, c[q0] - c[p0]);
+            grad[q0] = grad[q0] + w * dq;
+            grad[r0] = grad[r0] + w * dr;
+            grad[p0] = grad[p0] - w * (dq + dr);
+        }
+        for (int v = 0; v < 4; ++v) store(g, v, grad[v]);
+        return smallest;
+    }
+
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        double smallest = INFINITY;
+        int at = 0;
+        for (int i = 0; i < 3; ++i) {
+            const double lengths = norm(t.corner[(i + 1) % 3] - t.corner[i]) * norm(t.corner[(i + 2) % 3] - t.corner[i]);
+            const double term = lengths > 0.0 ? kTri * t.area / lengths : 0.0;
+            if (term < smallest) smallest = term, at = i;
+        }
+        if (!g) return smallest;
+        std::fill(g, g + 9, 0.0);
+        const int a = at, b = (at + 1) % 3, c = (at + 2) % 3;
+        const P u = t.corner[b] - t.corner[a], v = t.corner[c] - t.corner[a];
+        const double lu = norm(u), lv = norm(v);
+        if (!(lu > 0.0) || !(lv > 0.0)) return smallest;
+        // d term = kTri dA / (lu lv) - term (dlu / lu + dlv / lv)
+        P grad[3];
+        for (int i = 0; i < 3; ++i) grad[i] = (kTri / (lu * lv)) * t.darea[i];
+        const P du = (smallest / (lu * lu)) * u, dv = (smallest / (lv * lv)) * v;
+        grad[b] = grad[b] - du;
+        grad[c] = grad[c] - dv;
+        grad[a] = grad[a] + du + dv;
+        for (int i = 0; i < 3; ++i) store(g, i, grad[i]);
+        return smallest;
+    }
+
+private:
+    // The two corners of a tetrahedron other than i and j.
+    static std::pair<int, int> other_two(int i, int j) {
+        int out[2], n = 0;
+        for (int k = 0; k < 4; ++k)
+            if (k != i && k != j) out[n++] = k;
+        return {out[0], out[1]};
     }
 };
 

@@ -308,6 +308,9 @@ Catalogue& catalogue() {
              [](const MetricOptions& o) -> std::unique_ptr<QualityMetric> {
                  return std::make_unique<KernelMetric<UntangleHybrid>>(UntangleHybrid{o.hybrid_sharpness});
              }},
+            built_in<DihedralSine>("smallest sine of the dihedral angles (tetrahedra; corner angles for triangles) over the "
+                                   "regular element's; an inverted element rates minus its largest sine; range [-1.06, 1], ideal "
+                                   "1; small for angles near 0 and near 180 degrees alike. Its gradient is the smallest angle's."),
             built_in<MinDihedralAngle>("smallest dihedral angle in degrees, negative if inverted; tetrahedra; range "
                                        "[-70.53, 70.53], ideal 70.53. No gradient: for assessments and smart Laplace."),
             built_in<MinCornerAngle>("smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal "

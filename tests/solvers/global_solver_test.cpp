@@ -223,6 +223,35 @@ BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things
     }
 }
 
+// The dihedral quality, raised by both solvers on a valid mesh: never worse, never an inverted
+// element, and the smallest dihedral angle of the movable tets up (house2: 1.85 degrees before).
+BOOST_AUTO_TEST_CASE(both_solvers_raise_the_dihedral_quality) {
+    const auto input = shared_mesh("stellar/house2.node");
+    const pv::QualityAssessor assessor({"min_dihedral_deg", "dihedral_sine"});
+    const double before = assessor.assess(input).metric("min_dihedral_deg")->movable.min;
+    for (const char* method : {"global", "local"}) {
+        auto mesh = input;
+        pv::Summary summary;
+        if (std::string(method) == "global") {
+            pv::GlobalSolverOptions options;
+            options.shape_metric = "dihedral_sine";
+            summary = pv::GlobalSolver(options).improve(mesh);
+        } else {
+            pv::LocalSolverOptions options;
+            options.metric = "dihedral_sine";
+            summary = pv::LocalSolver(options).improve(mesh);
+        }
+        const auto after = assessor.assess(mesh);
+        BOOST_TEST_CONTEXT(method << ": " << summary.brief_report()) {
+            check_never_worse(summary);
+            BOOST_TEST(summary.after.inverted == 0);
+            BOOST_TEST(summary.worst_after > summary.worst_before);
+            BOOST_TEST(after.metric("dihedral_sine")->movable.min == summary.worst_after);
+            BOOST_TEST(after.metric("min_dihedral_deg")->movable.min > 5.0 * before);
+        }
+    }
+}
+
 BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk");
     mesh.set_fixed(std::vector<std::uint8_t>(mesh.num_vertices(), 1));
