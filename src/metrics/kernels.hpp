@@ -158,7 +158,7 @@ struct EdgeRatio {
         return orientation * r;
     }
     double tet(const double* x, double* g, const MetricScale&) const {
-        return ratio<4>(x, g, sign_of(TetGeometry(x).volume), kTetEdges);
+        return ratio<4>(x, g, sign_of(tet_signed_volume(x)), kTetEdges);  // the sign only: no gradients
     }
     double tri(const double* x, double* g, const MetricScale& s) const {
         return ratio<3>(x, g, sign_of(TriGeometry(x, s).area), kTriEdges);
@@ -386,23 +386,26 @@ struct MinDihedralAngle {
     static constexpr ElementKind only_kind = ElementKind::Tetrahedron;
     static constexpr double ideal = 70.528779365509308631;  // acos(1/3) in degrees
     double tet(const double* x, double* g, const MetricScale&) const {
-        const TetGeometry t(x);
+        // The volume and its gradient only (not the edge sums a full TetGeometry adds).
+        P corner[4], dvolume[4];
+        for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
+        const double volume = TetGeometry::tet_volume(corner, dvolume);
         // dvolume[k] is the inward normal of the face opposite corner k; the dihedral angle at
         // the edge those faces share has cosine -n_k . n_l / (|n_k| |n_l|). The smallest angle has
         // the largest cosine: one atan2 for it rather than one per edge. (A face of no area makes
         // the volume 0, and with it the result.)
         double length[4];
-        for (int k = 0; k < 4; ++k) length[k] = norm(t.dvolume[k]);
+        for (int k = 0; k < 4; ++k) length[k] = norm(dvolume[k]);
         int a = 0, b = 1;
         double largest = -INFINITY;
         for (int k = 0; k < 4; ++k)
             for (int l = k + 1; l < 4; ++l) {
-                const double cosine = -dot(t.dvolume[k], t.dvolume[l]) / (length[k] * length[l]);
+                const double cosine = -dot(dvolume[k], dvolume[l]) / (length[k] * length[l]);
                 if (cosine > largest) largest = cosine, a = k, b = l;
             }
-        const double smallest = std::atan2(norm(cross(t.dvolume[a], t.dvolume[b])), -dot(t.dvolume[a], t.dvolume[b]));
+        const double smallest = std::atan2(norm(cross(dvolume[a], dvolume[b])), -dot(dvolume[a], dvolume[b]));
         if (g) std::fill(g, g + 12, 0.0);
-        return sign_of(t.volume) * smallest * (180.0 / std::numbers::pi);
+        return sign_of(volume) * smallest * (180.0 / std::numbers::pi);
     }
     double tri(const double*, double*, const MetricScale&) const { return 0.0; }
 };
