@@ -276,10 +276,11 @@ void ElementMetric::accumulate_gradient(const SimplexMesh& mesh, std::span<const
 
 namespace {
 
-template <class Kernel, class... Args>
-MetricInfo built_in(std::string help, Args... args) {
-    return {std::string(Kernel::name), std::move(help), [=](const MetricOptions&) -> std::unique_ptr<QualityMetric> {
-                return std::make_unique<metrics::KernelMetric<Kernel>>(Kernel{args...});
+// A kernel without options of its own, by its name.
+template <class Kernel>
+MetricInfo built_in(std::string help) {
+    return {std::string(Kernel::name), std::move(help), [](const MetricOptions&) -> std::unique_ptr<QualityMetric> {
+                return std::make_unique<metrics::KernelMetric<Kernel>>();
             }};
 }
 
