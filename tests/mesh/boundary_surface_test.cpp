@@ -1,0 +1,133 @@
+// The boundary as a surface to slide on (issue 17, its first part): boundary faces, feature
+// curves and corners found on real meshes, and projections back onto the input's boundary.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+
+namespace {
+
+// The bundled example (examples/data/tangled_cube.vtk).
+pv::SimplexMesh bundled_cube() {
+    return pv::read_mesh(std::filesystem::path(PALOVERDE_SOURCE_DIR) / "examples/data/tangled_cube.vtk").mesh;
+}
+
+pv::Vec3 at(const pv::SimplexMesh& mesh, pv::VertexId v) {
+    const auto x = mesh.coordinates();
+    return {x[3 * static_cast<std::size_t>(v)], x[3 * static_cast<std::size_t>(v) + 1], x[3 * static_cast<std::size_t>(v) + 2]};
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(boundary_surface)
+
+// The tangled cube (7 x 7 x 7 vertices, its interior moved, its boundary untouched): 8 corners,
+// the 5 inner vertices of each of its 12 edges on curves, the 5 x 5 inside each face on the
+// surface; its tangled interior does not change that (faces face outward by the mesh's corner
+// order, not by the geometry).
+BOOST_AUTO_TEST_CASE(a_cube_has_eight_corners_twelve_edges_and_six_faces) {
+    const auto mesh = bundled_cube();
+    const pv::BoundarySurface surface(mesh);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Corner) == 8u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Curve) == 60u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Surface) == 150u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Interior) == 125u);
+    BOOST_TEST(surface.boundary_faces() == 6u * 6u * 6u * 2u);
+    BOOST_TEST(surface.feature_edges() == 12u * 6u);
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        BOOST_TEST((surface.role(v) == pv::BoundaryRole::Interior) == !mesh.fixed()[v], v);
+    // Creases sharper than the feature angle only: at 95 degrees the cube is one smooth surface.
+    pv::SurfaceOptions blunt;
+    blunt.feature_angle = 95.0;
+    const pv::BoundarySurface smooth(mesh, blunt);
+    BOOST_TEST(smooth.count(pv::BoundaryRole::Surface) == 218u);
+    BOOST_TEST(smooth.feature_edges() == 0u);
+}
+
+BOOST_AUTO_TEST_CASE(moved_boundary_vertices_project_back_where_they_may_be) {
+    const auto mesh = bundled_cube();
+    const pv::BoundarySurface surface(mesh);
+    const double d = surface.bounding_box_diagonal();
+    BOOST_TEST(d > 0.0);
+    int checked[4] = {0, 0, 0, 0};
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const pv::Vec3 p = at(mesh, v);
+        // Moved by a tenth of an element off its place, in a direction off every face and edge.
+        const pv::Vec3 moved{p[0] + 0.021 * d, p[1] - 0.013 * d, p[2] + 0.017 * d};
+        const pv::Vec3 q = surface.project(v, moved);
+        const auto role = surface.role(v);
+        ++checked[static_cast<int>(role)];
+        BOOST_TEST_CONTEXT("vertex " << v << ", role " << static_cast<int>(role)) {
+            if (role == pv::BoundaryRole::Interior) {
+                BOOST_TEST((q == moved));
+                continue;
+            }
+            if (role == pv::BoundaryRole::Corner) {
+                BOOST_TEST((q == p));
+                continue;
+            }
+            // On the cube's boundary: each coordinate within [min, max] and at least one (two on a
+            // curve) at a face of the box, the same face(s) as the vertex's own.
+            int on_faces = 0, same = 0;
+            for (int c = 0; c < 3; ++c) {
+                const bool q_at = std::abs(q[c] - 0.0) < 1e-9 * d || std::abs(q[c] - 1.0) < 1e-9 * d;
+                const bool p_at = std::abs(p[c] - 0.0) < 1e-12 || std::abs(p[c] - 1.0) < 1e-12;
+                on_faces += q_at;
+                same += q_at && p_at && std::abs(q[c] - p[c]) < 1e-9 * d;
+            }
+            const int expected = role == pv::BoundaryRole::Curve ? 2 : 1;
+            BOOST_TEST(on_faces >= expected);
+            BOOST_TEST(same >= expected);
+        }
+    }
+    BOOST_TEST(checked[0] == 125);
+    BOOST_TEST(checked[3] == 8);
+}
+
+// A planar triangle mesh: its boundary is a curve, with corners where it turns sharply.
+BOOST_AUTO_TEST_CASE(a_square_of_triangles_has_four_corners) {
+    // 3 x 3 vertices on the unit square, 8 triangles.
+    std::vector<double> xyz;
+    for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) xyz.insert(xyz.end(), {0.5 * i, 0.5 * j, 0.0});
+    std::vector<pv::VertexId> tris;
+    for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+            const int a = 3 * j + i, b = a + 1, c = a + 3, d = a + 4;
+            tris.insert(tris.end(), {a, b, d, a, d, c});
+        }
+    const pv::SimplexMesh mesh(pv::ElementKind::Triangle, xyz, tris);
+    const pv::BoundarySurface surface(mesh);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Corner) == 4u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Curve) == 4u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Interior) == 1u);
+    BOOST_TEST(surface.boundary_faces() == 8u);
+    BOOST_TEST(surface.freedom(4) == 2);
+    BOOST_TEST(surface.freedom(1) == 1);
+    BOOST_TEST(surface.freedom(0) == 0);
+    // The midpoint of the bottom side, moved up and right, comes back to the side.
+    const auto q = surface.project(1, {0.6, 0.2, 0.0});
+    BOOST_TEST(q[0] == 0.6, boost::test_tools::tolerance(1e-12));
+    BOOST_TEST(q[1] == 0.0, boost::test_tools::tolerance(1e-12));
+}
+
+BOOST_AUTO_TEST_CASE(a_round_surface_has_no_creases_and_bad_options_are_refused) {
+    const auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/flat-tet-sphere.vtk")).mesh;
+    const pv::BoundarySurface surface(mesh);
+    BOOST_TEST_MESSAGE("flat-tet-sphere: " << surface.count(pv::BoundaryRole::Surface) << " surface, "
+                                           << surface.count(pv::BoundaryRole::Curve) << " curve, "
+                                           << surface.count(pv::BoundaryRole::Corner) << " corner vertices");
+    BOOST_TEST(surface.count(pv::BoundaryRole::Surface) > 0u);
+    for (double bad : {0.0, 180.0, -5.0, std::nan("")}) {
+        pv::SurfaceOptions options;
+        options.feature_angle = bad;
+        BOOST_CHECK_THROW(pv::BoundarySurface(mesh, options), pv::OptionError);
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
