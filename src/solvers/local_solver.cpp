@@ -512,10 +512,15 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
         if (stop.target_worst_quality && best >= *stop.target_worst_quality)
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
+        // A budget spent before the sweeps with the boundary fixed converged leaves it unmoved.
+        const std::string unslid = sliding && !boundary_slides ? "; the boundary did not slide (the sweeps with it "
+                                                                 "fixed had not converged)"
+                                                               : "";
         if (s > stop.max_iterations)
-            return done(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop.max_iterations) + " sweeps");
+            return done(TerminationReason::IterationLimit,
+                        "stopped after " + std::to_string(stop.max_iterations) + " sweeps" + unslid);
         if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
-            return done(TerminationReason::TimeLimit, "time limit reached");
+            return done(TerminationReason::TimeLimit, "time limit reached" + unslid);
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
             if (sliding && !boundary_slides && sliding->slides(v)) return 0;

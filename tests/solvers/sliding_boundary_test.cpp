@@ -147,6 +147,16 @@ BOOST_AUTO_TEST_CASE(the_feature_angle_decides_which_creases_stay) {
     BOOST_TEST(at_95.boundary->sliding == 218);            // every boundary vertex, corners too
 }
 
+// The boundary slides once the sweeps with it fixed converge; a budget spent before says so.
+BOOST_AUTO_TEST_CASE(a_budget_spent_before_the_boundary_slides_says_so) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    auto options = sliding();
+    options.termination.max_iterations = 3;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    BOOST_TEST(summary.boundary->moved == 0);
+    BOOST_TEST(summary.message.find("the boundary did not slide") != std::string::npos, summary.message);
+}
+
 BOOST_AUTO_TEST_CASE(bad_feature_angles_are_refused) {
     auto options = sliding();
     for (double angle : {0.0, -5.0, 180.0, std::nan("")}) {
