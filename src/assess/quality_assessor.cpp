@@ -138,7 +138,9 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     return assess(mesh, xyz, {}, {}, serial, mesh.plane_normal());
 }
 
-QualityReport QualityAssessor::assess(const DistributedMesh& part) const {
+QualityReport QualityAssessor::assess(const MeshPart& whole_or_part) const {
+    if (!whole_or_part.distributed()) return assess(whole_or_part.mesh());
+    const DistributedMesh& part = *whole_or_part.distributed();
     std::vector<std::uint8_t> owned(part.vertex_owner.size());
     for (std::size_t v = 0; v < owned.size(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
     return assess(part.mesh, part.mesh.coordinates(), part.counted, owned, part.reducer(), part.plane_normal);

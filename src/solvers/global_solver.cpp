@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <functional>
 #include <optional>
 
 #include "core/blocked_sum.hpp"
@@ -615,8 +614,7 @@ namespace {
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
-              detail::Workspace& work, const std::function<void(std::span<const double>)>& copy_back,
-              detail::Checkpointer& checkpointer) {
+              detail::Workspace& work, detail::Checkpointer& checkpointer) {
     Summary& summary = run.summary;
     // A resumed run enters the phase (and untangling round) it was checkpointed in.
     std::optional<detail::SolverState> resume;
@@ -657,7 +655,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
             if (out_of_budget || result.reason == TerminationReason::Interrupted ||
                 result.reason == TerminationReason::NumericalFailure) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(out_of_budget ? TerminationReason::CannotUntangle : result.reason,
                               out_of_budget ? "untangling stopped (" + result.message + ") with elements still inverted"
                                             : "while untangling: " + result.message);
@@ -675,7 +673,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                          .run(here);
             if (result.reason == TerminationReason::TargetReached) break;
             if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(result.reason, "while untangling: " + result.message);
             }
             const bool out_of_budget =
@@ -684,7 +682,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                 colors = color_vertices(work.mesh(), work.mesh().global_ids(), work.owned(), work.halo(), work.reducer());
             if (out_of_budget || round == options.local_untangle_rounds ||
                 local_untangle_sweeps(work, colors ? &*colors : nullptr, xyz, *hybrid, summary, observer, start) == 0) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(TerminationReason::CannotUntangle,
                               "untangling stopped (" + result.message + ") with elements still inverted");
             }
@@ -704,7 +702,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
     }
-    copy_back(xyz);
+    work.copy_back(xyz);
     if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
         return finish(result.reason, result.message);
     if (summary.before.inverted_frozen > 0)
@@ -718,24 +716,13 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
 
 }  // namespace
 
-Summary GlobalSolver::improve(SimplexMesh& mesh) {
-    detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
-    if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
-    detail::Workspace work(mesh, options_.renumber);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, mesh); },
-                 checkpointer);
-}
-
-Summary GlobalSolver::improve(DistributedMesh& part) {
+Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(part, std::string(name()), options_.shape_metric);
     if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
-    detail::Workspace work(part);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, part); },
-                 checkpointer);
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part);
+    detail::Workspace work(part, options_.renumber);
+    return solve(options_, observer(), run, work, checkpointer);
 }
 
 }  // namespace paloverde

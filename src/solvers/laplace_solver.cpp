@@ -21,9 +21,12 @@ void LaplaceSolverOptions::validate() const {
 
 LaplaceSolver::LaplaceSolver(LaplaceSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
-Summary LaplaceSolver::improve(SimplexMesh& mesh) {
+Summary LaplaceSolver::improve(MeshPart part) {
+    if (part.distributed())
+        throw OptionError("'" + std::string(name()) + "' has no distributed version: smooth the whole mesh serially");
+    SimplexMesh& mesh = part.mesh();
     detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.metric);
+    detail::SolverRun run(part, std::string(name()), options_.metric);
     Summary& summary = run.summary;
     const auto start = run.start();
     const bool smart = options_.smart;

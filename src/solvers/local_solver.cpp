@@ -10,6 +10,7 @@
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/stop.hpp"
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
@@ -181,51 +182,47 @@ private:
 
 LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
-Summary LocalSolver::improve(SimplexMesh& mesh) {
+Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.metric);
+    detail::SolverRun run(whole_or_part, std::string(name()), options_.metric);
     if (auto nothing = run.nothing_to_move()) return *nothing;
-    const Reducer serial_reducer;
-    const Halo no_ghosts;
-    Domain domain{mesh, detail::movable_elements(mesh), serial_reducer, no_ghosts,
-                  color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
-    return sweep_colors(run, domain, checkpointer);
-}
-
-Summary LocalSolver::improve(DistributedMesh& part) {
-    detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(part, std::string(name()), options_.metric);
-    if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
+    const SimplexMesh& mesh = whole_or_part.mesh();
+    DistributedMesh* part = whole_or_part.distributed();
+    if (!part) {
+        Domain domain{mesh, detail::movable_elements(mesh), whole_or_part.reducer(), whole_or_part.halo(),
+                      color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
+        return sweep_colors(run, domain, checkpointer);
+    }
+    // The serial smallest-last coloring needs the whole mesh: a part is colored in rounds
+    // (Jones & Plassmann), and a rank moves only the vertices it owns.
     std::vector<ElementId> counted;
-    for (ElementId e : detail::movable_elements(part.mesh))
-        if (part.counted[e]) counted.push_back(e);
-    VertexColoring coloring = color_vertices(part);
-    // A rank moves only the vertices it owns.
-    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v)
-        if (part.vertex_owner[v] != part.rank) coloring.color[v] = -1;
-    MetricScale scale = MetricScale::of(part.mesh);
+    for (ElementId e : detail::movable_elements(mesh))
+        if (whole_or_part.counts(e)) counted.push_back(e);
+    VertexColoring coloring = color_vertices(*part);
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (!whole_or_part.owns(v)) coloring.color[v] = -1;
+    MetricScale scale = MetricScale::of(mesh);
     {
         // The whole mesh's mean element volume.
         auto volume = make_metric("scaled_volume");
         MetricScale unit = scale;
         unit.reference_volume = 1.0;
-        unit.plane_normal = part.plane_normal;
+        unit.plane_normal = part->plane_normal;
         volume->set_scale(unit);
         ExactSum sums[2];
         double v = 0.0;
-        for (ElementId e = 0; e < part.mesh.num_elements(); ++e)
-            if (part.counted[e]) {
-                volume->evaluate(part.mesh, part.mesh.coordinates(), e, e + 1, &v);
+        for (ElementId e = 0; e < mesh.num_elements(); ++e)
+            if (whole_or_part.counts(e)) {
+                volume->evaluate(mesh, mesh.coordinates(), e, e + 1, &v);
                 sums[0].add(std::abs(v));
                 sums[1].add(1.0);
             }
-        part.reducer().sum(sums);
+        whole_or_part.reducer().sum(sums);
         if (sums[0].value() > 0.0 && std::isfinite(sums[0].value())) scale.reference_volume = sums[0].value() / sums[1].value();
-        scale.plane_normal = part.plane_normal;
+        scale.plane_normal = part->plane_normal;
     }
-    Domain domain{part.mesh, std::move(counted), part.reducer(), part.halo(), std::move(coloring), scale};
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
+    Domain domain{mesh, std::move(counted), whole_or_part.reducer(), whole_or_part.halo(), std::move(coloring), scale};
     return sweep_colors(run, domain, checkpointer);
 }
 

@@ -28,7 +28,23 @@ bool has_free_vertex(const SimplexMesh& mesh, ElementId e) {
 }
 }  // namespace
 
-Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
+Workspace::Workspace(MeshPart part, bool renumber)
+    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
+    if (part_) {
+        distributed_ = true;
+        reducer_ = &part.reducer();
+        halo_ = &part.halo();
+        const VertexId n = mesh_.num_vertices();
+        owned_.resize(static_cast<std::size_t>(n));
+        for (VertexId v = 0; v < n; ++v) {
+            owned_[v] = part.owns(v);
+            if (!owned_[v]) ghosts_.push_back(v);
+        }
+        part_order_ = finish(part_->element_order, part_->counted, part_->global_elements);
+        if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
+        return;
+    }
+    const SimplexMesh& mesh = part.mesh();
     if (renumber) {
         Renumbering order = locality_order(mesh);
         own_ = renumbered(mesh, order);
@@ -43,20 +59,6 @@ Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
     owned_.assign(static_cast<std::size_t>(n), 1);
     std::vector<std::uint8_t> all_counted;
     finish(positions, all_counted, own_.num_elements());
-}
-
-Workspace::Workspace(DistributedMesh& part) : part_(&part), mesh_(part.mesh) {
-    distributed_ = true;
-    reducer_ = &part.reducer();
-    halo_ = &part.halo();
-    const VertexId n = part.mesh.num_vertices();
-    owned_.resize(static_cast<std::size_t>(n));
-    for (VertexId v = 0; v < n; ++v) {
-        owned_[v] = part.vertex_owner[v] == part.rank;
-        if (!owned_[v]) ghosts_.push_back(v);
-    }
-    part_order_ = finish(part.element_order, part.counted, part.global_elements);
-    if (part.mesh.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal;
 }
 
 namespace {
@@ -250,16 +252,17 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     }
 }
 
-void Workspace::copy_back(std::span<const double> xyz, SimplexMesh& original) const {
-    auto out = original.coordinates();
+void Workspace::copy_back(std::span<const double> xyz) const {
+    // A distributed part keeps its own vertex order (only its elements were reordered).
+    if (part_) {
+        std::copy(xyz.begin(), xyz.end(), original_->coordinates().begin());
+        return;
+    }
+    auto out = original_->coordinates();
     for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
         const VertexId old = old_vertex_.empty() ? v : old_vertex_[v];
         for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(old) + c] = xyz[3 * static_cast<std::size_t>(v) + c];
     }
-}
-
-void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) const {
-    std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
 }
 
 double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
