@@ -203,7 +203,7 @@ void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std:
         result.methods.push_back(std::move(r));
         if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
         // Interrupted (SIGINT, SIGTERM): the methods not yet run are skipped, on every rank alike.
-        if (part.reducer().max(stop_requested() ? 1.0 : 0.0) > 0.0) break;
+        if (stop_requested_anywhere(part.reducer())) break;
     }
     settle_status(result);
 }

@@ -14,6 +14,7 @@
 #include "energy_untangle.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
+#include "stopping.hpp"
 #include "workspace.hpp"
 
 namespace paloverde {
@@ -412,16 +413,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     for (int iteration = first_iteration;; ++iteration) {
         // Checkpoints and stops at the top of an iteration, where the state is complete. Every
         // process stops at the same iteration: a stop requested on any of them counts.
-        if (detail::stop_requested_anywhere(work_)) {
+        if (stop_requested_anywhere(reducer_)) {
             if (checkpointer_.writes()) save_checkpoint(iteration);
             return end(TerminationReason::Interrupted, detail::interrupted_after(summary_.iterations));
         }
         if (checkpointer_.due(summary_.iterations)) save_checkpoint(iteration);
-        if (iteration > stop_.max_iterations)
-            return end(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop_.max_iterations) + " iterations");
-        // Every process must stop at the same iteration: the slowest clock decides.
-        if (stop_.max_seconds > 0.0 && reducer_.max(seconds_since(start_)) > stop_.max_seconds)
-            return end(TerminationReason::TimeLimit, "time limit reached");
+        if (const auto spent = detail::budget_spent(stop_, iteration, reducer_, start_))
+            return end(*spent, detail::budget_message(*spent, stop_, "iterations"));
 
         if (precondition) {
             objective_.curvature_weights(q_, curvature_weight_);
@@ -504,7 +502,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                            std::to_string(summary_.iterations) + "); the best iterate is handed back");
         }
         // Better: fewer non-positive elements, then a higher worst quality.
-        if (s.bad < best_bad_ || (s.bad == best_bad_ && s.worst > best_worst_)) {
+        if (detail::better_iterate(s.bad, s.worst, best_bad_, best_worst_)) {
             best_bad_ = s.bad;
             best_worst_ = s.worst;
             best_x_ = x_;
@@ -519,17 +517,12 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             best_x_ = x_;
             return end(TerminationReason::TargetReached, "untangled");
         }
-        if (!untangling_ && stop_.target_worst_quality && best_worst_ >= *stop_.target_worst_quality)
+        if (!untangling_ && detail::target_reached(stop_, best_worst_))
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
-        bool stalled = failures_ >= options_.max_failed_searches;
-        const auto window = static_cast<std::size_t>(stop_.progress_window);
-        if (!stalled && best_history_.size() > window) {
-            const double tolerance = stop_.min_progress * std::max(std::abs(best_worst_), 1e-3);
-            const std::size_t then = best_history_.size() - 1 - window;
-            stalled = best_worst_ - best_history_[then] <= tolerance &&
-                      measure_history_.back() - measure_history_[then] <= tolerance &&
-                      bad_history_.back() >= bad_history_[then];
-        }
+        const detail::StallWindow progress(stop_, best_worst_);
+        const bool stalled = failures_ >= options_.max_failed_searches ||
+                             (progress.rose_too_little(best_history_) && progress.rose_too_little(measure_history_) &&
+                              progress.did_not_fall(bad_history_));
         if (failures_ >= options_.max_failed_searches)
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         if (stalled) return end(TerminationReason::Converged, "the worst quality stopped improving");
@@ -537,7 +530,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // (fandisk-100k-boundary: 440 iterations from -0.102 to -0.100). When the inverted count
         // did not fall over the window and, at the window's pace, the worst element would still
         // be inverted when the budget runs out, hand over to local untangling now.
-        if (untangling_ && best_history_.size() > window) {
+        const auto window = static_cast<std::size_t>(stop_.progress_window);
+        if (untangling_ && progress.spans(best_history_)) {
             const std::size_t then = best_history_.size() - 1 - window;
             const double pace = (best_worst_ - best_history_[then]) / static_cast<double>(window);
             const double left = static_cast<double>(stop_.max_iterations - iteration);

@@ -11,10 +11,10 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
+#include "stopping.hpp"
 
 namespace paloverde {
 
@@ -260,7 +260,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     }
     auto local_volume = make_metric("scaled_volume");
     local_volume->set_scale(local_scale);
-    auto elapsed = [&] { return reducer.max(seconds_since(start)); };
 
     const std::size_t n = static_cast<std::size_t>(mesh.num_vertices());
     std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
@@ -275,7 +274,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     auto keep_best = [&](long inverted, double worst) {
         now_inverted = inverted;
         now_worst = worst;
-        if (best_xyz.empty() || inverted < best_inverted || (inverted == best_inverted && worst > best_worst)) {
+        if (best_xyz.empty() || detail::better_iterate(inverted, worst, best_inverted, best_worst)) {
             best_inverted = inverted;
             best_worst = worst;
             best_xyz = xyz;
@@ -304,7 +303,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         return s;
     };
     auto done = [&](TerminationReason reason, std::string message) {
-        if (now_inverted > best_inverted || (now_inverted == best_inverted && now_worst < best_worst)) {
+        if (detail::better_iterate(best_inverted, best_worst, now_inverted, now_worst)) {
             xyz = best_xyz;
             message += "; the best sweep is handed back";
         }
@@ -356,7 +355,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     };
     // At the top of each sweep: a stop request (any process's) ends the run, a due checkpoint is written.
     auto stopping = [&](bool untangling, int next_sweep) {
-        const bool stop = reducer.max(stop_requested() ? 1.0 : 0.0) > 0.0;
+        const bool stop = stop_requested_anywhere(reducer);
         if (stop ? checkpointer.writes() : checkpointer.due(summary.iterations)) save(untangling, next_sweep);
         return stop;
     };
@@ -429,12 +428,13 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             if (stopping(true, s))
                 return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) +
                                                                 " sweeps, while untangling");
-            if (s > stop.max_iterations)
+            if (const auto spent = detail::budget_spent(stop, s, reducer, start)) {
+                if (*spent == TerminationReason::TimeLimit)
+                    return done(TerminationReason::TimeLimit, "time limit reached while untangling");
                 return done(TerminationReason::CannotUntangle, "untangling stopped after " +
                                                                    std::to_string(stop.max_iterations) +
                                                                    " sweeps with elements still inverted");
-            if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
-                return done(TerminationReason::TimeLimit, "time limit reached while untangling");
+            }
             const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
                 bool touches_inverted = false;
                 for (ElementId e : mesh.elements_of(v))
@@ -452,15 +452,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             inverted_history.push_back(static_cast<double>(inverted));
             worst_history.push_back(std::max(worst, worst_history.back()));
             if (inverted == 0) break;
-            const auto window = static_cast<std::size_t>(stop.progress_window);
-            bool stalled = moved == 0;
-            if (!stalled && inverted_history.size() > window) {
-                const std::size_t then = inverted_history.size() - 1 - window;
-                const double tolerance = stop.min_progress * std::max(std::abs(worst_history.back()), 1e-3);
-                stalled = inverted_history.back() >= inverted_history[then] &&
-                          worst_history.back() - worst_history[then] <= tolerance;
-            }
-            if (stalled)
+            const detail::StallWindow progress(stop, worst_history.back());
+            if (moved == 0 || (progress.did_not_fall(inverted_history) && progress.rose_too_little(worst_history)))
                 return done(TerminationReason::CannotUntangle,
                             std::to_string(inverted) + " elements are still inverted and local moves no longer help");
         }
@@ -479,12 +472,10 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     for (int s = resume ? first_sweep : 1;; ++s) {
         if (stopping(false, s))
             return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
-        if (stop.target_worst_quality && best >= *stop.target_worst_quality)
+        if (detail::target_reached(stop, best))
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
-        if (s > stop.max_iterations)
-            return done(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop.max_iterations) + " sweeps");
-        if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
-            return done(TerminationReason::TimeLimit, "time limit reached");
+        if (const auto spent = detail::budget_spent(stop, s, reducer, start))
+            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
             if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;
@@ -495,12 +486,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         best = std::max(best, st.worst);
         best_history.push_back(best);
         if (moved == 0) return done(TerminationReason::Converged, "no vertex can raise its worst element any more");
-        const auto window = static_cast<std::size_t>(stop.progress_window);
-        if (best_history.size() > window) {
-            const double tolerance = stop.min_progress * std::max(std::abs(best), 1e-3);
-            if (best - best_history[best_history.size() - 1 - window] <= tolerance)
-                return done(TerminationReason::Converged, "the worst quality stopped improving");
-        }
+        if (detail::StallWindow(stop, best).rose_too_little(best_history))
+            return done(TerminationReason::Converged, "the worst quality stopped improving");
     }
 }
 

@@ -10,7 +10,6 @@
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "local_untangle.hpp"
 
 namespace paloverde::detail {
@@ -284,13 +283,6 @@ bool untangled(const Workspace& work, std::span<const double> xyz) {
     for (ElementId e = 0; e < work.movable_elements() && tangled == 0.0; ++e)
         if (element_orientation(work.mesh(), xyz, e) <= 0) tangled = 1.0;
     return work.reducer().max(tangled) == 0.0;
-}
-
-bool stop_requested_anywhere(const Workspace& work) { return work.reducer().max(stop_requested() ? 1.0 : 0.0) > 0.0; }
-
-std::string interrupted_after(int iterations) {
-    return "interrupted (a stop was requested) after " + std::to_string(iterations) +
-           " iterations; the best iterate is handed back";
 }
 
 }  // namespace paloverde::detail

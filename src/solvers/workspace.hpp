@@ -125,9 +125,5 @@ double owned_dot(const Workspace& work, std::span<const double> a, std::span<con
 
 // Every movable element is positively oriented (decided exactly), over all processes.
 bool untangled(const Workspace& work, std::span<const double> xyz);
-// A stop was requested (stop.hpp) on any process: every process stops at the same iteration.
-bool stop_requested_anywhere(const Workspace& work);
-// What a phase stopped that way says.
-std::string interrupted_after(int iterations);
 
 }  // namespace paloverde::detail
