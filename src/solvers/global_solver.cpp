@@ -176,7 +176,7 @@ void Phase::damp_like_owners(std::vector<VertexId>& damped) {
     work_.halo().update(mark_, 1);
     std::erase_if(damped, [&](VertexId v) { return !owned[v]; });
     for (VertexId v : work_.ghosts())
-        if (mark_[v] != 0.0 && !work_.fixed()[v]) damped.push_back(v);
+        if (mark_[v] != 0.0 && work_.mesh().can_move(v)) damped.push_back(v);
     std::fill(mark_.begin(), mark_.end(), 0.0);
 }
 
@@ -225,7 +225,7 @@ bool Phase::line_search(double objective, double max_direction) {
             for (ElementId e = 0; e < movable; ++e)
                 if (blocks(e))
                     for (VertexId v : mesh.element(e))
-                        if (!mesh.fixed()[v] && stamp_[v] != round + 1) {
+                        if (mesh.can_move(v) && stamp_[v] != round + 1) {
                             stamp_[v] = round + 1;
                             damped.push_back(v);
                         }
@@ -567,7 +567,7 @@ int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* c
                 for (VertexId v : mesh.element(static_cast<ElementId>(e))) candidate[v] = 1;
         double moved_now = 0.0;
         auto visit = [&](VertexId v) {
-            if (candidate[v] && owned[v] && !mesh.fixed()[v])
+            if (candidate[v] && owned[v] && mesh.can_move(v))
                 moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
         };
         if (coloring) {

@@ -59,7 +59,7 @@ Summary LaplaceSolver::improve(MeshPart part) {
     } else {
         groups.emplace_back();
         for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-            if (!mesh.fixed()[v]) groups.back().push_back(v);
+            if (mesh.can_move(v)) groups.back().push_back(v);
     }
 
     auto done = [&](TerminationReason reason, std::string message) {

@@ -148,11 +148,7 @@ private:
 inline std::vector<ElementId> movable_elements(const SimplexMesh& mesh) {
     std::vector<ElementId> out;
     for (ElementId e = 0; e < mesh.num_elements(); ++e)
-        for (VertexId v : mesh.element(e))
-            if (!mesh.fixed()[v]) {
-                out.push_back(e);
-                break;
-            }
+        if (mesh.element_can_move(e)) out.push_back(e);
     return out;
 }
 

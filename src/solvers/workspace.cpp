@@ -19,12 +19,6 @@ constexpr ElementId kEvaluateChunk = 2048;
 // The canonical element order is cut into this many blocks; each vertex sums its elements'
 // contributions block by block. The blocks depend only on the whole mesh.
 constexpr GlobalId kGradientBlocks = 64;
-
-bool has_free_vertex(const SimplexMesh& mesh, ElementId e) {
-    for (VertexId v : mesh.element(e))
-        if (!mesh.fixed()[v]) return true;
-    return false;
-}
 }  // namespace
 
 Workspace::Workspace(MeshPart part, bool renumber)
@@ -108,7 +102,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
     std::iota(order.begin(), order.end(), ElementId{0});
     {
         std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
-        for (ElementId e = 0; e < m; ++e) movable[e] = has_free_vertex(mesh_, e);
+        for (ElementId e = 0; e < m; ++e) movable[e] = mesh_.element_can_move(e);
         std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
             if (movable[a] != movable[b]) return movable[a] > movable[b];
             return element_order[a] < element_order[b];
@@ -227,7 +221,6 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     // Fixed vertices get zero; ghosts too, until the halo brings their owners' values.
     const VertexId n = mesh_.num_vertices();
     const VertexId block = 4096;
-    const auto fixed = mesh_.fixed();
     auto gather = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low, VertexId high) {
         std::fill(out.begin() + width * static_cast<std::size_t>(low), out.begin() + width * (static_cast<std::size_t>(high) + 1), 0.0);
         for (const Lane& lane : lanes_) {
@@ -240,7 +233,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
             for (std::size_t i = 0; i < count; ++i) target[i] += source[i];
         }
         for (VertexId v = low; v <= high; ++v)
-            if (fixed[v] || !owned_[v])
+            if (!mesh_.can_move(v) || !owned_[v])
                 for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
     };
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)

@@ -36,7 +36,6 @@ public:
 
     const SimplexMesh& mesh() const { return mesh_; }
     ElementId movable_elements() const { return movable_; }
-    std::span<const std::uint8_t> fixed() const { return mesh_.fixed(); }
     // Per vertex: this process owns it (computes its gradient and moves it).
     std::span<const std::uint8_t> owned() const { return owned_; }
     // Vertices owned by other processes.
