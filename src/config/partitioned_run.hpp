@@ -2,7 +2,6 @@
 // What the serial run (run.cpp) and the partitioned run (partitioned_run.cpp) share, and the
 // partitioned run itself.
 #include <functional>
-#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -11,18 +10,6 @@
 #include "paloverde/config/run.hpp"
 
 namespace paloverde::config::detail {
-
-// An assess step's assessor (`metrics: []` stands for QualityAssessor()'s set).
-QualityAssessor assessor_of(const AssessSpec& assess);
-// What a method's before and after reports measure: the default set and output.metric.
-QualityAssessor report_assessor(const std::string& metric);
-
-// The solver of an untangle or improve step, with `threads`, and its target_worst_quality.
-struct BuiltSolver {
-    std::unique_ptr<Solver> solver;
-    std::optional<double> target;
-};
-BuiltSolver build_solver(const StepSpec& step, int threads);
 
 // The queue of a method's steps, with the target of each improver, in order.
 struct BuiltQueue {

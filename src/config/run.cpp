@@ -27,16 +27,24 @@ std::string_view to_string(RunStatus status) {
 
 namespace detail {
 
+namespace {
+// An assess step's assessor (`metrics: []` stands for QualityAssessor()'s set).
 QualityAssessor assessor_of(const AssessSpec& a) {
     return QualityAssessor(a.metrics.empty() ? QualityAssessor::default_metrics() : a.metrics, a.histogram_bins);
 }
 
+// What a method's before and after reports measure: the default set and output.metric.
 QualityAssessor report_assessor(const std::string& metric) {
     std::vector<std::string> names = QualityAssessor::default_metrics();
     if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
     return QualityAssessor(names);
 }
 
+// The solver of an untangle or improve step, with `threads`, and its target_worst_quality.
+struct BuiltSolver {
+    std::unique_ptr<Solver> solver;
+    std::optional<double> target;
+};
 BuiltSolver build_solver(const StepSpec& step, int threads) {
     const auto* kind = find_solver(step.name);
     if (!kind) describe("solver", step.name);  // throws, listing the solvers
@@ -49,6 +57,8 @@ BuiltSolver build_solver(const StepSpec& step, int threads) {
     }
     return {kind->make(options), kind->target(options)};
 }
+
+}  // namespace
 
 std::string origin(const RunSpec& spec, const std::string& key) {
     const auto it = spec.origins.find(key);
@@ -103,9 +113,7 @@ void worst_and_mean(const QualityReport& report, const std::string& metric, doub
     worst = m->movable.count > 0 ? m->movable.min : m->all.min;
     mean = m->all.mean;
 }
-}  // namespace
 
-namespace {
 // Once queue, before and after are set: worst and mean, iterations, status and message
 // (`targets`: per improver of the queue, in order).
 void finish_method(MethodResult& result, const std::vector<std::optional<double>>& targets) {
@@ -145,7 +153,6 @@ void settle_status(RunResult& result) {
             result.status = RunStatus::TargetNotReached;
     }
 }
-
 
 }  // namespace
 
