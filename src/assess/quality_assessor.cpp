@@ -138,7 +138,9 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     return assess(mesh, xyz, {}, {}, serial, mesh.plane_normal());
 }
 
-QualityReport QualityAssessor::assess(const DistributedMesh& part) const {
+QualityReport QualityAssessor::assess(const MeshPart& whole_or_part) const {
+    if (!whole_or_part.distributed()) return assess(whole_or_part.mesh());
+    const DistributedMesh& part = *whole_or_part.distributed();
     std::vector<std::uint8_t> owned(part.vertex_owner.size());
     for (std::size_t v = 0; v < owned.size(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
     return assess(part.mesh, part.mesh.coordinates(), part.counted, owned, part.reducer(), part.plane_normal);
@@ -162,10 +164,9 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     auto is_counted = [&](std::size_t e) { return counted.empty() || counted[e]; };
     auto is_owned = [&](VertexId v) { return owned.empty() || owned[v]; };
     QualityReport report;
-    const auto fixed = mesh.fixed();
     long vertices = 0, free_vertices = 0;
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (is_owned(v)) ++vertices, free_vertices += !fixed[v];
+        if (is_owned(v)) ++vertices, free_vertices += mesh.can_move(v);
 
     // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen.
     std::vector<std::uint8_t> group(m, 0);
@@ -173,9 +174,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
 #pragma omp parallel for schedule(static) reduction(+ : counts[:5]) if (mesh.num_elements() >= kParallelElements)
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
         if (!is_counted(static_cast<std::size_t>(e))) continue;
-        group[e] = 2;
-        for (VertexId v : mesh.element(e))
-            if (!fixed[v]) group[e] = 1;
+        group[e] = mesh.element_can_move(e) ? 1 : 2;
         const int o = element_orientation(mesh, xyz, e);
         counts[0] += 1;
         counts[1] += group[e] == 2;

@@ -15,9 +15,6 @@
 #include "io/xml_reader.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
-#include "paloverde/solvers/global_solver.hpp"
-#include "paloverde/solvers/local_solver.hpp"
-#include "paloverde/solvers/stop.hpp"
 
 namespace paloverde::config::detail {
 
@@ -50,107 +47,44 @@ std::string step_path(const RunSpec& spec, std::size_t m, std::size_t i) {
     return (spec.study.empty() ? std::string() : "study[" + std::to_string(m) + "].") + "queue[" + std::to_string(i) + "]";
 }
 
-// A queue for a distributed mesh: InstructionQueue runs on a SimplexMesh only.
-struct Step {
-    std::string label;
-    std::optional<QualityAssessor> assessor;  // an assessment, or
-    std::unique_ptr<Solver> solver;           // a GlobalSolver or LocalSolver
-};
-struct DistributedQueue {
-    std::vector<Step> steps;
-    std::vector<std::optional<double>> targets;  // per improver, in order
-};
-
-const char* const kOnlyGlobalAndLocal =
-    "has no distributed version: a partitioned run takes the global and local solvers (and the wrappers untangle, "
-    "shape_improvement, local_shape_improvement and untangle_then_improve); run it serially (partition.parts: 1, no "
-    "pieces, without mpirun)";
-
-// The steps of a wrapper, as wrappers/src/wrappers.cpp builds them (same labels, same solvers);
-// tests/config checks that both give the same steps.
-void append_wrapper(const StepSpec& step, int threads, DistributedQueue& q) {
-    const WrapperKind* kind = find_wrapper(step.name);
-    if (!kind) describe("wrapper", step.name);  // throws, listing the wrappers
-    SolverOptions options = step.options;
-    set_threads(options, threads);
-    const auto global = [&](bool untangle, bool shape) {
-        GlobalSolverOptions g = std::get<GlobalSolverOptions>(options);
-        g.untangle = untangle;
-        g.improve_shape = shape;
-        return std::make_unique<GlobalSolver>(g);
-    };
-    q.steps.push_back({"before", QualityAssessor(), nullptr});
-    if (step.name == "untangle") {
-        q.steps.push_back({"untangle", std::nullopt, global(true, false)});
-    } else if (step.name == "shape_improvement") {
-        q.steps.push_back({"global", std::nullopt, global(false, true)});
-    } else if (step.name == "untangle_then_improve") {
-        q.steps.push_back({"untangle", std::nullopt, global(true, false)});
-        q.steps.push_back({"global", std::nullopt, global(false, true)});
-    } else if (step.name == "local_shape_improvement") {
-        q.steps.push_back({"local", std::nullopt, std::make_unique<LocalSolver>(std::get<LocalSolverOptions>(options))});
-    } else {
-        throw OptionError("wrapper '" + step.name + "' " + kOnlyGlobalAndLocal);
-    }
-    q.steps.push_back({"after", QualityAssessor(), nullptr});
-    for (const auto& t : kind->targets(options)) q.targets.push_back(t);
+// The solvers and wrappers that have a distributed version, for the error that names a step
+// without one.
+std::string distributed_ones() {
+    std::string solvers, wrappers;
+    for (const SolverKind& kind : solver_kinds())
+        if (kind.distributed) solvers += (solvers.empty() ? "" : ", ") + kind.name;
+    for (const WrapperKind& kind : wrapper_kinds())
+        if (find_solver(kind.solver)->distributed) wrappers += (wrappers.empty() ? "" : ", ") + kind.name;
+    return "has no distributed version: a partitioned run takes the solvers " + solvers + " (and the wrappers " +
+           wrappers + "); run it serially (partition.parts: 1, no pieces, without mpirun)";
 }
 
-// Builds method `m`'s queue; a solver without a distributed version is an error naming its step.
-DistributedQueue build_queue_for(const RunSpec& spec, const MethodSpec& method, std::size_t m) {
-    DistributedQueue q;
+// Method `m`'s queue, the same as a serial run's; a step without a distributed version is an
+// error naming it.
+BuiltQueue build_queue_for(const RunSpec& spec, const MethodSpec& method, std::size_t m) {
     for (std::size_t i = 0; i < method.queue.size(); ++i) {
         const StepSpec& step = method.queue[i];
         const std::string path = step_path(spec, m, i);
-        const auto reject = [&](const std::string& key) {
-            const std::string where = origin(spec, key).empty() ? origin(spec, path) : origin(spec, key);
-            throw ConfigError(where, key, "'" + step.name + "' " + kOnlyGlobalAndLocal);
-        };
+        const SolverKind* solver = nullptr;
+        std::string key;
         switch (step.kind) {
-            case StepSpec::Kind::Assess: q.steps.push_back({step.label, assessor_of(step.assess), nullptr}); break;
+            case StepSpec::Kind::Assess: continue;
             case StepSpec::Kind::Untangle:
-            case StepSpec::Kind::Improve: {
-                if (step.name != "global" && step.name != "local")
-                    reject(path + (step.kind == StepSpec::Kind::Untangle ? ".untangle" : ".improve") + ".name");
-                BuiltSolver built = build_solver(step, spec.threads);
-                q.steps.push_back({step.label, std::nullopt, std::move(built.solver)});
-                q.targets.push_back(built.target);
+            case StepSpec::Kind::Improve:
+                solver = find_solver(step.name);
+                key = path + (step.kind == StepSpec::Kind::Untangle ? ".untangle" : ".improve") + ".name";
                 break;
-            }
             case StepSpec::Kind::Wrapper:
-                if (step.name == "laplace") reject(path + ".wrapper.name");
-                append_wrapper(step, spec.threads, q);
+                if (const WrapperKind* wrapper = find_wrapper(step.name)) solver = find_solver(wrapper->solver);
+                key = path + ".wrapper.name";
                 break;
         }
-    }
-    return q;
-}
-
-Summary improve(Solver& solver, DistributedMesh& part) {
-    if (auto* global = dynamic_cast<GlobalSolver*>(&solver)) return global->improve(part);
-    if (auto* local = dynamic_cast<LocalSolver*>(&solver)) return local->improve(part);
-    throw OptionError("solver '" + std::string(solver.name()) + "' " + kOnlyGlobalAndLocal);
-}
-
-// As InstructionQueue::run: stops at the first improver that fails.
-QueueResult run_queue(const DistributedQueue& queue, DistributedMesh& part) {
-    QueueResult result;
-    for (const Step& step : queue.steps) {
-        if (step.assessor) {
-            result.steps.push_back({step.label, step.assessor->assess(part)});
-            continue;
-        }
-        Summary summary = improve(*step.solver, part);
-        const bool ok = summary.success();
-        const std::string why = summary.message;
-        result.steps.push_back({step.label, std::move(summary)});
-        if (!ok) {
-            result.success = false;
-            result.message = "'" + step.label + "' failed: " + why;
-            break;
+        if (solver && !solver->distributed) {
+            const std::string where = origin(spec, key).empty() ? origin(spec, path) : origin(spec, key);
+            throw ConfigError(where, key, "'" + step.name + "' " + distributed_ones());
         }
     }
-    return result;
+    return build_queue_of(method.queue, spec.threads);
 }
 
 // Everything about the config and the number of ranks that can be wrong, before anything is read.
@@ -284,7 +218,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     const bool pieces = !spec.input.pieces.empty() || is_pvtu(spec.input.mesh);
     check_partitioned(spec, ranks, pieces);
     const auto methods = spec.methods();
-    std::vector<DistributedQueue> queues;  // every option checked before the mesh is read
+    std::vector<BuiltQueue> queues;  // every option checked before the mesh is read
     for (std::size_t m = 0; m < methods.size(); ++m) queues.push_back(build_queue_for(spec, methods[m], m));
     int initialized = 0;
     MPI_Initialized(&initialized);
@@ -337,35 +271,12 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     result.input = input_name(spec);
     result.kind = part.mesh.kind();
     result.orientation = pieces ? part.orientation : broadcast(comm, file.orientation);
-    const QualityAssessor assessor = report_assessor(spec.output.metric);
-    const std::vector<double> initial(part.mesh.coordinates().begin(), part.mesh.coordinates().end());
     WriteOptions write;
     write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
-    for (std::size_t m = 0; m < methods.size(); ++m) {
-        // Every method starts from the input.
-        if (m > 0) std::copy(initial.begin(), initial.end(), part.mesh.coordinates().begin());
-        const MethodSpec& method = methods[m];
-        if (hooks.on_iteration)
-            for (Step& step : queues[m].steps)
-                if (step.solver)
-                    step.solver->set_observer([&hooks, &method, label = step.label](const IterationRecord& r) {
-                        hooks.on_iteration(method.name, label, r);
-                    });
-        MethodResult r;
-        r.name = method.name;
-        r.metric = spec.output.metric;
-        r.before = assessor.assess(part);
-        MPI_Barrier(comm);
-        start = Clock::now();
-        r.queue = run_queue(queues[m], part);
-        r.seconds = part.reducer().max(seconds_since(start));
-        r.after = assessor.assess(part);
-        finish_method(r, queues[m].targets);
-        report.solve_seconds += r.seconds;
-
-        start = Clock::now();
+    run_methods(spec, hooks, part, queues, [&](MethodResult& r) {
+        const auto start = Clock::now();
         if (!spec.output.mesh.empty()) {
-            r.mesh_written = replace_method(spec.output.mesh, method.name);
+            r.mesh_written = replace_method(spec.output.mesh, r.name);
             if (is_pvtu(r.mesh_written)) {
                 part.write_pieces(r.mesh_written);
             } else if (pieces) {
@@ -380,16 +291,10 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
                          [&] { write_mesh(r.mesh_written, file.mesh, write, file.point_fields, file.cell_fields); });
             }
         }
-        if (!spec.output.pieces.empty()) part.write_pieces(replace_method(spec.output.pieces, method.name));
+        if (!spec.output.pieces.empty()) part.write_pieces(replace_method(spec.output.pieces, r.name));
         report.write_seconds += part.reducer().max(seconds_since(start));
-        result.methods.push_back(std::move(r));
-        if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
-        // Interrupted (SIGINT, SIGTERM): the methods not yet run are skipped, on every rank alike.
-        int stop = stop_requested() ? 1 : 0;
-        MPI_Allreduce(MPI_IN_PLACE, &stop, 1, MPI_INT, MPI_MAX, comm);
-        if (stop) break;
-    }
-    settle_status(result);
+    }, result);
+    for (const MethodResult& r : result.methods) report.solve_seconds += r.seconds;
     // Rank 0's clock for the stages it leads, so that every rank reports the same numbers.
     double seconds[4] = {report.read_seconds, report.partition_seconds, report.distribute_seconds,
                          report.schedule_seconds};

@@ -1,8 +1,9 @@
 #pragma once
 // What the serial run (run.cpp) and the partitioned run (partitioned_run.cpp) share, and the
 // partitioned run itself.
-#include <memory>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -10,17 +11,18 @@
 
 namespace paloverde::config::detail {
 
-// An assess step's assessor (`metrics: []` stands for QualityAssessor()'s set).
-QualityAssessor assessor_of(const AssessSpec& assess);
-// What a method's before and after reports measure: the default set and output.metric.
-QualityAssessor report_assessor(const std::string& metric);
-
-// The solver of an untangle or improve step, with `threads`, and its target_worst_quality.
-struct BuiltSolver {
-    std::unique_ptr<Solver> solver;
-    std::optional<double> target;
+// The queue of a method's steps, with the target of each improver, in order.
+struct BuiltQueue {
+    InstructionQueue queue;
+    std::vector<std::optional<double>> targets;
 };
-BuiltSolver build_solver(const StepSpec& step, int threads);
+BuiltQueue build_queue_of(std::span<const StepSpec> steps, int threads);
+
+// Runs every method's queue on the part (the whole mesh serially), each from the input's
+// coordinates, with its reports before and after; write_outputs then writes the method's mesh.
+// Stops after a method that was interrupted. Collective on a distributed part.
+void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std::vector<BuiltQueue>& queues,
+                 const std::function<void(MethodResult&)>& write_outputs, RunResult& result);
 
 // input.mesh read, with the fixed flags input.fixed and input.fixed_vertices ask for; the file's
 // own `fixed` field is dropped from the fields written back.
@@ -31,11 +33,6 @@ std::string origin(const RunSpec& spec, const std::string& key);
 // `path` with {method} replaced by the method's name.
 std::string replace_method(std::string path, const std::string& method);
 
-// Once queue, before and after are set: worst and mean, iterations, status and message
-// (`targets`: per improver of the queue, in order).
-void finish_method(MethodResult& result, const std::vector<std::optional<double>>& targets);
-// The run's status: the worst of its methods'.
-void settle_status(RunResult& result);
 // output.history, output.table, output.summary and output.plot (each through a temporary).
 void write_reports(const RunSpec& spec, const RunResult& result);
 

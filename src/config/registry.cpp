@@ -309,7 +309,8 @@ Tables::Tables() {
                                l.smart = smart;
                                return std::make_unique<LaplaceSolver>(l);
                            },
-                           [shape_target](const SolverOptions& o) { return shape_target(std::get<LaplaceSolverOptions>(o).termination); }});
+                           [shape_target](const SolverOptions& o) { return shape_target(std::get<LaplaceSolverOptions>(o).termination); },
+                           false});
     }
 
     using Targets = std::vector<std::optional<double>>;

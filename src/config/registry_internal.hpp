@@ -31,11 +31,13 @@ struct SolverKind {
     std::function<std::unique_ptr<Solver>(const SolverOptions&)> make;
     // The target_worst_quality the solver aims at, if any (none while only untangling).
     std::function<std::optional<double>(const SolverOptions&)> target;
+    // It improves a part of a DistributedMesh (else it runs serially only).
+    bool distributed = true;
 };
 
 struct WrapperKind {
     std::string name, help;
-    std::string solver;  // the solver whose options it takes
+    std::string solver;  // the solver whose options it takes (and whose distributed version it has, or not)
     const OptionsKind* options = nullptr;
     Skip skip;           // keys the wrapper sets itself
     std::function<SolverOptions()> defaults;

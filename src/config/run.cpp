@@ -27,16 +27,24 @@ std::string_view to_string(RunStatus status) {
 
 namespace detail {
 
+namespace {
+// An assess step's assessor (`metrics: []` stands for QualityAssessor()'s set).
 QualityAssessor assessor_of(const AssessSpec& a) {
     return QualityAssessor(a.metrics.empty() ? QualityAssessor::default_metrics() : a.metrics, a.histogram_bins);
 }
 
+// What a method's before and after reports measure: the default set and output.metric.
 QualityAssessor report_assessor(const std::string& metric) {
     std::vector<std::string> names = QualityAssessor::default_metrics();
     if (std::find(names.begin(), names.end(), metric) == names.end()) names.push_back(metric);
     return QualityAssessor(names);
 }
 
+// The solver of an untangle or improve step, with `threads`, and its target_worst_quality.
+struct BuiltSolver {
+    std::unique_ptr<Solver> solver;
+    std::optional<double> target;
+};
 BuiltSolver build_solver(const StepSpec& step, int threads) {
     const auto* kind = find_solver(step.name);
     if (!kind) describe("solver", step.name);  // throws, listing the solvers
@@ -49,6 +57,8 @@ BuiltSolver build_solver(const StepSpec& step, int threads) {
     }
     return {kind->make(options), kind->target(options)};
 }
+
+}  // namespace
 
 std::string origin(const RunSpec& spec, const std::string& key) {
     const auto it = spec.origins.find(key);
@@ -103,8 +113,9 @@ void worst_and_mean(const QualityReport& report, const std::string& metric, doub
     worst = m->movable.count > 0 ? m->movable.min : m->all.min;
     mean = m->all.mean;
 }
-}  // namespace
 
+// Once queue, before and after are set: worst and mean, iterations, status and message
+// (`targets`: per improver of the queue, in order).
 void finish_method(MethodResult& result, const std::vector<std::optional<double>>& targets) {
     worst_and_mean(result.before, result.metric, result.worst_before, result.mean_before);
     worst_and_mean(result.after, result.metric, result.worst_after, result.mean_after);
@@ -133,6 +144,7 @@ void finish_method(MethodResult& result, const std::vector<std::optional<double>
     }
 }
 
+// The run's status: the worst of its methods'.
 void settle_status(RunResult& result) {
     for (const auto& m : result.methods) {
         if (m.status == RunStatus::Interrupted || result.status == RunStatus::Interrupted) result.status = RunStatus::Interrupted;
@@ -142,32 +154,25 @@ void settle_status(RunResult& result) {
     }
 }
 
-}  // namespace detail
+}  // namespace
 
-namespace {
-
-struct BuiltQueue {
-    InstructionQueue queue;
-    std::vector<std::optional<double>> targets;  // per improver, in order
-};
-
-BuiltQueue build(std::span<const StepSpec> steps, int threads) {
+BuiltQueue build_queue_of(std::span<const StepSpec> steps, int threads) {
     BuiltQueue b;
     for (const StepSpec& step : steps) {
         switch (step.kind) {
-            case StepSpec::Kind::Assess: b.queue.assess(step.label, detail::assessor_of(step.assess)); break;
+            case StepSpec::Kind::Assess: b.queue.assess(step.label, assessor_of(step.assess)); break;
             case StepSpec::Kind::Untangle:
             case StepSpec::Kind::Improve: {
-                auto built = detail::build_solver(step, threads);
+                auto built = build_solver(step, threads);
                 b.queue.improve(step.label, std::move(built.solver));
                 b.targets.push_back(built.target);
                 break;
             }
             case StepSpec::Kind::Wrapper: {
-                const auto* kind = detail::find_wrapper(step.name);
+                const auto* kind = find_wrapper(step.name);
                 if (!kind) describe("wrapper", step.name);
                 SolverOptions options = step.options;
-                detail::set_threads(options, threads);
+                set_threads(options, threads);
                 b.queue.append(kind->make(options));
                 for (const auto& t : kind->targets(options)) b.targets.push_back(t);
                 break;
@@ -177,30 +182,42 @@ BuiltQueue build(std::span<const StepSpec> steps, int threads) {
     return b;
 }
 
-MethodResult run_method(const MethodSpec& method, SimplexMesh& mesh, const MeshFile& file, const RunSpec& spec,
-                        const RunHooks& hooks) {
-    BuiltQueue built = build(method.queue, spec.threads);
-    if (hooks.on_iteration)
-        built.queue.observe([&](std::string_view step, const IterationRecord& r) { hooks.on_iteration(method.name, step, r); });
-    MethodResult result;
-    result.name = method.name;
-    result.metric = spec.output.metric;
-    const QualityAssessor assessor = detail::report_assessor(spec.output.metric);
-    result.before = assessor.assess(mesh);
-    const auto start = std::chrono::steady_clock::now();
-    result.queue = built.queue.run(mesh);
-    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.after = assessor.assess(mesh);
-    detail::finish_method(result, built.targets);
-
-    if (!spec.output.mesh.empty()) {
-        result.mesh_written = detail::replace_method(spec.output.mesh, method.name);
-        WriteOptions write;
-        write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
-        write_mesh(result.mesh_written, mesh, write, file.point_fields, file.cell_fields);
+void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std::vector<BuiltQueue>& queues,
+                 const std::function<void(MethodResult&)>& write_outputs, RunResult& result) {
+    const paloverde::detail::ThreadScope threads(spec.threads);  // the assessments' threads too
+    const auto methods = spec.methods();
+    const QualityAssessor assessor = report_assessor(spec.output.metric);
+    const std::vector<double> input(part.mesh().coordinates().begin(), part.mesh().coordinates().end());
+    for (std::size_t m = 0; m < methods.size(); ++m) {
+        const MethodSpec& method = methods[m];
+        BuiltQueue& built = queues[m];
+        // Every method starts from the input.
+        if (m > 0) std::copy(input.begin(), input.end(), part.mesh().coordinates().begin());
+        if (hooks.on_iteration)
+            built.queue.observe(
+                [&](std::string_view step, const IterationRecord& r) { hooks.on_iteration(method.name, step, r); });
+        MethodResult r;
+        r.name = method.name;
+        r.metric = spec.output.metric;
+        r.before = assessor.assess(part);
+        part.reducer().max(0.0);  // the ranks start the clock together
+        const auto start = std::chrono::steady_clock::now();
+        r.queue = built.queue.run(part);
+        r.seconds = part.reducer().max(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+        r.after = assessor.assess(part);
+        finish_method(r, built.targets);
+        write_outputs(r);
+        result.methods.push_back(std::move(r));
+        if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
+        // Interrupted (SIGINT, SIGTERM): the methods not yet run are skipped, on every rank alike.
+        if (stop_requested_anywhere(part.reducer())) break;
     }
-    return result;
+    settle_status(result);
 }
+
+}  // namespace detail
+
+namespace {
 
 std::string solver_names(const MethodResult& m) {
     std::string names;
@@ -286,32 +303,30 @@ std::string to_json(const OrientationDecision& o) {
         .dump();
 }
 
-InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) { return build(steps, threads).queue; }
+InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) {
+    return detail::build_queue_of(steps, threads).queue;
+}
 
 RunResult run(const RunSpec& spec, const RunHooks& hooks) {
     spec.check_runnable();
     // Under mpirun every rank runs this: a serial run on each would write the same files at once.
     if (spec.partitioned() || detail::world_size() > 1) return detail::run_partitioned(spec, hooks);
-    const auto methods = spec.methods();
-    for (const auto& m : methods) build(m.queue, spec.threads);  // every option checked before the mesh is read
-    const paloverde::detail::ThreadScope threads(spec.threads);   // the assessments' threads too
+    std::vector<detail::BuiltQueue> queues;  // every option checked before the mesh is read
+    for (const auto& m : spec.methods()) queues.push_back(detail::build_queue_of(m.queue, spec.threads));
 
     MeshFile file = detail::read_input(spec);
     RunResult result;
     result.input = spec.input.mesh;
     result.kind = file.mesh.kind();
     result.orientation = file.orientation;
-    for (std::size_t i = 0; i < methods.size(); ++i) {
-        // Every method starts from the input; the last may use it up.
-        SimplexMesh copy;
-        const bool last = i + 1 == methods.size();
-        if (!last) copy = file.mesh;
-        SimplexMesh& mesh = last ? file.mesh : copy;
-        result.methods.push_back(run_method(methods[i], mesh, file, spec, hooks));
-        if (hooks.on_method_done) hooks.on_method_done(result.methods.back());
-        if (stop_requested()) break;  // interrupted: the methods not yet run are skipped
-    }
-    detail::settle_status(result);
+    WriteOptions write;
+    write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
+    // A serial run is the one-part case: the part is the whole mesh.
+    detail::run_methods(spec, hooks, file.mesh, queues, [&](MethodResult& r) {
+        if (spec.output.mesh.empty()) return;
+        r.mesh_written = detail::replace_method(spec.output.mesh, r.name);
+        write_mesh(r.mesh_written, file.mesh, write, file.point_fields, file.cell_fields);
+    }, result);
     detail::write_reports(spec, result);
     return result;
 }

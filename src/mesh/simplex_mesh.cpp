@@ -150,7 +150,9 @@ void SimplexMesh::set_fixed(std::vector<std::uint8_t> fixed) {
 void SimplexMesh::fix_boundary() { fixed_ = boundary_vertices(kind_, connectivity_, num_vertices()); }
 
 VertexId SimplexMesh::num_free_vertices() const noexcept {
-    return static_cast<VertexId>(std::count(fixed_.begin(), fixed_.end(), std::uint8_t{0}));
+    VertexId count = 0;
+    for (VertexId v = 0; v < num_vertices(); ++v) count += can_move(v);
+    return count;
 }
 
 void SimplexMesh::set_global_ids(std::vector<GlobalId> ids) {

@@ -232,10 +232,13 @@ OptionsText& OptionsText::operator()(const char* key, const TerminationCriterion
 }
 
 Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
-                           const SimplexMesh& mesh, const DistributedMesh* part)
-    : options_(options), solver_(std::move(solver)), part_(part), saved_at_(Clock::now()) {
+                           MeshPart whole_or_part)
+    : options_(options), solver_(std::move(solver)), reducer_(&whole_or_part.reducer()),
+      part_(whole_or_part.distributed()), saved_at_(Clock::now()) {
     options_.validate();
     if (!writes() && !resumes()) return;
+    const SimplexMesh& mesh = whole_or_part.mesh();
+    const DistributedMesh* part = part_;
     const VertexId n = mesh.num_vertices();
     keys_.resize(static_cast<std::size_t>(n));
     owned_.assign(static_cast<std::size_t>(n), 1);
@@ -282,8 +285,6 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
     if (part) MPI_Allreduce(MPI_IN_PLACE, sums.data(), 2, MPI_UINT64_T, MPI_SUM, part->comm);
     mesh_hash_ = mix(mix(sums[0], sums[1]), vertices_);
 }
-
-const Reducer& Checkpointer::reducer() const { return part_ ? part_->reducer() : serial_reducer_; }
 
 bool Checkpointer::due(int iterations) {
     if (!writes()) return false;

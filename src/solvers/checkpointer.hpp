@@ -63,11 +63,10 @@ private:
 
 class Checkpointer {
 public:
-    // `mesh`: the solver's mesh at the start of the run (serially the whole mesh, in a distributed
-    // run this process's part, whose vertices are identified by their global ids). Collective in
-    // a distributed run when checkpoints are written or read.
-    Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
-                 const SimplexMesh& mesh, const DistributedMesh* part);
+    // `part`: the solver's part at the start of the run (serially the whole mesh; a distributed
+    // part's vertices are identified by their global ids). Collective on a distributed part when
+    // checkpoints are written or read.
+    Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text, MeshPart part);
 
     bool writes() const { return !options_.file.empty(); }
     bool resumes() const { return !options_.resume.empty(); }
@@ -85,13 +84,13 @@ public:
 private:
     void encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const;
     std::vector<double> gather(const std::vector<double>& field) const;
-    const Reducer& reducer() const;
+    const Reducer& reducer() const { return *reducer_; }
 
     CheckpointOptions options_;
     std::string solver_;
     std::uint64_t mesh_hash_ = 0, options_hash_ = 0;
-    const DistributedMesh* part_;
-    Reducer serial_reducer_;
+    const Reducer* reducer_;
+    const DistributedMesh* part_;  // nullptr serially
     std::vector<GlobalId> keys_;        // per local vertex
     std::vector<std::uint8_t> owned_;   // per local vertex
     std::uint64_t vertices_ = 0;        // over all processes

@@ -8,6 +8,7 @@
 #include "core/exact_sums.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "local_untangle.hpp"
+#include "stopping.hpp"
 
 namespace paloverde::detail {
 
@@ -284,7 +285,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
             new_round = false;
         }
         // Checkpoints and stops at the top of an iteration, where the state is complete.
-        if (stop_requested_anywhere(work_)) {
+        if (stop_requested_anywhere(reducer)) {
             if (checkpointer.writes()) save(checkpointer);
             return finish(TerminationReason::Interrupted, interrupted_after(summary_.iterations));
         }
@@ -293,7 +294,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
             return valid_found_ ? finish(TerminationReason::TargetReached, "untangled")
                                 : finish(TerminationReason::IterationLimit, "the untangling energy used its " +
                                                                                std::to_string(max_iterations) + " iterations");
-        if (max_seconds > 0.0 && reducer.max(seconds_since(start_)) > max_seconds)
+        if (time_is_up(max_seconds, reducer, start_))
             return finish(valid_found_ ? TerminationReason::TargetReached : TerminationReason::TimeLimit,
                           valid_found_ ? "untangled" : "time limit reached");
         if (idle > kStepsPerEpsilon)  // rounds in a row without a step: the energy cannot go on

@@ -4,7 +4,6 @@
 #include <array>
 #include <cmath>
 #include <limits>
-#include <functional>
 #include <optional>
 
 #include "core/blocked_sum.hpp"
@@ -15,6 +14,7 @@
 #include "energy_untangle.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
+#include "stopping.hpp"
 #include "workspace.hpp"
 
 namespace paloverde {
@@ -176,7 +176,7 @@ void Phase::damp_like_owners(std::vector<VertexId>& damped) {
     work_.halo().update(mark_, 1);
     std::erase_if(damped, [&](VertexId v) { return !owned[v]; });
     for (VertexId v : work_.ghosts())
-        if (mark_[v] != 0.0 && !work_.fixed()[v]) damped.push_back(v);
+        if (mark_[v] != 0.0 && work_.mesh().can_move(v)) damped.push_back(v);
     std::fill(mark_.begin(), mark_.end(), 0.0);
 }
 
@@ -225,7 +225,7 @@ bool Phase::line_search(double objective, double max_direction) {
             for (ElementId e = 0; e < movable; ++e)
                 if (blocks(e))
                     for (VertexId v : mesh.element(e))
-                        if (!mesh.fixed()[v] && stamp_[v] != round + 1) {
+                        if (mesh.can_move(v) && stamp_[v] != round + 1) {
                             stamp_[v] = round + 1;
                             damped.push_back(v);
                         }
@@ -413,16 +413,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     for (int iteration = first_iteration;; ++iteration) {
         // Checkpoints and stops at the top of an iteration, where the state is complete. Every
         // process stops at the same iteration: a stop requested on any of them counts.
-        if (detail::stop_requested_anywhere(work_)) {
+        if (stop_requested_anywhere(reducer_)) {
             if (checkpointer_.writes()) save_checkpoint(iteration);
             return end(TerminationReason::Interrupted, detail::interrupted_after(summary_.iterations));
         }
         if (checkpointer_.due(summary_.iterations)) save_checkpoint(iteration);
-        if (iteration > stop_.max_iterations)
-            return end(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop_.max_iterations) + " iterations");
-        // Every process must stop at the same iteration: the slowest clock decides.
-        if (stop_.max_seconds > 0.0 && reducer_.max(seconds_since(start_)) > stop_.max_seconds)
-            return end(TerminationReason::TimeLimit, "time limit reached");
+        if (const auto spent = detail::budget_spent(stop_, iteration, reducer_, start_))
+            return end(*spent, detail::budget_message(*spent, stop_, "iterations"));
 
         if (precondition) {
             objective_.curvature_weights(q_, curvature_weight_);
@@ -505,7 +502,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                            std::to_string(summary_.iterations) + "); the best iterate is handed back");
         }
         // Better: fewer non-positive elements, then a higher worst quality.
-        if (s.bad < best_bad_ || (s.bad == best_bad_ && s.worst > best_worst_)) {
+        if (detail::better_iterate(s.bad, s.worst, best_bad_, best_worst_)) {
             best_bad_ = s.bad;
             best_worst_ = s.worst;
             best_x_ = x_;
@@ -520,17 +517,12 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             best_x_ = x_;
             return end(TerminationReason::TargetReached, "untangled");
         }
-        if (!untangling_ && stop_.target_worst_quality && best_worst_ >= *stop_.target_worst_quality)
+        if (!untangling_ && detail::target_reached(stop_, best_worst_))
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
-        bool stalled = failures_ >= options_.max_failed_searches;
-        const auto window = static_cast<std::size_t>(stop_.progress_window);
-        if (!stalled && best_history_.size() > window) {
-            const double tolerance = stop_.min_progress * std::max(std::abs(best_worst_), 1e-3);
-            const std::size_t then = best_history_.size() - 1 - window;
-            stalled = best_worst_ - best_history_[then] <= tolerance &&
-                      measure_history_.back() - measure_history_[then] <= tolerance &&
-                      bad_history_.back() >= bad_history_[then];
-        }
+        const detail::StallWindow progress(stop_, best_worst_);
+        const bool stalled = failures_ >= options_.max_failed_searches ||
+                             (progress.rose_too_little(best_history_) && progress.rose_too_little(measure_history_) &&
+                              progress.did_not_fall(bad_history_));
         if (failures_ >= options_.max_failed_searches)
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         if (stalled) return end(TerminationReason::Converged, "the worst quality stopped improving");
@@ -538,7 +530,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // (fandisk-100k-boundary: 440 iterations from -0.102 to -0.100). When the inverted count
         // did not fall over the window and, at the window's pace, the worst element would still
         // be inverted when the budget runs out, hand over to local untangling now.
-        if (untangling_ && best_history_.size() > window) {
+        const auto window = static_cast<std::size_t>(stop_.progress_window);
+        if (untangling_ && progress.spans(best_history_)) {
             const std::size_t then = best_history_.size() - 1 - window;
             const double pace = (best_worst_ - best_history_[then]) / static_cast<double>(window);
             const double left = static_cast<double>(stop_.max_iterations - iteration);
@@ -574,7 +567,7 @@ int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* c
                 for (VertexId v : mesh.element(static_cast<ElementId>(e))) candidate[v] = 1;
         double moved_now = 0.0;
         auto visit = [&](VertexId v) {
-            if (candidate[v] && owned[v] && !mesh.fixed()[v])
+            if (candidate[v] && owned[v] && mesh.can_move(v))
                 moved_now += detail::untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
         };
         if (coloring) {
@@ -615,8 +608,7 @@ namespace {
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
-              detail::Workspace& work, const std::function<void(std::span<const double>)>& copy_back,
-              detail::Checkpointer& checkpointer) {
+              detail::Workspace& work, detail::Checkpointer& checkpointer) {
     Summary& summary = run.summary;
     // A resumed run enters the phase (and untangling round) it was checkpointed in.
     std::optional<detail::SolverState> resume;
@@ -657,7 +649,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
             if (out_of_budget || result.reason == TerminationReason::Interrupted ||
                 result.reason == TerminationReason::NumericalFailure) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(out_of_budget ? TerminationReason::CannotUntangle : result.reason,
                               out_of_budget ? "untangling stopped (" + result.message + ") with elements still inverted"
                                             : "while untangling: " + result.message);
@@ -675,7 +667,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                          .run(here);
             if (result.reason == TerminationReason::TargetReached) break;
             if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(result.reason, "while untangling: " + result.message);
             }
             const bool out_of_budget =
@@ -684,7 +676,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                 colors = color_vertices(work.mesh(), work.mesh().global_ids(), work.owned(), work.halo(), work.reducer());
             if (out_of_budget || round == options.local_untangle_rounds ||
                 local_untangle_sweeps(work, colors ? &*colors : nullptr, xyz, *hybrid, summary, observer, start) == 0) {
-                copy_back(xyz);
+                work.copy_back(xyz);
                 return finish(TerminationReason::CannotUntangle,
                               "untangling stopped (" + result.message + ") with elements still inverted");
             }
@@ -704,7 +696,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
     }
-    copy_back(xyz);
+    work.copy_back(xyz);
     if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
         return finish(result.reason, result.message);
     if (summary.before.inverted_frozen > 0)
@@ -718,24 +710,13 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
 
 }  // namespace
 
-Summary GlobalSolver::improve(SimplexMesh& mesh) {
-    detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.shape_metric);
-    if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
-    detail::Workspace work(mesh, options_.renumber);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, mesh); },
-                 checkpointer);
-}
-
-Summary GlobalSolver::improve(DistributedMesh& part) {
+Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(part, std::string(name()), options_.shape_metric);
     if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
-    detail::Workspace work(part);
-    return solve(options_, observer(), run, work, [&](std::span<const double> xyz) { work.copy_back(xyz, part); },
-                 checkpointer);
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part);
+    detail::Workspace work(part, options_.renumber);
+    return solve(options_, observer(), run, work, checkpointer);
 }
 
 }  // namespace paloverde

@@ -43,14 +43,14 @@ void InstructionQueue::attach(const Instruction& step) const {
     step.solver->set_observer([observer = observer_, label = step.label](const IterationRecord& r) { observer(label, r); });
 }
 
-QueueResult InstructionQueue::run(SimplexMesh& mesh) const {
+QueueResult InstructionQueue::run(MeshPart part) const {
     QueueResult result;
     for (const Instruction& step : steps_) {
         if (step.assessor) {
-            result.steps.push_back({step.label, step.assessor->assess(mesh)});
+            result.steps.push_back({step.label, step.assessor->assess(part)});
             continue;
         }
-        Summary summary = step.solver->improve(mesh);
+        Summary summary = step.solver->improve(part);
         const bool ok = summary.success();
         const bool interrupted = summary.reason == TerminationReason::Interrupted;
         const std::string why = summary.message;

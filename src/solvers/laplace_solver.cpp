@@ -7,8 +7,8 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "run_support.hpp"
+#include "stopping.hpp"
 
 namespace paloverde {
 
@@ -21,9 +21,12 @@ void LaplaceSolverOptions::validate() const {
 
 LaplaceSolver::LaplaceSolver(LaplaceSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
-Summary LaplaceSolver::improve(SimplexMesh& mesh) {
+Summary LaplaceSolver::improve(MeshPart part) {
+    if (part.distributed())
+        throw OptionError("'" + std::string(name()) + "' has no distributed version: smooth the whole mesh serially");
+    SimplexMesh& mesh = part.mesh();
     detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(mesh, std::string(name()), options_.metric);
+    detail::SolverRun run(part, std::string(name()), options_.metric);
     Summary& summary = run.summary;
     const auto start = run.start();
     const bool smart = options_.smart;
@@ -56,7 +59,7 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
     } else {
         groups.emplace_back();
         for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-            if (!mesh.fixed()[v]) groups.back().push_back(v);
+            if (mesh.can_move(v)) groups.back().push_back(v);
     }
 
     auto done = [&](TerminationReason reason, std::string message) {
@@ -99,15 +102,13 @@ Summary LaplaceSolver::improve(SimplexMesh& mesh) {
     const TerminationCriterion& stop = options_.termination;
     double best = record(0, -1e300).worst;
     for (int s = 1;; ++s) {
-        if (stop_requested())
+        if (stop_requested_anywhere(part.reducer()))
             return done(TerminationReason::Interrupted,
                         "interrupted (a stop was requested) after " + std::to_string(summary.iterations) + " sweeps");
-        if (stop.target_worst_quality && best >= *stop.target_worst_quality)
+        if (detail::target_reached(stop, best))
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
-        if (s > stop.max_iterations)
-            return done(TerminationReason::IterationLimit, "stopped after " + std::to_string(stop.max_iterations) + " sweeps");
-        if (stop.max_seconds > 0.0 && detail::seconds_since(start) > stop.max_seconds)
-            return done(TerminationReason::TimeLimit, "time limit reached");
+        if (const auto spent = detail::budget_spent(stop, s, part.reducer(), start))
+            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
         int moved = 0;
         double largest = 0.0;
         for (const auto& members : groups) {

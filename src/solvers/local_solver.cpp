@@ -10,11 +10,12 @@
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/solvers/stop.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
 #include "sliding_boundary.hpp"
+#include "stopping.hpp"
 
 namespace paloverde {
 
@@ -193,62 +194,60 @@ private:
 
 LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
-Summary LocalSolver::improve(SimplexMesh& mesh) {
+Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
+    if (whole_or_part.distributed() && options_.boundary == LocalSolverOptions::Boundary::Slide)
+        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17); run serially "
+                          "(threads work), or keep the boundary fixed");
     // Built before the run rescales the mesh, so that its reports count the sliding vertices free.
     std::optional<detail::SlidingBoundary> sliding;
-    if (options_.boundary == LocalSolverOptions::Boundary::Slide) sliding.emplace(mesh, options_.surface);
-    Summary summary = [&] {
-        detail::SolverRun run(mesh, std::string(name()), options_.metric);
-        if (sliding) sliding->set_scale_exponent(run.scale_exponent());
-        if (auto nothing = run.nothing_to_move()) return *nothing;
-        const Reducer serial_reducer;
-        const Halo no_ghosts;
-        Domain domain{mesh, detail::movable_elements(mesh), serial_reducer, no_ghosts,
-                      color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
-        detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), mesh, nullptr);
-        return sweep_colors(run, domain, checkpointer, sliding ? &*sliding : nullptr);
-    }();
+    if (options_.boundary == LocalSolverOptions::Boundary::Slide) sliding.emplace(whole_or_part.mesh(), options_.surface);
+    Summary summary = improve_part(whole_or_part, sliding ? &*sliding : nullptr);
     if (sliding) summary.boundary = sliding->motion();
     return summary;
 }
 
-Summary LocalSolver::improve(DistributedMesh& part) {
-    if (options_.boundary == LocalSolverOptions::Boundary::Slide)
-        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17); run serially "
-                          "(threads work), or keep the boundary fixed");
-    detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(part, std::string(name()), options_.metric);
+Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding) {
+    detail::SolverRun run(whole_or_part, std::string(name()), options_.metric);
+    if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
+    const SimplexMesh& mesh = whole_or_part.mesh();
+    DistributedMesh* part = whole_or_part.distributed();
+    if (!part) {
+        Domain domain{mesh, detail::movable_elements(mesh), whole_or_part.reducer(), whole_or_part.halo(),
+                      color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
+        return sweep_colors(run, domain, checkpointer, sliding);
+    }
+    // The serial smallest-last coloring needs the whole mesh: a part is colored in rounds
+    // (Jones & Plassmann), and a rank moves only the vertices it owns.
     std::vector<ElementId> counted;
-    for (ElementId e : detail::movable_elements(part.mesh))
-        if (part.counted[e]) counted.push_back(e);
-    VertexColoring coloring = color_vertices(part);
-    // A rank moves only the vertices it owns.
-    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v)
-        if (part.vertex_owner[v] != part.rank) coloring.color[v] = -1;
-    MetricScale scale = MetricScale::of(part.mesh);
+    for (ElementId e : detail::movable_elements(mesh))
+        if (whole_or_part.counts(e)) counted.push_back(e);
+    VertexColoring coloring = color_vertices(*part);
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (!whole_or_part.owns(v)) coloring.color[v] = -1;
+    MetricScale scale = MetricScale::of(mesh);
     {
         // The whole mesh's mean element volume.
         auto volume = make_metric("scaled_volume");
         MetricScale unit = scale;
         unit.reference_volume = 1.0;
-        unit.plane_normal = part.plane_normal;
+        unit.plane_normal = part->plane_normal;
         volume->set_scale(unit);
         ExactSum sums[2];
         double v = 0.0;
-        for (ElementId e = 0; e < part.mesh.num_elements(); ++e)
-            if (part.counted[e]) {
-                volume->evaluate(part.mesh, part.mesh.coordinates(), e, e + 1, &v);
+        for (ElementId e = 0; e < mesh.num_elements(); ++e)
+            if (whole_or_part.counts(e)) {
+                volume->evaluate(mesh, mesh.coordinates(), e, e + 1, &v);
                 sums[0].add(std::abs(v));
                 sums[1].add(1.0);
             }
-        part.reducer().sum(sums);
+        whole_or_part.reducer().sum(sums);
         if (sums[0].value() > 0.0 && std::isfinite(sums[0].value())) scale.reference_volume = sums[0].value() / sums[1].value();
-        scale.plane_normal = part.plane_normal;
+        scale.plane_normal = part->plane_normal;
     }
-    Domain domain{part.mesh, std::move(counted), part.reducer(), part.halo(), std::move(coloring), scale};
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part.mesh, &part);
+    Domain domain{mesh, std::move(counted), whole_or_part.reducer(), whole_or_part.halo(), std::move(coloring), scale};
     return sweep_colors(run, domain, checkpointer);
 }
 
@@ -287,7 +286,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     }
     auto local_volume = make_metric("scaled_volume");
     local_volume->set_scale(local_scale);
-    auto elapsed = [&] { return reducer.max(seconds_since(start)); };
 
     const std::size_t n = static_cast<std::size_t>(mesh.num_vertices());
     std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
@@ -302,7 +300,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     auto keep_best = [&](long inverted, double worst) {
         now_inverted = inverted;
         now_worst = worst;
-        if (best_xyz.empty() || inverted < best_inverted || (inverted == best_inverted && worst > best_worst)) {
+        if (best_xyz.empty() || detail::better_iterate(inverted, worst, best_inverted, best_worst)) {
             best_inverted = inverted;
             best_worst = worst;
             best_xyz = xyz;
@@ -331,7 +329,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         return s;
     };
     auto done = [&](TerminationReason reason, std::string message) {
-        if (now_inverted > best_inverted || (now_inverted == best_inverted && now_worst < best_worst)) {
+        if (detail::better_iterate(best_inverted, best_worst, now_inverted, now_worst)) {
             xyz = best_xyz;
             message += "; the best sweep is handed back";
         }
@@ -384,7 +382,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     };
     // At the top of each sweep: a stop request (any process's) ends the run, a due checkpoint is written.
     auto stopping = [&](bool untangling, int next_sweep) {
-        const bool stop = reducer.max(stop_requested() ? 1.0 : 0.0) > 0.0;
+        const bool stop = stop_requested_anywhere(reducer);
         if (stop ? checkpointer.writes() : checkpointer.due(summary.iterations)) save(untangling, next_sweep);
         return stop;
     };
@@ -459,12 +457,13 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             if (stopping(true, s))
                 return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) +
                                                                 " sweeps, while untangling");
-            if (s > stop.max_iterations)
+            if (const auto spent = detail::budget_spent(stop, s, reducer, start)) {
+                if (*spent == TerminationReason::TimeLimit)
+                    return done(TerminationReason::TimeLimit, "time limit reached while untangling");
                 return done(TerminationReason::CannotUntangle, "untangling stopped after " +
                                                                    std::to_string(stop.max_iterations) +
                                                                    " sweeps with elements still inverted");
-            if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
-                return done(TerminationReason::TimeLimit, "time limit reached while untangling");
+            }
             const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
                 if (sliding && sliding->slides(v)) return 0;  // untangling keeps the boundary
                 bool touches_inverted = false;
@@ -483,15 +482,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             inverted_history.push_back(static_cast<double>(inverted));
             worst_history.push_back(std::max(worst, worst_history.back()));
             if (inverted == 0) break;
-            const auto window = static_cast<std::size_t>(stop.progress_window);
-            bool stalled = moved == 0;
-            if (!stalled && inverted_history.size() > window) {
-                const std::size_t then = inverted_history.size() - 1 - window;
-                const double tolerance = stop.min_progress * std::max(std::abs(worst_history.back()), 1e-3);
-                stalled = inverted_history.back() >= inverted_history[then] &&
-                          worst_history.back() - worst_history[then] <= tolerance;
-            }
-            if (stalled)
+            const detail::StallWindow progress(stop, worst_history.back());
+            if (moved == 0 || (progress.did_not_fall(inverted_history) && progress.rose_too_little(worst_history)))
                 return done(TerminationReason::CannotUntangle,
                             std::to_string(inverted) + " elements are still inverted and local moves no longer help");
         }
@@ -510,17 +502,14 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     for (int s = resume ? first_sweep : 1;; ++s) {
         if (stopping(false, s))
             return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
-        if (stop.target_worst_quality && best >= *stop.target_worst_quality)
+        if (detail::target_reached(stop, best))
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
         // A budget spent before the sweeps with the boundary fixed converged leaves it unmoved.
-        const std::string unslid = sliding && !boundary_slides ? "; the boundary did not slide (the sweeps with it "
-                                                                 "fixed had not converged)"
-                                                               : "";
-        if (s > stop.max_iterations)
-            return done(TerminationReason::IterationLimit,
-                        "stopped after " + std::to_string(stop.max_iterations) + " sweeps" + unslid);
-        if (stop.max_seconds > 0.0 && elapsed() > stop.max_seconds)
-            return done(TerminationReason::TimeLimit, "time limit reached" + unslid);
+        if (const auto spent = detail::budget_spent(stop, s, reducer, start))
+            return done(*spent, detail::budget_message(*spent, stop, "sweeps") +
+                                    (sliding && !boundary_slides
+                                         ? "; the boundary did not slide (the sweeps with it fixed had not converged)"
+                                         : ""));
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
             if (sliding && !boundary_slides && sliding->slides(v)) return 0;
@@ -531,12 +520,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         const detail::SweepStats st = record("shape", *metric, count_inverted(xyz), moved, best);
         best = std::max(best, st.worst);
         best_history.push_back(best);
-        bool converged = moved == 0;
-        const auto window = static_cast<std::size_t>(stop.progress_window);
-        if (!converged && best_history.size() > window) {
-            const double tolerance = stop.min_progress * std::max(std::abs(best), 1e-3);
-            converged = best - best_history[best_history.size() - 1 - window] <= tolerance;
-        }
+        const bool converged = moved == 0 || detail::StallWindow(stop, best).rose_too_little(best_history);
         // With a sliding boundary the sweeps first converge with it fixed, then go on with it
         // sliding: as no move lowers the worst element, the run ends no lower than with the
         // boundary fixed (sliding from the start sometimes ends lower: a max-min ascent stops at

@@ -121,7 +121,7 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
     VertexUntangle result;
     const int k = mesh.corners();
     const auto elements = mesh.elements_of(v);
-    if (elements.empty() || mesh.fixed()[v]) return result;
+    if (elements.empty() || !mesh.can_move(v)) return result;
     auto volume = make_metric("scaled_volume");
     volume->set_scale(scale);
     // Each element's scaled volume and its gradient with respect to v (exact: linear in v).
@@ -326,7 +326,7 @@ int VertexEnergy::inverted(std::span<const double> xyz, VertexId v) const {
 }
 
 bool VertexEnergy::improve(std::span<double> xyz, VertexId v) {
-    if (mesh_.fixed()[v] || mesh_.elements_of(v).empty()) return false;
+    if (!mesh_.can_move(v) || mesh_.elements_of(v).empty()) return false;
     const double length = local_length(mesh_, xyz, v);
     if (!(length > 0.0)) return false;
     double* p = &xyz[3 * static_cast<std::size_t>(v)];

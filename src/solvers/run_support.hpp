@@ -17,7 +17,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/summary.hpp"
 
 namespace paloverde::detail {
@@ -47,18 +47,13 @@ class SolverRun {
 public:
     // Solvers run at unit scale (an exact power-of-two rescaling, undone by finish() or, if the
     // run throws, by the destructor): every metric is scale-free, and volumes of coordinates near
-    // 1e300 or 1e-300 would overflow or underflow.
-    SolverRun(SimplexMesh& mesh, std::string solver, std::string metric)
-        : mesh_(mesh), start_(Clock::now()), original_(mesh.coordinates().begin(), mesh.coordinates().end()),
-          exponent_(unit_scale_exponent(mesh.coordinates())) {
-        begin(std::move(solver), std::move(metric));
-    }
-    // A distributed run (collective): reports and decisions are the whole mesh's, on every rank.
-    SolverRun(DistributedMesh& part, std::string solver, std::string metric)
-        : mesh_(part.mesh), part_(&part), start_(Clock::now()),
-          original_(part.mesh.coordinates().begin(), part.mesh.coordinates().end()) {
+    // 1e300 or 1e-300 would overflow or underflow. On a distributed part (collective), reports and
+    // decisions are the whole mesh's, on every rank.
+    SolverRun(MeshPart part, std::string solver, std::string metric)
+        : part_(part), mesh_(part.mesh()), start_(Clock::now()),
+          original_(mesh_.coordinates().begin(), mesh_.coordinates().end()) {
         double largest = 0.0;
-        for (double c : part.mesh.coordinates()) largest = std::max(largest, std::abs(c));
+        for (double c : mesh_.coordinates()) largest = std::max(largest, std::abs(c));
         largest = part.reducer().max(largest);
         exponent_ = unit_scale_exponent(std::span<const double>(&largest, 1));
         begin(std::move(solver), std::move(metric));
@@ -88,7 +83,7 @@ public:
         if (summary.before.free_vertices == 0)
             return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
         const double planar = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() ? 0.0 : 1.0;
-        if ((part_ ? part_->reducer().min(planar) : planar) == 0.0)
+        if (part_.reducer().min(planar) == 0.0)
             throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
                             "tetrahedral meshes, not surfaces");
         if (summary.before.frozen_elements == summary.before.elements)
@@ -135,15 +130,15 @@ private:
         summary.before = assess();
         summary.worst_before = worst_movable(summary.before);
     }
-    QualityReport assess() const { return part_ ? assessor_.assess(*part_) : assessor_.assess(mesh_); }
+    QualityReport assess() const { return assessor_.assess(part_); }
     double worst_movable(const QualityReport& report) const {
         const MetricReport* r = report.metric(summary.quality_metric);
         if (!r) r = &report.metrics.front();
         return r->movable.count > 0 ? r->movable.min : r->all.min;
     }
 
+    MeshPart part_;
     SimplexMesh& mesh_;
-    DistributedMesh* part_ = nullptr;
     Clock::time_point start_;
     QualityAssessor assessor_;
     std::vector<double> original_;  // the input, at its own scale
@@ -155,11 +150,7 @@ private:
 inline std::vector<ElementId> movable_elements(const SimplexMesh& mesh) {
     std::vector<ElementId> out;
     for (ElementId e = 0; e < mesh.num_elements(); ++e)
-        for (VertexId v : mesh.element(e))
-            if (!mesh.fixed()[v]) {
-                out.push_back(e);
-                break;
-            }
+        if (mesh.element_can_move(e)) out.push_back(e);
     return out;
 }
 

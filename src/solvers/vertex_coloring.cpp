@@ -18,13 +18,13 @@ namespace {
 
 // Smallest-last (Matula & Beck): repeatedly remove a vertex of least remaining degree; coloring
 // in the reverse of that order gives each vertex at most its degree-at-removal colors to avoid.
-std::vector<VertexId> smallest_last(const VertexGraph& graph, std::span<const std::uint8_t> fixed) {
-    const auto n = static_cast<VertexId>(fixed.size());
+std::vector<VertexId> smallest_last(const VertexGraph& graph, const SimplexMesh& mesh) {
+    const VertexId n = mesh.num_vertices();
     std::vector<int> degree(static_cast<std::size_t>(n), 0);
     int max_degree = 0;
     for (VertexId v = 0; v < n; ++v) {
-        if (fixed[v]) continue;
-        for (auto i = graph.offsets[v]; i < graph.offsets[v + 1]; ++i) degree[v] += !fixed[graph.neighbours[i]];
+        if (!mesh.can_move(v)) continue;
+        for (auto i = graph.offsets[v]; i < graph.offsets[v + 1]; ++i) degree[v] += mesh.can_move(graph.neighbours[i]);
         max_degree = std::max(max_degree, degree[v]);
     }
     // Buckets by degree as doubly linked lists, so each removal costs O(degree).
@@ -42,7 +42,7 @@ std::vector<VertexId> smallest_last(const VertexGraph& graph, std::span<const st
     };
     // Inserting in decreasing id order leaves the lowest id first in each bucket: deterministic.
     for (VertexId v = n - 1; v >= 0; --v)
-        if (!fixed[v]) link(v);
+        if (mesh.can_move(v)) link(v);
     std::vector<std::uint8_t> removed(static_cast<std::size_t>(n), 0);
     std::vector<VertexId> order;
     int low = 0;
@@ -55,7 +55,7 @@ std::vector<VertexId> smallest_last(const VertexGraph& graph, std::span<const st
         order.push_back(v);
         for (auto i = graph.offsets[v]; i < graph.offsets[v + 1]; ++i) {
             const VertexId w = graph.neighbours[i];
-            if (fixed[w] || removed[w]) continue;
+            if (!mesh.can_move(w) || removed[w]) continue;
             unlink(w);
             --degree[w];
             link(w);
@@ -70,17 +70,16 @@ std::vector<VertexId> smallest_last(const VertexGraph& graph, std::span<const st
 
 VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order) {
     const VertexId n = mesh.num_vertices();
-    const auto fixed = mesh.fixed();
     VertexColoring result;
     result.color.assign(static_cast<std::size_t>(n), -1);
     // In a simplex mesh two vertices share an element exactly when they share an edge.
     const VertexGraph graph = vertex_graph(mesh);
     std::vector<VertexId> sequence;
     if (order == ColoringOrder::SmallestLast) {
-        sequence = smallest_last(graph, fixed);
+        sequence = smallest_last(graph, mesh);
     } else {
         for (VertexId v = 0; v < n; ++v)
-            if (!fixed[v]) sequence.push_back(v);
+            if (mesh.can_move(v)) sequence.push_back(v);
     }
     std::vector<VertexId> taken;  // taken[c] == v: color c is used by a neighbour of v
     for (VertexId v : sequence) {
@@ -102,7 +101,7 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
     if (coloring.color.size() != static_cast<std::size_t>(mesh.num_vertices())) return false;
     for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
         const int c = coloring.color[v];
-        if (mesh.fixed()[v] ? c != -1 : (c < 0 || c >= coloring.count)) return false;
+        if (!mesh.can_move(v) ? c != -1 : (c < 0 || c >= coloring.count)) return false;
     }
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
         const auto element = mesh.element(e);
@@ -118,7 +117,6 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
 VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId> ids, std::span<const std::uint8_t> owned,
                               const Halo& halo, const Reducer& reducer) {
     const VertexId n = mesh.num_vertices();
-    const auto fixed = mesh.fixed();
     // SplitMix64 of the id: a priority that looks random (few rounds) yet is the same on every
     // rank and in every numbering.
     auto priority = [&](VertexId v) {
@@ -135,13 +133,13 @@ VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId>
         chosen.clear();
         double uncolored = 0.0;
         for (VertexId v = 0; v < n; ++v) {
-            if (fixed[v] || !owned[v] || color[v] >= 0.0) continue;
+            if (!mesh.can_move(v) || !owned[v] || color[v] >= 0.0) continue;
             uncolored += 1.0;
             bool first = true;
             used.assign(1, 0);
             for (auto i = graph.offsets[v]; i < graph.offsets[v + 1] && first; ++i) {
                 const VertexId w = graph.neighbours[i];
-                if (fixed[w]) continue;
+                if (!mesh.can_move(w)) continue;
                 if (color[w] < 0.0) first = priority(w) < priority(v);
                 else {
                     const auto c = static_cast<std::size_t>(color[w]);
@@ -162,7 +160,7 @@ VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId>
     result.color.resize(static_cast<std::size_t>(n));
     int count = 0;
     for (VertexId v = 0; v < n; ++v) {
-        result.color[v] = fixed[v] ? -1 : static_cast<int>(color[v]);
+        result.color[v] = mesh.can_move(v) ? static_cast<int>(color[v]) : -1;
         count = std::max(count, result.color[v] + 1);
     }
     result.count = static_cast<int>(reducer.max(count));

@@ -10,7 +10,6 @@
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "local_untangle.hpp"
 
 namespace paloverde::detail {
@@ -20,15 +19,25 @@ constexpr ElementId kEvaluateChunk = 2048;
 // The canonical element order is cut into this many blocks; each vertex sums its elements'
 // contributions block by block. The blocks depend only on the whole mesh.
 constexpr GlobalId kGradientBlocks = 64;
-
-bool has_free_vertex(const SimplexMesh& mesh, ElementId e) {
-    for (VertexId v : mesh.element(e))
-        if (!mesh.fixed()[v]) return true;
-    return false;
-}
 }  // namespace
 
-Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
+Workspace::Workspace(MeshPart part, bool renumber)
+    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
+    if (part_) {
+        distributed_ = true;
+        reducer_ = &part.reducer();
+        halo_ = &part.halo();
+        const VertexId n = mesh_.num_vertices();
+        owned_.resize(static_cast<std::size_t>(n));
+        for (VertexId v = 0; v < n; ++v) {
+            owned_[v] = part.owns(v);
+            if (!owned_[v]) ghosts_.push_back(v);
+        }
+        part_order_ = finish(part_->element_order, part_->counted, part_->global_elements);
+        if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
+        return;
+    }
+    const SimplexMesh& mesh = part.mesh();
     if (renumber) {
         Renumbering order = locality_order(mesh);
         own_ = renumbered(mesh, order);
@@ -43,20 +52,6 @@ Workspace::Workspace(const SimplexMesh& mesh, bool renumber) : mesh_(own_) {
     owned_.assign(static_cast<std::size_t>(n), 1);
     std::vector<std::uint8_t> all_counted;
     finish(positions, all_counted, own_.num_elements());
-}
-
-Workspace::Workspace(DistributedMesh& part) : part_(&part), mesh_(part.mesh) {
-    distributed_ = true;
-    reducer_ = &part.reducer();
-    halo_ = &part.halo();
-    const VertexId n = part.mesh.num_vertices();
-    owned_.resize(static_cast<std::size_t>(n));
-    for (VertexId v = 0; v < n; ++v) {
-        owned_[v] = part.vertex_owner[v] == part.rank;
-        if (!owned_[v]) ghosts_.push_back(v);
-    }
-    part_order_ = finish(part.element_order, part.counted, part.global_elements);
-    if (part.mesh.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal;
 }
 
 namespace {
@@ -107,7 +102,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
     std::iota(order.begin(), order.end(), ElementId{0});
     {
         std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
-        for (ElementId e = 0; e < m; ++e) movable[e] = has_free_vertex(mesh_, e);
+        for (ElementId e = 0; e < m; ++e) movable[e] = mesh_.element_can_move(e);
         std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
             if (movable[a] != movable[b]) return movable[a] > movable[b];
             return element_order[a] < element_order[b];
@@ -226,7 +221,6 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     // Fixed vertices get zero; ghosts too, until the halo brings their owners' values.
     const VertexId n = mesh_.num_vertices();
     const VertexId block = 4096;
-    const auto fixed = mesh_.fixed();
     auto gather = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low, VertexId high) {
         std::fill(out.begin() + width * static_cast<std::size_t>(low), out.begin() + width * (static_cast<std::size_t>(high) + 1), 0.0);
         for (const Lane& lane : lanes_) {
@@ -239,7 +233,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
             for (std::size_t i = 0; i < count; ++i) target[i] += source[i];
         }
         for (VertexId v = low; v <= high; ++v)
-            if (fixed[v] || !owned_[v])
+            if (!mesh_.can_move(v) || !owned_[v])
                 for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
     };
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
@@ -250,16 +244,17 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     }
 }
 
-void Workspace::copy_back(std::span<const double> xyz, SimplexMesh& original) const {
-    auto out = original.coordinates();
+void Workspace::copy_back(std::span<const double> xyz) const {
+    // A distributed part keeps its own vertex order (only its elements were reordered).
+    if (part_) {
+        std::copy(xyz.begin(), xyz.end(), original_->coordinates().begin());
+        return;
+    }
+    auto out = original_->coordinates();
     for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
         const VertexId old = old_vertex_.empty() ? v : old_vertex_[v];
         for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(old) + c] = xyz[3 * static_cast<std::size_t>(v) + c];
     }
-}
-
-void Workspace::copy_back(std::span<const double> xyz, DistributedMesh& part) const {
-    std::copy(xyz.begin(), xyz.end(), part.mesh.coordinates().begin());
 }
 
 double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
@@ -281,13 +276,6 @@ bool untangled(const Workspace& work, std::span<const double> xyz) {
     for (ElementId e = 0; e < work.movable_elements() && tangled == 0.0; ++e)
         if (element_orientation(work.mesh(), xyz, e) <= 0) tangled = 1.0;
     return work.reducer().max(tangled) == 0.0;
-}
-
-bool stop_requested_anywhere(const Workspace& work) { return work.reducer().max(stop_requested() ? 1.0 : 0.0) > 0.0; }
-
-std::string interrupted_after(int iterations) {
-    return "interrupted (a stop was requested) after " + std::to_string(iterations) +
-           " iterations; the best iterate is handed back";
 }
 
 }  // namespace paloverde::detail

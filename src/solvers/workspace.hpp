@@ -18,29 +18,24 @@
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/halo.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/reducer.hpp"
-
-namespace paloverde {
-class DistributedMesh;
-}
 
 namespace paloverde::detail {
 
 class Workspace {
 public:
-    // The whole mesh, serially; `renumber` false keeps the vertex numbering.
-    Workspace(const SimplexMesh& mesh, bool renumber);
-    // This process's part of a distributed mesh. The workspace orders the part's elements in place
-    // rather than holding a reordered copy (a copy would cost as much as the part's mesh), and
-    // puts them back in the part's order when it is destroyed.
-    explicit Workspace(DistributedMesh& part);
+    // The whole mesh, renumbered for locality unless `renumber` is false, in a copy. A part of a
+    // distributed mesh is in canonical order already: the workspace orders the part's elements in
+    // place rather than holding a reordered copy (a copy would cost as much as the part's mesh),
+    // and puts them back in the part's order when it is destroyed.
+    Workspace(MeshPart part, bool renumber);
     ~Workspace();
     Workspace(const Workspace&) = delete;
     Workspace& operator=(const Workspace&) = delete;
 
     const SimplexMesh& mesh() const { return mesh_; }
     ElementId movable_elements() const { return movable_; }
-    std::span<const std::uint8_t> fixed() const { return mesh_.fixed(); }
     // Per vertex: this process owns it (computes its gradient and moves it).
     std::span<const std::uint8_t> owned() const { return owned_; }
     // Vertices owned by other processes.
@@ -67,10 +62,8 @@ public:
                   std::span<double> gradient, std::span<const double> curvature_weight = {},
                   std::span<double> curvature = {});
 
-    // Serial runs: coordinates in the caller's numbering.
-    void copy_back(std::span<const double> xyz, SimplexMesh& original) const;
-    // Distributed runs: the part's own vertex order is kept, only elements were reordered.
-    void copy_back(std::span<const double> xyz, DistributedMesh& part) const;
+    // Coordinates xyz (the workspace's) into the part it was made from, in the part's numbering.
+    void copy_back(std::span<const double> xyz) const;
 
 private:
     struct Lane {
@@ -86,6 +79,7 @@ private:
     void build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
 
+    SimplexMesh* original_;             // the part's mesh
     SimplexMesh own_;                   // serial runs: the mesh in canonical order
     DistributedMesh* part_ = nullptr;    // distributed runs: the part, whose elements mesh_ reorders
     std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
@@ -130,9 +124,5 @@ double owned_dot(const Workspace& work, std::span<const double> a, std::span<con
 
 // Every movable element is positively oriented (decided exactly), over all processes.
 bool untangled(const Workspace& work, std::span<const double> xyz);
-// A stop was requested (stop.hpp) on any process: every process stops at the same iteration.
-bool stop_requested_anywhere(const Workspace& work);
-// What a phase stopped that way says.
-std::string interrupted_after(int iterations);
 
 }  // namespace paloverde::detail

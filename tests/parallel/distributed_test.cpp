@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/config/run.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
-#include "paloverde/parallel/distributed_run.hpp"
 #include "paloverde/parallel/partition.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
@@ -23,6 +23,7 @@
 #include "world.hpp"
 
 namespace pv = paloverde;
+namespace cfg = paloverde::config;
 
 namespace {
 
@@ -543,23 +544,29 @@ BOOST_AUTO_TEST_SUITE_END()
 
 BOOST_AUTO_TEST_SUITE(distributed_run)
 
-// The command line's path: read on rank 0, solve on all, gather and write one file.
+// The command line's path (config::run): read on rank 0, solve on all, gather and write one file.
+// On one rank the run is the serial one, the one-part case of the same path.
 BOOST_AUTO_TEST_CASE(a_whole_run_writes_the_serial_answer) {
     const auto input_path = pv::test::shared_data("stellar/house2.node");
     const auto input = pv::read_mesh(input_path).mesh;
     const auto output = std::filesystem::temp_directory_path() / ("paloverde_run_" + std::to_string(ranks()) + ".vtk");
-    pv::DistributedRunOptions options;
-    options.input = input_path;
-    options.output = output;
-    pv::GlobalSolverOptions solver_options;
-    solver_options.termination.max_iterations = 10;
-    pv::GlobalSolver solver(solver_options);
-    const auto report = pv::improve_distributed(MPI_COMM_WORLD, options, solver);
-    BOOST_TEST(report.ranks == ranks());
-    BOOST_TEST(report.summary.after.inverted == 0);
-    if (ranks() == 1) BOOST_TEST(report.ghost_copies == 0);
-    else BOOST_TEST(report.ghost_copies > 0);
+    const std::vector<cfg::Override> set{{"input.mesh=" + input_path.string(), "test", true},
+                                         {"output.mesh=" + output.string(), "test", true},
+                                         {"partition.parts=" + std::to_string(ranks())},
+                                         {"queue[0].improve.name=global"},
+                                         {"queue[0].improve.termination.max_iterations=10"}};
+    const cfg::RunResult result = cfg::run(cfg::parse_config("", "test", set));
+    BOOST_TEST(result.methods.at(0).after.inverted == 0);
+    if (ranks() == 1) {
+        BOOST_TEST(!result.parallel.has_value());
+    } else {
+        BOOST_REQUIRE(result.parallel.has_value());
+        BOOST_TEST(result.parallel->ranks == ranks());
+        BOOST_TEST(result.parallel->ghost_copies > 0);
+    }
     if (rank() == 0) {
+        pv::GlobalSolverOptions solver_options;
+        solver_options.termination.max_iterations = 10;
         pv::SimplexMesh serial = input;
         pv::GlobalSolver(solver_options).improve(serial);
         const auto written = pv::read_mesh(output).mesh;

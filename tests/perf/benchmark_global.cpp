@@ -53,7 +53,7 @@ int main(int argc, char** argv) {
         auto t = Clock::now();
         auto file = pv::read_mesh(argv[1]);
         const double read = seconds_since(t);
-        const auto& mesh = file.mesh;
+        auto& mesh = file.mesh;
         t = Clock::now();
         pv::detail::Workspace work(mesh, true);
         const double setup = seconds_since(t);

@@ -1,6 +1,6 @@
 // The public headers of the layers above the parallel one (solvers, config runs, wrappers) and
 // those below it compile without <mpi.h>: a program that never runs distributed does not see
-// MPI. (distributed_mesh.hpp, distributed_run.hpp and the MPI examples are where it starts.)
+// MPI. (distributed_mesh.hpp and the MPI examples are where it starts.)
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/config/config.hpp"
 #include "paloverde/config/registry.hpp"
@@ -15,6 +15,7 @@
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/objectives/objective_function.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/instruction_queue.hpp"

@@ -9,11 +9,10 @@
 
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
 namespace paloverde {
-
-class DistributedMesh;
 
 struct QualityStatistics {
     ElementId count = 0;
@@ -57,9 +56,9 @@ public:
     // Metrics that do not support the mesh's element kind are left out of the report.
     QualityReport assess(const SimplexMesh& mesh) const { return assess(mesh, mesh.coordinates()); }
     QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates) const;
-    // Collective: the report of the whole distributed mesh, on every rank. Equal to the serial
-    // report of the whole mesh, except that worst_element is -1.
-    QualityReport assess(const DistributedMesh& part) const;
+    // The report of the whole mesh the part belongs to. A distributed part's is collective, the
+    // same on every rank, and equal to the serial report except that worst_element is -1.
+    QualityReport assess(const MeshPart& part) const;
 
 private:
     // Elements with counted[e] (all when empty) and vertices with owned[v] enter the report;

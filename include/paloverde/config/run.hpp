@@ -37,8 +37,8 @@ struct MethodResult {
     std::string mesh_written;  // "" if output.mesh is not set
 };
 
-// How a partitioned run got its mesh onto the ranks and what the exchange moves: the numbers of
-// DistributedRunReport (docs/parallel.md), the same on every rank. Seconds are those of rank 0
+// How a partitioned run got its mesh onto the ranks and what the exchange moves: the paper's
+// numbers (docs/parallel.md), the same on every rank. Seconds are those of rank 0
 // or, for solve and write, of the slowest rank.
 struct ParallelReport {
     int ranks = 1;
@@ -76,7 +76,7 @@ struct RunResult {
     // Run keys ("input_orientation": mode, flipped, sign, share, oriented), "methods": [...]; one
     // method's keys also at the top; a partitioned run adds
     // "parallel" (ranks, exchange, colors, ghost_copies, messages_per_exchange, seconds: read,
-    // partition, distribute, schedule, solve, write), as DistributedRunReport::to_json does.
+    // partition, distribute, schedule, solve, write), as paloverde_parallel_benchmark prints them.
     std::string to_json() const;
     std::string table_csv() const;    // one row per method
     std::string history_csv() const;  // method, improver (its label), then Summary::history_csv's columns

@@ -51,6 +51,17 @@ public:
 
     // 1 for vertices that must not move.
     std::span<const std::uint8_t> fixed() const noexcept { return fixed_; }
+    // Where a vertex may move, decided here for every solver and assessment: in 3 directions (a
+    // free vertex) or in none (a fixed one). Sliding boundary vertices will take 2 on a surface,
+    // 1 on a feature curve (issue 17): solvers ask can_move(), not the fixed flag.
+    int degrees_of_freedom(VertexId v) const noexcept { return fixed_[v] ? 0 : 3; }
+    bool can_move(VertexId v) const noexcept { return degrees_of_freedom(v) > 0; }
+    // Element e has a vertex that can move: the only elements a vertex mover changes (movable).
+    bool element_can_move(ElementId e) const noexcept {
+        for (VertexId v : element(e))
+            if (can_move(v)) return true;
+        return false;
+    }
     void set_fixed(std::vector<std::uint8_t> fixed);
     // Fixes exactly the vertices on the boundary (faces of one tetrahedron, edges of one triangle).
     void fix_boundary();

@@ -15,8 +15,6 @@
 
 namespace paloverde {
 
-class DistributedMesh;  // paloverde/parallel/distributed_mesh.hpp (MPI): only a distributed run needs it
-
 struct GlobalSolverOptions {
     enum class Direction { SteepestAscent, ConjugateGradient };
     Direction direction = Direction::ConjugateGradient;
@@ -52,11 +50,10 @@ class GlobalSolver final : public Solver {
 public:
     explicit GlobalSolver(GlobalSolverOptions options = {});
     std::string_view name() const override { return "global"; }
-    Summary improve(SimplexMesh& mesh) override;
-    // Collective over the mesh's communicator: every rank moves the vertices it owns, and all
-    // end with the same Summary. The result equals the serial run's on the whole mesh (with the
-    // default renumbering), except that local untangling steps are serial-only.
-    Summary improve(DistributedMesh& part);
+    // On a distributed part every rank moves the vertices it owns. The result equals the serial
+    // run's on the whole mesh (with the default renumbering), except when the local untangling
+    // fallback runs: it sweeps by hashed colors when distributed, in id order serially.
+    Summary improve(MeshPart part) override;
 
 private:
     GlobalSolverOptions options_;

@@ -43,7 +43,8 @@ public:
     InstructionQueue& observe(StepObserver observer);
     std::size_t size() const { return steps_.size(); }
 
-    QueueResult run(SimplexMesh& mesh) const;
+    // On the whole mesh or, collectively, on this rank's part of a distributed one.
+    QueueResult run(MeshPart part) const;
 
 private:
     struct Instruction {

@@ -34,7 +34,8 @@ class LaplaceSolver final : public Solver {
 public:
     explicit LaplaceSolver(LaplaceSolverOptions options = {});
     std::string_view name() const override { return options_.smart ? "smart_laplace" : "laplace"; }
-    Summary improve(SimplexMesh& mesh) override;
+    // Serial only: a part of a DistributedMesh is an OptionError (on every rank).
+    Summary improve(MeshPart part) override;
 
 private:
     LaplaceSolverOptions options_;

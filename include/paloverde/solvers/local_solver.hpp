@@ -16,8 +16,6 @@
 
 namespace paloverde {
 
-class DistributedMesh;  // paloverde/parallel/distributed_mesh.hpp (MPI): only a distributed run needs it
-
 namespace detail {
 class SolverRun;
 class Checkpointer;
@@ -64,11 +62,10 @@ public:
     explicit LocalSolver(LocalSolverOptions options = {});
     std::string_view name() const override { return "local"; }
     // Summary::message ends with the number of colors, e.g. "(12 colors)".
-    Summary improve(SimplexMesh& mesh) override;
-    // Collective: each rank moves the vertices it owns; the coloring is global, and after each
-    // color the ghosts take their owners' new positions. (Not bitwise the serial result: the
-    // coloring differs from the serial smallest-last one.)
-    Summary improve(DistributedMesh& part);
+    // On a distributed part each rank moves the vertices it owns; the coloring is global, and
+    // after each color the ghosts take their owners' new positions. (Not bitwise the serial
+    // result: the coloring differs from the serial smallest-last one.)
+    Summary improve(MeshPart part) override;
 
 private:
     // What a sweep needs of the mesh: the elements whose statistics this process counts, the
@@ -81,6 +78,8 @@ private:
         VertexColoring coloring;
         MetricScale scale;
     };
+    // The run on the part, with the boundary sliding (`sliding`) or not (nullptr).
+    Summary improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding);
     Summary sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,
                          const detail::SlidingBoundary* sliding = nullptr);
 

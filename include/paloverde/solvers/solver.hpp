@@ -2,11 +2,15 @@
 // A solver (vertex mover) improves a mesh in place and says what it did. Whatever stops it, the
 // mesh it leaves is never worse than the one it got: no more inverted elements, and no lower
 // worst quality among the elements it could move.
+//
+// One entry point for serial and distributed runs: improve() takes a MeshPart, the whole mesh
+// (`solver.improve(mesh)`) or this rank's part of a DistributedMesh (`solver.improve(part)`,
+// collective: every rank ends with the same Summary).
 #include <functional>
 #include <string_view>
 #include <utility>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/summary.hpp"
 
 namespace paloverde {
@@ -18,7 +22,7 @@ class Solver {
 public:
     virtual ~Solver() = default;
     virtual std::string_view name() const = 0;
-    virtual Summary improve(SimplexMesh& mesh) = 0;
+    virtual Summary improve(MeshPart part) = 0;
 
     void set_observer(IterationObserver observer) { observer_ = std::move(observer); }
 
