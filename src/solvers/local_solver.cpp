@@ -28,6 +28,9 @@ void LocalSolverOptions::validate() const {
         throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
                           "inverse_condition or edge_ratio");
     surface.validate();
+    if (boundary == Boundary::Slide && (!checkpoint.file.empty() || !checkpoint.resume.empty()))
+        throw OptionError("checkpoints do not go with boundary: slide yet (a sliding run is two runs: the boundary "
+                          "fixed, then sliding); keep the boundary fixed to checkpoint");
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
@@ -196,15 +199,31 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
-    if (whole_or_part.distributed() && options_.boundary == LocalSolverOptions::Boundary::Slide)
+    if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
+    if (whole_or_part.distributed())
         throw OptionError("boundary: slide is not available in distributed runs yet (issue 17); run serially "
                           "(threads work), or keep the boundary fixed");
-    // Built before the run rescales the mesh, so that its reports count the sliding vertices free.
-    std::optional<detail::SlidingBoundary> sliding;
-    if (options_.boundary == LocalSolverOptions::Boundary::Slide) sliding.emplace(whole_or_part.mesh(), options_.surface);
-    Summary summary = improve_part(whole_or_part, sliding ? &*sliding : nullptr);
-    if (sliding) summary.boundary = sliding->motion();
-    return summary;
+    // The input's boundary, which the boundary-fixed run leaves where it is.
+    detail::SlidingBoundary sliding(whole_or_part.mesh(), options_.surface);
+    Summary fixed = improve_part(whole_or_part, nullptr);
+    // Then the shape sweeps with the boundary sliding, on what budget is left.
+    LocalSolverOptions slide = options_;
+    slide.termination.max_iterations -= fixed.iterations - fixed.untangle_iterations;
+    if (slide.termination.max_seconds > 0.0) slide.termination.max_seconds -= fixed.seconds;
+    const bool budget_left = slide.termination.max_iterations > 0 &&
+                             (options_.termination.max_seconds == 0.0 || slide.termination.max_seconds > 0.0);
+    const bool go_on = fixed.reason == TerminationReason::Converged || fixed.reason == TerminationReason::NothingToMove ||
+                       fixed.reason == TerminationReason::NoImprovingStep;
+    if (!go_on || !budget_left) {
+        if (fixed.reason == TerminationReason::IterationLimit || fixed.reason == TerminationReason::TimeLimit)
+            fixed.message += "; the boundary did not slide (the budget was spent with it fixed)";
+        return sliding.join(std::move(fixed), std::nullopt);
+    }
+    sliding.release();
+    LocalSolver second(slide);
+    second.set_observer(observer());
+    Summary slid = second.improve_part(whole_or_part, &sliding);
+    return sliding.join(std::move(fixed), std::move(slid));
 }
 
 Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding) {
@@ -367,7 +386,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     long inverted = 0;
     std::vector<double> inverted_history, worst_history;  // untangling
     double best = -1e300;                                 // shape: best worst quality so far
-    bool boundary_slides = false;                         // shape, sliding boundary: its second stage
     std::vector<double> best_history;
     auto save = [&](bool untangling, int next_sweep) {
         detail::SolverState state;
@@ -375,7 +393,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                          {"inverted", static_cast<double>(inverted)}, {"best", best},
                          {"best_inverted", static_cast<double>(best_inverted)}, {"best_worst", best_worst},
                          {"now_inverted", static_cast<double>(now_inverted)}, {"now_worst", now_worst},
-                         {"epsilon", epsilon}, {"boundary_slides", boundary_slides ? 1.0 : 0.0}};
+                         {"epsilon", epsilon}};
         state.lists = {{"inverted_history", inverted_history}, {"worst_history", worst_history}, {"best_history", best_history}};
         state.vertex_fields = {{"x", xyz}, {"best_x", best_xyz}};
         checkpointer.save(summary, state, seconds_since(start));
@@ -408,7 +426,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                 for (VertexId w : mesh.element(e)) near[w] = 1.0;
         domain.halo.update(near, 1);
         const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent&, detail::VertexEnergy& energy) {
-            if (sliding && sliding->slides(v)) return 0;  // untangling keeps the boundary
             bool close = false;
             for (ElementId e : mesh.elements_of(v))
                 for (VertexId w : mesh.element(e)) close = close || near[w] != 0.0;
@@ -437,7 +454,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         now_inverted = static_cast<long>(resume->number("now_inverted"));
         now_worst = resume->number("now_worst");
         epsilon = resume->number("epsilon");
-        boundary_slides = resume->number("boundary_slides") != 0.0;
         inverted_history = resume->list("inverted_history");
         worst_history = resume->list("worst_history");
         best_history = resume->list("best_history");
@@ -465,8 +481,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                                                                    " sweeps with elements still inverted");
             }
             const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
-                if (sliding && sliding->slides(v)) return 0;  // untangling keeps the boundary
-                bool touches_inverted = false;
+                    bool touches_inverted = false;
                 for (ElementId e : mesh.elements_of(v))
                     if (element_orientation(mesh, xyz, e) <= 0) touches_inverted = true;
                 if (!touches_inverted) return 0;
@@ -504,15 +519,10 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
         if (detail::target_reached(stop, best))
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
-        // A budget spent before the sweeps with the boundary fixed converged leaves it unmoved.
         if (const auto spent = detail::budget_spent(stop, s, reducer, start))
-            return done(*spent, detail::budget_message(*spent, stop, "sweeps") +
-                                    (sliding && !boundary_slides
-                                         ? "; the boundary did not slide (the sweeps with it fixed had not converged)"
-                                         : ""));
+            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
-            if (sliding && !boundary_slides && sliding->slides(v)) return 0;
             if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;
             return ascent.improve(xyz, v) ? 1 : 0;
         });
@@ -520,19 +530,9 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         const detail::SweepStats st = record("shape", *metric, count_inverted(xyz), moved, best);
         best = std::max(best, st.worst);
         best_history.push_back(best);
-        const bool converged = moved == 0 || detail::StallWindow(stop, best).rose_too_little(best_history);
-        // With a sliding boundary the sweeps first converge with it fixed, then go on with it
-        // sliding: as no move lowers the worst element, the run ends no lower than with the
-        // boundary fixed (sliding from the start sometimes ends lower: a max-min ascent stops at
-        // the first local maximum on its path).
-        if (converged && sliding && !boundary_slides) {
-            boundary_slides = true;
-            best_history = {best};
-            continue;
-        }
-        if (converged)
-            return done(TerminationReason::Converged, moved == 0 ? "no vertex can raise its worst element any more"
-                                                                 : "the worst quality stopped improving");
+        if (moved == 0) return done(TerminationReason::Converged, "no vertex can raise its worst element any more");
+        if (detail::StallWindow(stop, best).rose_too_little(best_history))
+            return done(TerminationReason::Converged, "the worst quality stopped improving");
     }
 }
 

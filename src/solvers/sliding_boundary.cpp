@@ -27,18 +27,47 @@ SlidingBoundary::SlidingBoundary(SimplexMesh& mesh, const SurfaceOptions& option
     for (std::size_t v = 0; v < n; ++v) on_boundary[v] = surface_.role(static_cast<VertexId>(v)) != BoundaryRole::Interior;
     const bool boundary_fixed = on_boundary == fixed_;
     slides_.assign(n, 0);
-    std::vector<std::uint8_t> fixed = fixed_;
+    released_ = fixed_;
     for (std::size_t v = 0; v < n; ++v) {
         const BoundaryRole role = surface_.role(static_cast<VertexId>(v));
         if (role != BoundaryRole::Surface && role != BoundaryRole::Curve) continue;
         if (fixed_[v] && !boundary_fixed) continue;  // fixed by the user's own choice
         slides_[v] = 1;
-        fixed[v] = 0;
+        released_[v] = 0;
     }
-    mesh_.set_fixed(std::move(fixed));
 }
 
 SlidingBoundary::~SlidingBoundary() { mesh_.set_fixed(fixed_); }
+
+void SlidingBoundary::release() { mesh_.set_fixed(released_); }
+
+Summary SlidingBoundary::join(Summary fixed, std::optional<Summary> slid) const {
+    auto worst_of_all = [](const Summary& s, const QualityReport& r) {
+        const MetricReport* m = r.metric(s.quality_metric);
+        return m ? m->all.min : (r.metrics.empty() ? 0.0 : r.metrics.front().all.min);
+    };
+    Summary out = std::move(fixed);
+    out.worst_before = worst_of_all(out, out.before);
+    if (slid) {
+        // The sliding run's own phase: its worst qualities are over the elements it frees.
+        for (IterationRecord r : slid->history) {
+            r.phase = "slide";
+            r.iteration += out.iterations;
+            r.seconds += out.seconds;
+            out.history.push_back(std::move(r));
+        }
+        out.iterations += slid->iterations;
+        out.quality_passes += slid->quality_passes;
+        out.gradient_passes += slid->gradient_passes;
+        out.seconds += slid->seconds;
+        out.reason = slid->reason;
+        out.message = "boundary fixed: " + out.message + "; then sliding: " + slid->message;
+        out.after = std::move(slid->after);
+    }
+    out.worst_after = worst_of_all(out, out.after);
+    out.boundary = motion();
+    return out;
+}
 
 Vec3 SlidingBoundary::project(VertexId v, const Vec3& p) const {
     Vec3 q = surface_.project(v, {std::ldexp(p[0], -exponent_), std::ldexp(p[1], -exponent_), std::ldexp(p[2], -exponent_)});

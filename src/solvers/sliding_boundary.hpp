@@ -1,13 +1,17 @@
 #pragma once
-// Boundary vertices that slide on the input's boundary (boundary: slide, issue 17) for one solver
-// run. While it lives, the mesh's fixed flags free the vertices that slide, so that colorings,
-// movable elements and reports count them like any free vertex; a solver then keeps each such
-// vertex's moves on its surface patch or feature curve with tangent() and project().
+// Boundary vertices that slide on the input's boundary (boundary: slide, issue 17). A solver
+// that slides its boundary runs twice: the ordinary run with the boundary fixed (untangling and
+// shape), then a shape run from its result in which the sliding vertices move too
+// (`release()` frees their fixed flags, so that colorings, movable elements and reports count
+// them like any free vertex; a solver keeps each such vertex's moves on its surface patch or
+// feature curve with tangent() and project()). No run lowers the worst element, so the result is
+// never below the boundary-fixed run's; join() makes one Summary of the two.
 //
 // Which vertices slide: every boundary vertex on a patch or a curve (mesh/boundary_surface.hpp;
 // corners stay). When the fixed flags are exactly the boundary (the default, and Mesquite files'
 // `fixed` fields) that is all of them; a `fixed` field that marks anything else is the user's
 // choice, and the boundary vertices it fixes stay where they are.
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -18,9 +22,11 @@ namespace paloverde::detail {
 
 class SlidingBoundary {
 public:
-    // From the mesh at the input's scale, before the run rescales it.
+    // From the input mesh, at its own scale (before any run moves or rescales it).
     SlidingBoundary(SimplexMesh& mesh, const SurfaceOptions& options);
     ~SlidingBoundary();  // gives the mesh its fixed flags back
+    // Frees the fixed flags of the vertices that slide, until destruction.
+    void release();
     SlidingBoundary(const SlidingBoundary&) = delete;
     SlidingBoundary& operator=(const SlidingBoundary&) = delete;
 
@@ -31,13 +37,18 @@ public:
     // point of v's patch or curve nearest to p.
     Vec3 tangent(VertexId v, const Vec3& d) const { return surface_.tangent(v, d); }
     Vec3 project(VertexId v, const Vec3& p) const;
-    // What the run did to the boundary, from the mesh handed back (at the input's scale).
+    // What the runs did to the boundary, from the mesh handed back (at the input's scale).
     BoundaryMotion motion() const;
+    // One Summary of the boundary-fixed run and the sliding one (`slid`; none when the fixed run
+    // left nothing to slide or no budget). Worst qualities are over every element: the two runs
+    // free different vertices, and neither lowers the smallest quality of all.
+    Summary join(Summary fixed, std::optional<Summary> slid) const;
 
 private:
     SimplexMesh& mesh_;
     BoundarySurface surface_;
     std::vector<std::uint8_t> fixed_;   // the flags the mesh had, given back at the end
+    std::vector<std::uint8_t> released_;  // the flags while the boundary slides
     std::vector<std::uint8_t> slides_;  // per vertex
     std::vector<double> input_;         // the input's coordinates
     double volume_before_ = 0.0;

@@ -45,9 +45,9 @@ struct LocalSolverOptions {
     // moves trade a patch's good elements for its worst one, so moving every vertex lowers the
     // mean quality (by ~10% on tire) for no gain in the worst; 1 or more moves them all.
     double improve_below = 0.1;
-    // Boundary vertices: fixed (the fixed flags decide), or slide: in the shape sweeps they move
-    // on the input's boundary, along feature curves, corners fixed (mesh/boundary_surface.hpp;
-    // docs/local_solver.md). Untangling keeps them where they are.
+    // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the
+    // boundary fixed, shape sweeps in which they move on the input's boundary, along feature
+    // curves, corners fixed (mesh/boundary_surface.hpp; docs/local_solver.md). No checkpoints.
     enum class Boundary { Fixed, Slide };
     Boundary boundary = Boundary::Fixed;
     SurfaceOptions surface;          // with slide: the feature angle

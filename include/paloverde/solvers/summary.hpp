@@ -26,7 +26,7 @@ std::string_view to_string(TerminationReason reason);
 
 struct IterationRecord {
     int iteration = 0;
-    std::string phase;  // "untangle" or "shape"
+    std::string phase;  // "untangle", "shape", or "slide" (the shape sweeps of a sliding boundary)
     double worst_quality = 0.0;       // of this iterate
     double best_worst_quality = 0.0;  // of the best iterate so far: what the phase hands back
     double mean_quality = 0.0;
@@ -60,7 +60,9 @@ struct Summary {
     long gradient_passes = 0;  // evaluations of the whole gradient
     double seconds = 0.0;
     std::string quality_metric;       // the metric worst_* refer to
-    double worst_before = 0.0, worst_after = 0.0;  // over elements with a free vertex
+    // Over elements with a free vertex; with a sliding boundary (its two runs free different
+    // vertices) over every element.
+    double worst_before = 0.0, worst_after = 0.0;
     // The counts, and the statistics of the solver's metric and the aspect ratio (QualityAssessor has
     // every metric, for a full report of the mesh).
     QualityReport before, after;
