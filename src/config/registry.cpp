@@ -127,6 +127,7 @@ struct Tables {
     Table<LaplaceSolverOptions> laplace{"a Laplace solver", [](const LaplaceSolverOptions& o) { o.validate(); }};
     Table<AssessSpec> assess{"an assess step", [](const AssessSpec& a) { a.validate(); }};
     Table<CheckpointOptions> checkpoint{"checkpoint", [](const CheckpointOptions& c) { c.validate(); }};
+    Table<SurfaceOptions> surface{"surface", [](const SurfaceOptions& s) { s.validate(); }};
     OptionsKind global_kind, local_kind, laplace_kind;
     std::vector<SolverKind> solvers;
     std::vector<WrapperKind> wrappers;
@@ -170,6 +171,10 @@ Tables::Tables() {
         .real("barrier_initial_active", &ObjectiveOptions::barrier_initial_active,
               "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1; 0: 0.5% of the elements, at least 10,000.");
     p_mean.real("p", &ObjectiveOptions::p, "Exponent, nonzero; negative stresses the worst elements.");
+
+    surface.real("feature_angle", &SurfaceOptions::feature_angle,
+                 "Boundary faces meeting at more than this angle (degrees, in (0, 180)) make a feature curve that "
+                 "stays; curves turning more sharply make corners, which stay put.");
 
     checkpoint.path("file", &CheckpointOptions::file,
                     "Write the solver's state here (a temporary, then a rename) to resume from; ~: no checkpoints.")
@@ -231,6 +236,14 @@ Tables::Tables() {
               "Elements within this fraction of the patch minimum are active, in [0, 1).")
         .real("improve_below", &LocalSolverOptions::improve_below,
               "Move only vertices whose worst element lies in this lowest fraction of worst..ideal, > 0 (1: all).")
+        .choice("boundary", &LocalSolverOptions::boundary,
+                {{"fixed", LocalSolverOptions::Boundary::Fixed}, {"slide", LocalSolverOptions::Boundary::Slide}},
+                "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in the shape "
+                "sweeps (feature curves kept, corners fixed; serial runs).")
+        .object("surface", &LocalSolverOptions::surface, surface,
+                "The boundary surface slid on (boundary: slide): feature_angle, in degrees in (0, 180): boundary "
+                "faces meeting at a sharper angle make a feature curve, which stays; curves turning more sharply "
+                "make corners, which stay put.")
         .object("checkpoint", &LocalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run, at sweep boundaries: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 

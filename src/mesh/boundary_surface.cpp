@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <memory>
 #include <numbers>
 #include <string>
 
@@ -76,13 +78,60 @@ std::vector<Facet> boundary_facets(const SimplexMesh& mesh) {
     return boundary;
 }
 
+Vec3 unit(const Vec3& a) {
+    const double l = norm(a);
+    return l > 0.0 ? Vec3{a[0] / l, a[1] / l, a[2] / l} : Vec3{0.0, 0.0, 0.0};
+}
+
+// Union-find over 0..n-1 with path halving: patches from faces, curves from feature edges.
+class Groups {
+public:
+    explicit Groups(std::size_t n) : parent_(n) {
+        for (std::size_t i = 0; i < n; ++i) parent_[i] = i;
+    }
+    std::size_t find(std::size_t i) {
+        while (parent_[i] != i) i = parent_[i] = parent_[parent_[i]];
+        return i;
+    }
+    void join(std::size_t a, std::size_t b) { parent_[find(a)] = find(b); }
+    // Dense ids 0..k-1 of the groups, by first appearance; returns k.
+    std::size_t number(std::vector<std::int32_t>& id) {
+        id.assign(parent_.size(), -1);
+        std::vector<std::int32_t> of_root(parent_.size(), -1);
+        std::int32_t next = 0;
+        for (std::size_t i = 0; i < parent_.size(); ++i) {
+            auto& root = of_root[find(i)];
+            if (root < 0) root = next++;
+            id[i] = root;
+        }
+        return static_cast<std::size_t>(next);
+    }
+
+private:
+    std::vector<std::size_t> parent_;
+};
+
+// An AABB tree over its own primitives (the tree refers to them, so they live beside it).
+template <class Primitives, class Tree>
+struct Piece {
+    Primitives primitives;
+    Tree tree;
+    void build() {
+        if (primitives.empty()) return;
+        tree.insert(primitives.cbegin(), primitives.cend());
+        tree.accelerate_distance_queries();
+    }
+};
+using Patch = Piece<Triangles, TriangleTree>;
+using Curve = Piece<Segments, SegmentTree>;
+
 }  // namespace
 
 struct BoundarySurface::Trees {
-    Triangles triangles;
-    Segments segments;
-    TriangleTree triangle_tree;
-    SegmentTree segment_tree;
+    std::vector<std::unique_ptr<Patch>> patches;  // by patch id
+    std::vector<std::unique_ptr<Curve>> curves;   // by curve id
+    Patch all_faces;                              // tetrahedra: every boundary face
+    Curve all_edges;                              // triangles: every boundary edge
 };
 
 void SurfaceOptions::validate() const {
@@ -136,22 +185,30 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
         const auto& c = facets[f].corner;
         return cross(minus(original_[c[1]], original_[c[0]]), minus(original_[c[2]], original_[c[0]]));
     };
-    // Each vertex's feature edges, by the vertex at their other end.
+    // Feature edges, each vertex's feature edges by the vertex at their other end, and the faces
+    // joined into patches across the smooth edges.
+    std::vector<std::array<VertexId, 2>> features;
     std::vector<std::vector<VertexId>> along(n);
+    Groups faces(facets.size());
     for (std::size_t i = 0; i < uses.size();) {
         std::size_t j = i + 1;
         while (j < uses.size() && uses[j].key == uses[i].key) ++j;
+        const auto [a, b] = uses[i].key;
+        if (tets && j - i > 2)
+            throw MeshError("the boundary is not a manifold surface: " + std::to_string(j - i) +
+                            " boundary faces meet at the edge of vertices " + std::to_string(a) + " and " +
+                            std::to_string(b) + ", so no surface to slide on is defined there");
         const bool feature = !tets || j - i != 2 || angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
         if (feature) {
-            const auto [a, b] = uses[i].key;
             along[static_cast<std::size_t>(a)].push_back(b);
             along[static_cast<std::size_t>(b)].push_back(a);
-            trees_->segments.emplace_back(Kernel::Point_3(original_[a][0], original_[a][1], original_[a][2]),
-                                          Kernel::Point_3(original_[b][0], original_[b][1], original_[b][2]));
-            ++feature_count_;
+            features.push_back({a, b});
+        } else {
+            faces.join(uses[i].facet, uses[i + 1].facet);
         }
         i = j;
     }
+    feature_count_ = features.size();
     for (std::size_t v = 0; v < n; ++v) {
         if (roles_[v] == BoundaryRole::Interior || along[v].empty()) continue;
         bool corner = along[v].size() != 2;
@@ -163,23 +220,66 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
         }
         roles_[v] = corner ? BoundaryRole::Corner : BoundaryRole::Curve;
     }
-    if (tets)
-        for (const auto& f : facets) {
-            const auto p = [&](VertexId v) { return Kernel::Point_3(original_[v][0], original_[v][1], original_[v][2]); };
-            const Kernel::Triangle_3 t(p(f.corner[0]), p(f.corner[1]), p(f.corner[2]));
-            if (!t.is_degenerate()) trees_->triangles.push_back(t);
+
+    auto point = [&](VertexId v) {
+        const Vec3& x = original_[static_cast<std::size_t>(v)];
+        return Kernel::Point_3(x[0], x[1], x[2]);
+    };
+    direction_.assign(n, Vec3{0.0, 0.0, 0.0});
+    piece_.assign(n, -1);
+    // Patches: a surface vertex's faces all lie in one (none of its edges is a feature edge);
+    // its normal is their area-weighted normal.
+    std::vector<std::int32_t> patch_of;
+    trees_->patches.resize(tets ? faces.number(patch_of) : 0);
+    for (auto& patch : trees_->patches) patch = std::make_unique<Patch>();
+    for (std::size_t f = 0; f < facets.size(); ++f) {
+        if (!tets) break;
+        const auto& c = facets[f].corner;
+        const Vec3 nf = normal(f);
+        for (VertexId v : c)
+            if (roles_[static_cast<std::size_t>(v)] == BoundaryRole::Surface) {
+                auto& d = direction_[static_cast<std::size_t>(v)];
+                for (int k = 0; k < 3; ++k) d[k] += nf[k];
+                piece_[static_cast<std::size_t>(v)] = patch_of[f];
+            }
+        const Kernel::Triangle_3 t(point(c[0]), point(c[1]), point(c[2]));
+        if (t.is_degenerate()) continue;
+        trees_->patches[static_cast<std::size_t>(patch_of[f])]->primitives.push_back(t);
+        trees_->all_faces.primitives.push_back(t);
+    }
+    // Curves: feature edges joined at curve vertices (corners end them); a curve vertex's tangent
+    // bisects its two edges' directions.
+    Groups edges(features.size());
+    std::vector<std::int32_t> first_edge(n, -1);
+    for (std::size_t e = 0; e < features.size(); ++e)
+        for (VertexId v : features[e]) {
+            if (roles_[static_cast<std::size_t>(v)] != BoundaryRole::Curve) continue;
+            auto& first = first_edge[static_cast<std::size_t>(v)];
+            if (first < 0) first = static_cast<std::int32_t>(e);
+            else edges.join(static_cast<std::size_t>(first), e);
         }
-    if (!trees_->triangles.empty()) {
-        trees_->triangle_tree.insert(trees_->triangles.cbegin(), trees_->triangles.cend());
-        trees_->triangle_tree.accelerate_distance_queries();
+    std::vector<std::int32_t> curve_of;
+    trees_->curves.resize(edges.number(curve_of));
+    for (auto& curve : trees_->curves) curve = std::make_unique<Curve>();
+    for (std::size_t e = 0; e < features.size(); ++e) {
+        const auto [a, b] = features[e];
+        const Kernel::Segment_3 s(point(a), point(b));
+        if (s.is_degenerate()) continue;
+        trees_->curves[static_cast<std::size_t>(curve_of[e])]->primitives.push_back(s);
+        if (!tets) trees_->all_edges.primitives.push_back(s);
     }
-    trees_->segments.erase(std::remove_if(trees_->segments.begin(), trees_->segments.end(),
-                                          [](const Kernel::Segment_3& s) { return s.is_degenerate(); }),
-                           trees_->segments.end());
-    if (!trees_->segments.empty()) {
-        trees_->segment_tree.insert(trees_->segments.cbegin(), trees_->segments.cend());
-        trees_->segment_tree.accelerate_distance_queries();
+    for (std::size_t v = 0; v < n; ++v) {
+        if (roles_[v] == BoundaryRole::Surface) direction_[v] = unit(direction_[v]);
+        if (roles_[v] != BoundaryRole::Curve) continue;
+        piece_[v] = curve_of[static_cast<std::size_t>(first_edge[v])];
+        const Vec3 in = unit(minus(original_[v], original_[static_cast<std::size_t>(along[v][0])]));
+        const Vec3 out = unit(minus(original_[static_cast<std::size_t>(along[v][1])], original_[v]));
+        direction_[v] = unit({in[0] + out[0], in[1] + out[1], in[2] + out[2]});
     }
+    for (auto& patch : trees_->patches) patch->build();
+    for (auto& curve : trees_->curves) curve->build();
+    trees_->all_faces.build();
+    trees_->all_edges.build();
 }
 
 int BoundarySurface::freedom(VertexId v) const {
@@ -193,17 +293,43 @@ int BoundarySurface::freedom(VertexId v) const {
 }
 
 Vec3 BoundarySurface::project(VertexId v, const Vec3& p) const {
+    const auto i = static_cast<std::size_t>(v);
     const Kernel::Point_3 q(p[0], p[1], p[2]);
-    auto out = [](const Kernel::Point_3& r) { return Vec3{r.x(), r.y(), r.z()}; };
+    auto nearest = [&](const auto& piece) {
+        if (piece.primitives.empty()) return original_[i];
+        // The vertex's own place in the input is a point of its patch or curve near q: with it
+        // as a first guess, the search prunes most of the tree at once.
+        const auto r = piece.tree.closest_point(q, Kernel::Point_3(original_[i][0], original_[i][1], original_[i][2]));
+        return Vec3{r.x(), r.y(), r.z()};
+    };
     switch (role(v)) {
         case BoundaryRole::Interior: return p;
-        case BoundaryRole::Surface:
-            return trees_->triangles.empty() ? original_[static_cast<std::size_t>(v)] : out(trees_->triangle_tree.closest_point(q));
-        case BoundaryRole::Curve:
-            return trees_->segments.empty() ? original_[static_cast<std::size_t>(v)] : out(trees_->segment_tree.closest_point(q));
-        case BoundaryRole::Corner: return original_[static_cast<std::size_t>(v)];
+        case BoundaryRole::Surface: return nearest(*trees_->patches[static_cast<std::size_t>(piece_[i])]);
+        case BoundaryRole::Curve: return nearest(*trees_->curves[static_cast<std::size_t>(piece_[i])]);
+        case BoundaryRole::Corner: return original_[i];
     }
     return p;
+}
+
+Vec3 BoundarySurface::tangent(VertexId v, const Vec3& d) const {
+    const Vec3& u = direction_[static_cast<std::size_t>(v)];
+    const double along = dot(d, u);
+    switch (role(v)) {
+        case BoundaryRole::Interior: return d;
+        case BoundaryRole::Surface: return {d[0] - along * u[0], d[1] - along * u[1], d[2] - along * u[2]};
+        case BoundaryRole::Curve: return {along * u[0], along * u[1], along * u[2]};
+        case BoundaryRole::Corner: return {0.0, 0.0, 0.0};
+    }
+    return d;
+}
+
+double BoundarySurface::distance(const Vec3& p) const {
+    const Kernel::Point_3 q(p[0], p[1], p[2]);
+    const auto& faces = trees_->all_faces;
+    const auto& edges = trees_->all_edges;
+    if (!faces.primitives.empty()) return std::sqrt(faces.tree.squared_distance(q));
+    if (!edges.primitives.empty()) return std::sqrt(edges.tree.squared_distance(q));
+    return std::numeric_limits<double>::infinity();
 }
 
 std::size_t BoundarySurface::count(BoundaryRole r) const {

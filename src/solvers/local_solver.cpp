@@ -14,6 +14,7 @@
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
+#include "sliding_boundary.hpp"
 #include "stopping.hpp"
 
 namespace paloverde {
@@ -26,6 +27,7 @@ void LocalSolverOptions::validate() const {
     if (!m->has_gradient())
         throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
                           "inverse_condition or edge_ratio");
+    surface.validate();
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
@@ -48,7 +50,9 @@ std::string options_text(const LocalSolverOptions& o) {
         ("untangling", o.untangling == LocalSolverOptions::Untangling::Energy ? "energy" : "volume")
         ("termination", o.termination)("untangle_termination", o.untangle_termination)
         ("coloring", o.coloring == ColoringOrder::SmallestLast ? "smallest_last" : "greedy")
-        ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below);
+        ("ascent_steps", o.ascent_steps)("active_tolerance", o.active_tolerance)("improve_below", o.improve_below)
+        ("boundary", o.boundary == LocalSolverOptions::Boundary::Slide ? "slide" : "fixed")
+        ("feature_angle", o.surface.feature_angle);
     return t.text();
 }
 
@@ -78,10 +82,13 @@ Vec3 min_norm_point(const std::vector<Vec3>& points) {
 // is accepted only if it raises that minimum and leaves no element that was positively oriented
 // non-positive (decided exactly). Returns whether v moved. Only v's coordinates are written,
 // and only v's elements are read: vertices of one color can run this at the same time.
+// A vertex that slides (`sliding`) ascends along its surface or curve: the gradients are
+// projected on its tangent space, and each trial point back onto the surface before it is rated.
 class VertexAscent {
 public:
-    VertexAscent(const SimplexMesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options)
-        : mesh_(mesh), metric_(metric), options_(options) {}
+    VertexAscent(const SimplexMesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
+                 const detail::SlidingBoundary* sliding = nullptr)
+        : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding) {}
 
     bool improve(std::span<double> xyz, VertexId v) {
         const auto elements = mesh_.elements_of(v);
@@ -94,7 +101,8 @@ public:
         for (std::size_t i = 0; i < k; ++i) positive_[i] = element_orientation(mesh_, xyz, elements[i]) > 0;
         double* p = &xyz[3 * static_cast<std::size_t>(v)];
         const double length = detail::local_length(mesh_, xyz, v);
-        double worst = evaluate(xyz, v, true);
+        const bool slides = sliding_ && sliding_->slides(v);
+        double worst = evaluate(xyz, v, true, slides);
         bool moved = false;
         for (int step = 0; step < options_.ascent_steps; ++step) {
             const double tolerance = options_.active_tolerance * std::max(std::abs(worst), 1e-3);
@@ -122,8 +130,10 @@ public:
             bool accepted = false;
             double trial_worst = worst;
             for (int attempt = 0; attempt < 30 && !accepted; ++attempt, alpha *= 0.5) {
-                for (int c = 0; c < 3; ++c) p[c] = origin[c] + alpha * d[c];
-                trial_worst = evaluate(xyz, v, false);
+                Vec3 trial = {origin[0] + alpha * d[0], origin[1] + alpha * d[1], origin[2] + alpha * d[2]};
+                if (slides) trial = sliding_->project(v, trial);
+                for (int c = 0; c < 3; ++c) p[c] = trial[c];
+                trial_worst = evaluate(xyz, v, false, slides);
                 if (!(trial_worst > worst)) continue;
                 accepted = true;
                 for (std::size_t i = 0; i < k && accepted; ++i)
@@ -135,7 +145,7 @@ public:
             }
             moved = true;
             const double gain = trial_worst - worst;
-            worst = evaluate(xyz, v, true);
+            worst = evaluate(xyz, v, true, slides);
             if (gain <= 1e-12 * std::max(std::abs(worst), 1e-3)) break;
         }
         return moved;
@@ -143,8 +153,8 @@ public:
 
 private:
     // Qualities of v's elements into q_ (or trial_q_), and with `gradient` each one's gradient
-    // with respect to v. Returns their minimum.
-    double evaluate(std::span<const double> xyz, VertexId v, bool gradient) {
+    // with respect to v (on its tangent space when it slides). Returns their minimum.
+    double evaluate(std::span<const double> xyz, VertexId v, bool gradient, bool slides) {
         const auto elements = mesh_.elements_of(v);
         const int corners = mesh_.corners();
         double worst = std::numeric_limits<double>::infinity();
@@ -159,6 +169,7 @@ private:
             if (gradient) {
                 q = metric_.value_and_gradient(mesh_.kind(), corners_.data(), all_gradients_.data());
                 gradient_[i] = {all_gradients_[3 * slot], all_gradients_[3 * slot + 1], all_gradients_[3 * slot + 2]};
+                if (slides) gradient_[i] = sliding_->tangent(v, gradient_[i]);
                 q_[i] = q;
             } else {
                 q = metric_.value(mesh_.kind(), corners_.data());
@@ -172,6 +183,7 @@ private:
     const SimplexMesh& mesh_;
     const QualityMetric& metric_;
     const LocalSolverOptions& options_;
+    const detail::SlidingBoundary* sliding_;
     std::vector<double> q_, trial_q_;
     std::vector<Vec3> gradient_, active_;
     std::vector<std::uint8_t> positive_;
@@ -184,7 +196,20 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
+    if (whole_or_part.distributed() && options_.boundary == LocalSolverOptions::Boundary::Slide)
+        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17); run serially "
+                          "(threads work), or keep the boundary fixed");
+    // Built before the run rescales the mesh, so that its reports count the sliding vertices free.
+    std::optional<detail::SlidingBoundary> sliding;
+    if (options_.boundary == LocalSolverOptions::Boundary::Slide) sliding.emplace(whole_or_part.mesh(), options_.surface);
+    Summary summary = improve_part(whole_or_part, sliding ? &*sliding : nullptr);
+    if (sliding) summary.boundary = sliding->motion();
+    return summary;
+}
+
+Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding) {
     detail::SolverRun run(whole_or_part, std::string(name()), options_.metric);
+    if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
     detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
     const SimplexMesh& mesh = whole_or_part.mesh();
@@ -192,7 +217,7 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
     if (!part) {
         Domain domain{mesh, detail::movable_elements(mesh), whole_or_part.reducer(), whole_or_part.halo(),
                       color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
-        return sweep_colors(run, domain, checkpointer);
+        return sweep_colors(run, domain, checkpointer, sliding);
     }
     // The serial smallest-last coloring needs the whole mesh: a part is colored in rounds
     // (Jones & Plassmann), and a rank moves only the vertices it owns.
@@ -226,7 +251,8 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
     return sweep_colors(run, domain, checkpointer);
 }
 
-Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer) {
+Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,
+                                  const detail::SlidingBoundary* sliding) {
     const SimplexMesh& mesh = domain.mesh;
     const Reducer& reducer = domain.reducer;
     Summary& summary = run.summary;
@@ -326,7 +352,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
-                VertexAscent shape(mesh, *metric, options_), untangle(mesh, *volume, options_);
+                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_);
                 detail::VertexEnergy energy(mesh, reference, scale, epsilon);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)
@@ -341,6 +367,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     long inverted = 0;
     std::vector<double> inverted_history, worst_history;  // untangling
     double best = -1e300;                                 // shape: best worst quality so far
+    bool boundary_slides = false;                         // shape, sliding boundary: its second stage
     std::vector<double> best_history;
     auto save = [&](bool untangling, int next_sweep) {
         detail::SolverState state;
@@ -348,7 +375,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                          {"inverted", static_cast<double>(inverted)}, {"best", best},
                          {"best_inverted", static_cast<double>(best_inverted)}, {"best_worst", best_worst},
                          {"now_inverted", static_cast<double>(now_inverted)}, {"now_worst", now_worst},
-                         {"epsilon", epsilon}};
+                         {"epsilon", epsilon}, {"boundary_slides", boundary_slides ? 1.0 : 0.0}};
         state.lists = {{"inverted_history", inverted_history}, {"worst_history", worst_history}, {"best_history", best_history}};
         state.vertex_fields = {{"x", xyz}, {"best_x", best_xyz}};
         checkpointer.save(summary, state, seconds_since(start));
@@ -381,6 +408,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                 for (VertexId w : mesh.element(e)) near[w] = 1.0;
         domain.halo.update(near, 1);
         const int moved = sweep([&](VertexId v, VertexAscent&, VertexAscent&, detail::VertexEnergy& energy) {
+            if (sliding && sliding->slides(v)) return 0;  // untangling keeps the boundary
             bool close = false;
             for (ElementId e : mesh.elements_of(v))
                 for (VertexId w : mesh.element(e)) close = close || near[w] != 0.0;
@@ -409,6 +437,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         now_inverted = static_cast<long>(resume->number("now_inverted"));
         now_worst = resume->number("now_worst");
         epsilon = resume->number("epsilon");
+        boundary_slides = resume->number("boundary_slides") != 0.0;
         inverted_history = resume->list("inverted_history");
         worst_history = resume->list("worst_history");
         best_history = resume->list("best_history");
@@ -436,6 +465,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                                                                    " sweeps with elements still inverted");
             }
             const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
+                if (sliding && sliding->slides(v)) return 0;  // untangling keeps the boundary
                 bool touches_inverted = false;
                 for (ElementId e : mesh.elements_of(v))
                     if (element_orientation(mesh, xyz, e) <= 0) touches_inverted = true;
@@ -474,10 +504,15 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
         if (detail::target_reached(stop, best))
             return done(TerminationReason::TargetReached, "the worst quality reached the target");
+        // A budget spent before the sweeps with the boundary fixed converged leaves it unmoved.
         if (const auto spent = detail::budget_spent(stop, s, reducer, start))
-            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
+            return done(*spent, detail::budget_message(*spent, stop, "sweeps") +
+                                    (sliding && !boundary_slides
+                                         ? "; the boundary did not slide (the sweeps with it fixed had not converged)"
+                                         : ""));
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
+            if (sliding && !boundary_slides && sliding->slides(v)) return 0;
             if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;
             return ascent.improve(xyz, v) ? 1 : 0;
         });
@@ -485,9 +520,19 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         const detail::SweepStats st = record("shape", *metric, count_inverted(xyz), moved, best);
         best = std::max(best, st.worst);
         best_history.push_back(best);
-        if (moved == 0) return done(TerminationReason::Converged, "no vertex can raise its worst element any more");
-        if (detail::StallWindow(stop, best).rose_too_little(best_history))
-            return done(TerminationReason::Converged, "the worst quality stopped improving");
+        const bool converged = moved == 0 || detail::StallWindow(stop, best).rose_too_little(best_history);
+        // With a sliding boundary the sweeps first converge with it fixed, then go on with it
+        // sliding: as no move lowers the worst element, the run ends no lower than with the
+        // boundary fixed (sliding from the start sometimes ends lower: a max-min ascent stops at
+        // the first local maximum on its path).
+        if (converged && sliding && !boundary_slides) {
+            boundary_slides = true;
+            best_history = {best};
+            continue;
+        }
+        if (converged)
+            return done(TerminationReason::Converged, moved == 0 ? "no vertex can raise its worst element any more"
+                                                                 : "the worst quality stopped improving");
     }
 }
 

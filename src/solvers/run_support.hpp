@@ -72,6 +72,8 @@ public:
     }
     // The mesh's coordinates, at unit scale until finish().
     std::span<double> coordinates() { return mesh_.coordinates(); }
+    // Unit scale is the input's coordinates times 2^scale_exponent().
+    int scale_exponent() const { return exponent_; }
 
     // The checks every solver makes before moving anything: a finished Summary when there is
     // nothing to move (no elements, no free vertex, no element with one); a MeshError for a

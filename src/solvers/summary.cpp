@@ -38,6 +38,15 @@ std::string Summary::brief_report() const {
         << std::setprecision(6) << worst_before << " -> " << worst_after << ", inverted " << before.inverted << " -> "
         << after.inverted;
     if (!message.empty()) out << "\n  " << message;
+    if (boundary) {
+        const double change = boundary->volume_before != 0.0
+                                  ? (boundary->volume_after - boundary->volume_before) / std::abs(boundary->volume_before)
+                                  : 0.0;
+        out << "\n  boundary: " << boundary->moved << " of " << boundary->sliding
+            << " sliding vertices moved; largest distance from the input's boundary " << std::setprecision(3)
+            << boundary->largest_distance << " of the bounding box diagonal; volume " << std::setprecision(9)
+            << boundary->volume_before << " -> " << boundary->volume_after << " (" << std::setprecision(3) << change << " relative)";
+    }
     return out.str();
 }
 
@@ -82,6 +91,12 @@ std::string Summary::to_json() const {
                      {"mean_quality", r.mean_quality}, {"inverted", r.inverted}, {"mu", r.mu}, {"t", r.t},
                      {"objective", r.objective}, {"step", r.step}, {"gain", r.gain}, {"moved", r.moved}, {"seconds", r.seconds}});
     j["history"] = std::move(h);
+    if (boundary)
+        j["boundary"] = {{"sliding", boundary->sliding},
+                         {"moved", boundary->moved},
+                         {"largest_distance", boundary->largest_distance},
+                         {"volume_before", boundary->volume_before},
+                         {"volume_after", boundary->volume_after}};
     return j.dump(2);
 }
 

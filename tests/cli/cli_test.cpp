@@ -280,4 +280,35 @@ BOOST_AUTO_TEST_CASE(untangle_only_works_for_global_and_local) {
     }
 }
 
+// --boundary slide: the local smoother slides the boundary and the summary says how far it went;
+// the other methods keep the boundary fixed and say so; a bad mode or angle is a usage error.
+BOOST_AUTO_TEST_CASE(boundary_slide_with_the_local_smoother) {
+    const pv::test::ScratchDir dir("cli_slide");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    const auto out = quoted(dir / "out.vtk");
+    const auto result = run_cli("improve -q " + quoted(input) + " -o " + out +
+                                " --method local --boundary slide --feature-angle 35 --summary " + quoted(dir / "s.json"));
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    const auto s = nlohmann::json::parse(read_text(dir / "s.json"));
+    const auto& motion = s["steps"][0]["summary"]["boundary"];
+    BOOST_TEST(motion["moved"].get<long>() > 0);
+    BOOST_TEST(motion["largest_distance"].get<double>() <= 1e-9);
+    BOOST_TEST(motion["volume_before"].get<double>() > 0.0);
+    const auto full = run_cli("improve " + quoted(input) + " -o " + out + " --method local --boundary slide");
+    BOOST_TEST(has(full.output, "sliding vertices moved; largest distance from the input's boundary"), full.output);
+    // The config the flags stand for.
+    const auto config = run_cli("improve " + quoted(input) + " -o " + out + " --method local --boundary slide --print-config");
+    BOOST_TEST(has(config.output, "boundary: slide"), config.output);
+    for (const std::string flags : {"--boundary slide", "--method global --boundary slide", "--method laplace --feature-angle 30"}) {
+        const auto refused = run_cli("improve " + quoted(input) + " -o " + out + " " + flags);
+        BOOST_TEST(refused.exit_code == 2, flags);
+        BOOST_TEST(has(refused.output, "only the local smoother slides boundary vertices"), refused.output);
+    }
+    BOOST_TEST(run_cli("improve -q " + quoted(input) + " -o " + out + " --boundary fixed --iterations 2").exit_code == 0);
+    for (const std::string flags : {"--boundary sideways", "--feature-angle 190"}) {
+        const auto refused = run_cli("improve " + quoted(input) + " -o " + out + " --method local " + flags);
+        BOOST_TEST(refused.exit_code == 2, flags << ": " << refused.output);
+    }
+}
+
 BOOST_AUTO_TEST_SUITE_END()

@@ -89,6 +89,42 @@ BOOST_AUTO_TEST_CASE(moved_boundary_vertices_project_back_where_they_may_be) {
     BOOST_TEST(checked[3] == 8);
 }
 
+// Moves along the surface: a face vertex keeps the part of a move within its face's plane, an edge
+// vertex the part along its edge, a corner none. A face vertex projects onto its own face even
+// where another face of the boundary is nearer: it never cuts across a crease.
+BOOST_AUTO_TEST_CASE(moves_stay_on_the_vertex_own_face_edge_or_corner) {
+    const auto mesh = bundled_cube();
+    const pv::BoundarySurface surface(mesh);
+    const pv::Vec3 move{0.1, 0.2, 0.3};
+    int checked[4] = {0, 0, 0, 0};
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const pv::Vec3 p = at(mesh, v);
+        const auto role = surface.role(v);
+        const pv::Vec3 t = surface.tangent(v, move);
+        BOOST_TEST_CONTEXT("vertex " << v) {
+            for (int c = 0; c < 3; ++c) {
+                const bool at_face = std::abs(p[c]) < 1e-12 || std::abs(p[c] - 1.0) < 1e-12;
+                const double expected = role == pv::BoundaryRole::Corner || (at_face && role != pv::BoundaryRole::Interior)
+                                            ? 0.0
+                                            : move[c];
+                BOOST_TEST(t[c] == expected, boost::test_tools::tolerance(1e-12));
+            }
+            // A face vertex at x = 0 taken to a point just inside the face y = 0: the nearest
+            // boundary point is on y = 0, but the vertex's own face is x = 0.
+            if (role == pv::BoundaryRole::Surface && std::abs(p[0]) < 1e-12) {
+                const pv::Vec3 q = surface.project(v, {0.3, 0.001, p[2]});
+                BOOST_TEST(std::abs(q[0]) < 1e-12);
+                BOOST_TEST(q[1] == 0.001, boost::test_tools::tolerance(1e-9));
+            }
+        }
+        ++checked[static_cast<int>(role)];
+    }
+    BOOST_TEST(checked[static_cast<int>(pv::BoundaryRole::Surface)] == 150);
+    // Distances to the input's boundary: zero on it, the depth inside.
+    BOOST_TEST(surface.distance({0.5, 0.5, 0.0}) == 0.0, boost::test_tools::tolerance(1e-12));
+    BOOST_TEST(surface.distance({0.5, 0.4, 0.3}) == 0.3, boost::test_tools::tolerance(1e-12));
+}
+
 // A planar triangle mesh: its boundary is a curve, with corners where it turns sharply.
 BOOST_AUTO_TEST_CASE(a_square_of_triangles_has_four_corners) {
     // 3 x 3 vertices on the unit square, 8 triangles.

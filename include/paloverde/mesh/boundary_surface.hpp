@@ -10,9 +10,13 @@
 // - A boundary vertex on no feature edge lies on the surface (2 degrees of freedom); on exactly
 //   two whose directions turn by at most the feature angle, on a curve (1); otherwise (one, three
 //   or more feature edges, or a sharp turn) it is a corner and stays where it is (0).
-// - project() brings a moved boundary vertex back: a surface vertex to the nearest point of the
-//   boundary triangulation, a curve vertex to the nearest point of the feature edges, a corner to
-//   its own place.
+// - The surface falls into patches (boundary faces joined across edges that are not feature
+//   edges) and the feature edges into curves (joined at curve vertices, ending at corners).
+//   project() brings a moved boundary vertex back onto its own patch or curve only: a vertex next
+//   to a crease cannot cut across it onto the other side, nor jump to a nearby piece of the
+//   boundary it is not part of. A corner goes back to its own place.
+// - A tet mesh's boundary edge on more than two boundary faces (a non-manifold boundary) leaves
+//   the surface undefined there, and is refused.
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -44,6 +48,12 @@ public:
     int freedom(VertexId v) const;
     // Where vertex v may be, nearest to p (see above); an interior vertex's p itself.
     Vec3 project(VertexId v, const Vec3& p) const;
+    // The part of a move d that keeps vertex v on its patch to first order: d less its component
+    // along the surface's normal at v, d's component along the curve's tangent at v, nothing at a
+    // corner, d itself inside. (From the input's boundary; project() corrects what is left.)
+    Vec3 tangent(VertexId v, const Vec3& d) const;
+    // Distance from p to the input's boundary triangulation (its boundary edges for triangles).
+    double distance(const Vec3& p) const;
 
     std::size_t boundary_faces() const { return face_count_; }  // triangles (edges for triangle meshes)
     std::size_t feature_edges() const { return feature_count_; }
@@ -55,6 +65,10 @@ private:
     ElementKind kind_;
     std::vector<BoundaryRole> roles_;
     std::vector<Vec3> original_;  // each vertex's place in the input (corners stay there)
+    // Surface vertices: the unit normal of their faces at the input; curve vertices: the unit
+    // tangent of their curve; zero otherwise.
+    std::vector<Vec3> direction_;
+    std::vector<std::int32_t> piece_;  // surface vertices: their patch; curve vertices: their curve
     std::size_t face_count_ = 0, feature_count_ = 0;
     double diagonal_ = 0.0;
     std::unique_ptr<Trees> trees_;

@@ -7,6 +7,7 @@
 // lowering the regularized energy of its elements (or raising their smallest signed volume).
 #include <string>
 
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/solver.hpp"
@@ -18,6 +19,7 @@ namespace paloverde {
 namespace detail {
 class SolverRun;
 class Checkpointer;
+class SlidingBoundary;
 }
 
 struct LocalSolverOptions {
@@ -43,6 +45,12 @@ struct LocalSolverOptions {
     // moves trade a patch's good elements for its worst one, so moving every vertex lowers the
     // mean quality (by ~10% on tire) for no gain in the worst; 1 or more moves them all.
     double improve_below = 0.1;
+    // Boundary vertices: fixed (the fixed flags decide), or slide: in the shape sweeps they move
+    // on the input's boundary, along feature curves, corners fixed (mesh/boundary_surface.hpp;
+    // docs/local_solver.md). Untangling keeps them where they are.
+    enum class Boundary { Fixed, Slide };
+    Boundary boundary = Boundary::Fixed;
+    SurfaceOptions surface;          // with slide: the feature angle
     int threads = 0;                 // 0: OpenMP's default; results do not depend on it
     CheckpointOptions checkpoint;    // periodic checkpoints (at sweep boundaries), resuming
 
@@ -70,7 +78,10 @@ private:
         VertexColoring coloring;
         MetricScale scale;
     };
-    Summary sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer);
+    // The run on the whole mesh or a part, once the sliding boundary (if any) is built.
+    Summary improve_part(MeshPart part, detail::SlidingBoundary* sliding);
+    Summary sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,
+                         const detail::SlidingBoundary* sliding = nullptr);
 
     LocalSolverOptions options_;
 };

@@ -1,5 +1,6 @@
 #pragma once
 // What a solver run did and why it stopped, in the spirit of Ceres' Solver::Summary.
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -38,6 +39,17 @@ struct IterationRecord {
     double seconds = 0.0;
 };
 
+// With sliding boundary vertices (boundary: slide): how far the boundary moved, measured on
+// the mesh handed back, against the input's boundary.
+struct BoundaryMotion {
+    long sliding = 0;  // boundary vertices that may slide (on a surface patch or a feature curve)
+    long moved = 0;    // of them, those that moved
+    // Largest distance of a boundary vertex from the input's boundary triangulation, over the
+    // input's bounding-box diagonal: 0 up to rounding when every move stayed on the surface.
+    double largest_distance = 0.0;
+    double volume_before = 0.0, volume_after = 0.0;  // the mesh's volume (area for triangles)
+};
+
 struct Summary {
     std::string solver;
     TerminationReason reason = TerminationReason::NothingToMove;
@@ -53,6 +65,7 @@ struct Summary {
     // every metric, for a full report of the mesh).
     QualityReport before, after;
     std::vector<IterationRecord> history;
+    std::optional<BoundaryMotion> boundary;  // runs with sliding boundary vertices only
 
     // The mesh handed back has no inverted element (decided exactly).
     bool valid() const { return after.inverted == 0; }

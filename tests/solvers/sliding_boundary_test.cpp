@@ -1,0 +1,182 @@
+// Sliding boundary vertices (boundary: slide, issue 17) in the local smoother: every boundary
+// vertex ends on the input's boundary (flat faces in their plane, feature edges on the edge,
+// corners in place), the worst element over all elements ends no lower than with the boundary
+// fixed, nothing inverts, and the threads do not change the result.
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <utility>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "support/solver_checks.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+using paloverde::test::check_never_worse;
+using paloverde::test::shared_mesh;
+
+namespace {
+
+pv::LocalSolverOptions sliding(int threads = 1) {
+    pv::LocalSolverOptions options;
+    options.boundary = pv::LocalSolverOptions::Boundary::Slide;
+    options.threads = threads;
+    return options;
+}
+
+// The smallest quality of a metric over every element, boundary ones too.
+double worst_of_all(const pv::Summary& summary, const std::string& metric) {
+    return summary.after.metric(metric)->all.min;
+}
+
+// The bundled example: a 6 x 6 x 6 cube of tets, tangled inside. Untangling keeps the boundary;
+// the shape sweeps then slide it.
+pv::SimplexMesh tangled_cube() {
+    return pv::read_mesh(std::filesystem::path(PALOVERDE_SOURCE_DIR) / "examples/data/tangled_cube.vtk").mesh;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(sliding_boundary)
+
+// The cube's faces are flat and its edges straight: a face vertex keeps the coordinate of its
+// face's plane, an edge vertex the two of its edge, a corner all three, to 1e-9 of the diagonal;
+// the volume stays.
+BOOST_AUTO_TEST_CASE(cube_faces_stay_flat_edges_straight_and_corners_in_place) {
+    const auto input = tangled_cube();
+    const pv::BoundarySurface surface(input);
+    const double tolerance = 1e-9 * surface.bounding_box_diagonal();
+    auto fixed_mesh = input, slide_mesh = input;
+    pv::LocalSolverOptions fixed_options = sliding();
+    fixed_options.boundary = pv::LocalSolverOptions::Boundary::Fixed;
+    const auto fixed = pv::LocalSolver(fixed_options).improve(fixed_mesh);
+    const auto slide = pv::LocalSolver(sliding()).improve(slide_mesh);
+    BOOST_TEST(slide.valid());
+    check_never_worse(slide);
+    BOOST_REQUIRE(slide.boundary.has_value());
+    BOOST_TEST(slide.boundary->sliding == 210);  // 150 on the faces, 60 on the edges
+    BOOST_TEST(slide.boundary->moved > 0);
+    BOOST_TEST(slide.boundary->largest_distance <= 1e-9);
+    BOOST_TEST(std::abs(slide.boundary->volume_after - slide.boundary->volume_before) <= 1e-12 * slide.boundary->volume_before);
+    BOOST_TEST(worst_of_all(slide, "aspect_ratio") >= worst_of_all(fixed, "aspect_ratio"));
+    // The cube spans [lo, hi] in each coordinate: a vertex on the boundary has some at lo or hi.
+    const auto x = std::as_const(slide_mesh).coordinates();
+    const auto x0 = input.coordinates();
+    pv::Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v)
+        for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], x0[3 * v + c]), hi[c] = std::max(hi[c], x0[3 * v + c]);
+    int moved[4] = {0, 0, 0, 0};
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v) {
+        const auto role = surface.role(v);
+        if (role == pv::BoundaryRole::Interior) continue;
+        int on_side = 0;
+        for (int c = 0; c < 3; ++c) {
+            const bool side = std::abs(x0[3 * v + c] - lo[c]) <= tolerance || std::abs(x0[3 * v + c] - hi[c]) <= tolerance;
+            if (!side) continue;
+            ++on_side;
+            BOOST_TEST(std::abs(x[3 * v + c] - x0[3 * v + c]) <= tolerance, "vertex " << v << " left its face");
+        }
+        BOOST_TEST(on_side == (role == pv::BoundaryRole::Surface ? 1 : role == pv::BoundaryRole::Curve ? 2 : 3));
+        bool changed = false;
+        for (int c = 0; c < 3; ++c) changed = changed || x[3 * v + c] != x0[3 * v + c];
+        moved[static_cast<int>(role)] += changed ? 1 : 0;
+        if (role == pv::BoundaryRole::Corner) BOOST_TEST(!changed);
+    }
+    BOOST_TEST(moved[static_cast<int>(pv::BoundaryRole::Surface)] > 0);
+    BOOST_TEST(moved[static_cast<int>(pv::BoundaryRole::Curve)] > 0);
+}
+
+// Curved and faceted meshes: every boundary vertex on the input's boundary triangulation (or its
+// boundary edges, for triangles), the worst of all elements no lower than with the boundary fixed.
+BOOST_DATA_TEST_CASE(boundary_vertices_end_on_the_input_boundary,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
+                                  "mesquite/tris/tri_20258.vtk"}),
+                     name) {
+    const auto input = shared_mesh(name);
+    const pv::BoundarySurface surface(input);
+    auto fixed_mesh = input, slide_mesh = input;
+    pv::LocalSolverOptions fixed_options = sliding();
+    fixed_options.boundary = pv::LocalSolverOptions::Boundary::Fixed;
+    const auto fixed = pv::LocalSolver(fixed_options).improve(fixed_mesh);
+    const auto slide = pv::LocalSolver(sliding()).improve(slide_mesh);
+    BOOST_TEST_MESSAGE(name << ": worst aspect ratio of all elements, fixed " << worst_of_all(fixed, "aspect_ratio")
+                            << ", slide " << worst_of_all(slide, "aspect_ratio"));
+    BOOST_TEST(slide.valid());
+    check_never_worse(slide);
+    BOOST_TEST(worst_of_all(slide, "aspect_ratio") >= worst_of_all(fixed, "aspect_ratio"));
+    BOOST_TEST(pv::count_orientations(slide_mesh).inverted == 0);
+    BOOST_TEST(pv::count_orientations(slide_mesh).degenerate == 0);
+    BOOST_REQUIRE(slide.boundary.has_value());
+    BOOST_TEST(slide.boundary->moved > 0);
+    BOOST_TEST(slide.boundary->largest_distance <= 1e-9);
+    const double tolerance = 1e-9 * surface.bounding_box_diagonal();
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v) {
+        if (surface.role(v) == pv::BoundaryRole::Interior) continue;
+        BOOST_TEST(surface.distance(slide_mesh.point(v)) <= tolerance, "vertex " << v);
+        if (surface.role(v) == pv::BoundaryRole::Corner)
+            for (int c = 0; c < 3; ++c) BOOST_TEST(slide_mesh.point(v)[c] == input.point(v)[c]);
+    }
+    // The fixed flags the mesh came with are its own again.
+    BOOST_TEST(std::equal(slide_mesh.fixed().begin(), slide_mesh.fixed().end(), input.fixed().begin()));
+}
+
+BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides) {
+    auto one = shared_mesh("mesquite/tets/tire.vtk"), two = one;
+    pv::LocalSolver(sliding(1)).improve(one);
+    pv::LocalSolver(sliding(2)).improve(two);
+    BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
+}
+
+// Past the cube's 90-degree creases (feature angle 95) the cube is one smooth surface: its edge
+// vertices may cut across them, and the volume shrinks; at the default angle it does not.
+BOOST_AUTO_TEST_CASE(the_feature_angle_decides_which_creases_stay) {
+    auto kept = tangled_cube(), cut = kept;
+    auto blunt = sliding();
+    blunt.surface.feature_angle = 95.0;
+    const auto at_default = pv::LocalSolver(sliding()).improve(kept);
+    const auto at_95 = pv::LocalSolver(blunt).improve(cut);
+    BOOST_TEST(at_default.boundary->volume_after == at_default.boundary->volume_before,
+               boost::test_tools::tolerance(1e-12));
+    BOOST_TEST(at_95.boundary->volume_after < at_95.boundary->volume_before * (1.0 - 1e-6));
+    BOOST_TEST(at_95.boundary->largest_distance <= 1e-9);  // still on the input's boundary faces
+    BOOST_TEST(at_95.boundary->sliding == 218);            // every boundary vertex, corners too
+}
+
+// The boundary slides once the sweeps with it fixed converge; a budget spent before says so.
+BOOST_AUTO_TEST_CASE(a_budget_spent_before_the_boundary_slides_says_so) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    auto options = sliding();
+    options.termination.max_iterations = 3;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    BOOST_TEST(summary.boundary->moved == 0);
+    BOOST_TEST(summary.message.find("the boundary did not slide") != std::string::npos, summary.message);
+}
+
+BOOST_AUTO_TEST_CASE(bad_feature_angles_are_refused) {
+    auto options = sliding();
+    for (double angle : {0.0, -5.0, 180.0, std::nan("")}) {
+        options.surface.feature_angle = angle;
+        BOOST_CHECK_THROW(pv::LocalSolver{options}, pv::OptionError);
+    }
+}
+
+// Two tets sharing only an edge: four boundary faces meet there, and no surface is defined.
+BOOST_AUTO_TEST_CASE(a_non_manifold_boundary_is_refused) {
+    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron,
+                         {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, -1, 0.5, 0.5, -2},
+                         {0, 1, 2, 3, 1, 0, 4, 5});
+    auto options = sliding();
+    try {
+        pv::LocalSolver(options).improve(mesh);
+        BOOST_FAIL("a non-manifold boundary was accepted");
+    } catch (const pv::MeshError& e) {
+        BOOST_TEST(std::string(e.what()).find("not a manifold surface") != std::string::npos, e.what());
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
