@@ -673,7 +673,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
             const bool out_of_budget =
                 result.reason == TerminationReason::IterationLimit || result.reason == TerminationReason::TimeLimit;
             if (work.distributed() && !out_of_budget && round < options.local_untangle_rounds && !colors)
-                colors = color_vertices(work.mesh(), work.mesh().global_ids(), work.owned(), work.halo(), work.reducer());
+                colors = color_vertices(*work.distributed());
             if (out_of_budget || round == options.local_untangle_rounds ||
                 local_untangle_sweeps(work, colors ? &*colors : nullptr, xyz, *hybrid, summary, observer, start) == 0) {
                 work.copy_back(xyz);

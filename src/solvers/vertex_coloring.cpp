@@ -114,8 +114,10 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
     return true;
 }
 
-VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId> ids, std::span<const std::uint8_t> owned,
-                              const Halo& halo, const Reducer& reducer) {
+VertexColoring color_vertices(const DistributedMesh& part) {
+    const SimplexMesh& mesh = part.mesh;
+    const auto ids = mesh.global_ids();
+    const Reducer& reducer = part.reducer();
     const VertexId n = mesh.num_vertices();
     // SplitMix64 of the id: a priority that looks random (few rounds) yet is the same on every
     // rank and in every numbering.
@@ -133,7 +135,7 @@ VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId>
         chosen.clear();
         double uncolored = 0.0;
         for (VertexId v = 0; v < n; ++v) {
-            if (!mesh.can_move(v) || !owned[v] || color[v] >= 0.0) continue;
+            if (!mesh.can_move(v) || part.vertex_owner[v] != part.rank || color[v] >= 0.0) continue;
             uncolored += 1.0;
             bool first = true;
             used.assign(1, 0);
@@ -154,7 +156,7 @@ VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId>
         }
         if (reducer.total(uncolored) == 0.0) break;
         for (const auto& [v, c] : chosen) color[v] = c;
-        halo.update(color, 1);
+        part.halo().update(color, 1);
     }
     VertexColoring result;
     result.color.resize(static_cast<std::size_t>(n));
@@ -165,12 +167,6 @@ VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId>
     }
     result.count = static_cast<int>(reducer.max(count));
     return result;
-}
-
-VertexColoring color_vertices(const DistributedMesh& part) {
-    std::vector<std::uint8_t> owned(static_cast<std::size_t>(part.mesh.num_vertices()));
-    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
-    return color_vertices(part.mesh, part.mesh.global_ids(), owned, part.halo(), part.reducer());
 }
 
 }  // namespace paloverde

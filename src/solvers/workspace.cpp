@@ -24,7 +24,6 @@ constexpr GlobalId kGradientBlocks = 64;
 Workspace::Workspace(MeshPart part, bool renumber)
     : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
     if (part_) {
-        distributed_ = true;
         reducer_ = &part.reducer();
         halo_ = &part.halo();
         const VertexId n = mesh_.num_vertices();
@@ -163,7 +162,7 @@ void Workspace::build_lanes(std::span<const GlobalId> element_order, GlobalId gl
 }
 
 std::span<const double> Workspace::counted(std::span<const double> quality, std::vector<double>& buffer) const {
-    if (!distributed_) return quality;
+    if (!part_) return quality;
     buffer.resize(counted_.size());
     for (std::size_t i = 0; i < counted_.size(); ++i) buffer[i] = quality[counted_[i]];
     return buffer;

@@ -44,7 +44,9 @@ public:
     const MetricScale& scale() const { return scale_; }
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
-    bool distributed() const { return distributed_; }
+    // The DistributedMesh of a distributed run's part (its elements in the workspace's order until
+    // the workspace is destroyed); nullptr serially.
+    DistributedMesh* distributed() const { return part_; }
     // Per movable element, as metric scale: the mean size of its corners' neighbourhoods.
     std::vector<double> local_reference_volumes() const;
 
@@ -90,7 +92,6 @@ private:
     std::vector<VertexId> ghosts_;
     std::vector<ElementId> counted_;   // movable elements counted here; empty when all are
     double global_movable_ = 0.0;
-    bool distributed_ = false;
     Reducer serial_reducer_;
     Halo serial_halo_;
     const Reducer* reducer_ = &serial_reducer_;

@@ -16,9 +16,11 @@
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/partition.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/wrappers.hpp"
 #include "support/solver_checks.hpp"
 #include "world.hpp"
 
@@ -76,6 +78,27 @@ BOOST_AUTO_TEST_CASE(every_vertex_owned_once_every_element_counted_once) {
     for (std::size_t i = 1; i < part.schedule().partners.size(); ++i)
         BOOST_TEST(part.schedule().partners[i].color != part.schedule().partners[i - 1].color);
     if (ranks() == 1) BOOST_TEST(part.schedule().partners.empty());
+}
+
+// The view solvers and queues take: a part owns and counts what its DistributedMesh says; the
+// whole mesh of a serial run owns and counts everything, with reductions that do nothing.
+BOOST_AUTO_TEST_CASE(a_mesh_part_owns_and_counts_as_its_mesh_says) {
+    auto whole = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    auto distributed = scatter(whole);
+    const pv::MeshPart part(distributed);
+    BOOST_TEST(&part.mesh() == &distributed.mesh);
+    BOOST_TEST(part.distributed() == &distributed);
+    long owned = 0, counted = 0;
+    for (pv::VertexId v = 0; v < part.mesh().num_vertices(); ++v) owned += part.owns(v);
+    for (pv::ElementId e = 0; e < part.mesh().num_elements(); ++e) counted += part.counts(e);
+    BOOST_TEST(part.reducer().total(static_cast<double>(owned)) == whole.num_vertices());
+    BOOST_TEST(part.reducer().total(static_cast<double>(counted)) == whole.num_elements());
+
+    const pv::MeshPart serial(whole);
+    BOOST_TEST(serial.distributed() == nullptr);
+    BOOST_TEST(serial.owns(whole.num_vertices() - 1));
+    BOOST_TEST(serial.counts(whole.num_elements() - 1));
+    BOOST_TEST(serial.reducer().total(2.5) == 2.5);
 }
 
 BOOST_AUTO_TEST_CASE(ghosts_receive_their_owners_values_both_ways) {
@@ -543,6 +566,33 @@ BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
 BOOST_AUTO_TEST_SUITE_END()
 
 BOOST_AUTO_TEST_SUITE(distributed_run)
+
+// One queue, one path: the wrapper a serial run uses, run on the part, ends on the serial mesh
+// with the same steps.
+BOOST_AUTO_TEST_CASE(a_queue_runs_on_a_part_as_on_the_whole_mesh) {
+    const auto input = pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.05, 2);
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 8;
+    options.untangle_termination.max_iterations = 150;
+    pv::SimplexMesh serial = input;
+    const pv::QueueResult serial_result = pv::wrappers::untangle_then_improve(options).run(serial);
+
+    pv::SimplexMesh gathered = input;
+    auto part = scatter(input);
+    const pv::QueueResult result = pv::wrappers::untangle_then_improve(options).run(part);
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    BOOST_TEST(result.success == serial_result.success);
+    BOOST_REQUIRE(result.steps.size() == serial_result.steps.size());
+    for (std::size_t i = 0; i < result.steps.size(); ++i) {
+        BOOST_TEST(result.steps[i].label == serial_result.steps[i].label);
+        if (const auto* summary = std::get_if<pv::Summary>(&result.steps[i].outcome))
+            BOOST_TEST(summary->iterations == std::get<pv::Summary>(serial_result.steps[i].outcome).iterations);
+        else
+            BOOST_TEST(std::get<pv::QualityReport>(result.steps[i].outcome).inverted ==
+                       std::get<pv::QualityReport>(serial_result.steps[i].outcome).inverted);
+    }
+    if (rank() == 0) BOOST_TEST(relative_difference(gathered, serial) <= 1e-10);
+}
 
 // The command line's path (config::run): read on rank 0, solve on all, gather and write one file.
 // On one rank the run is the serial one, the one-part case of the same path.

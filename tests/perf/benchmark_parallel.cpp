@@ -21,6 +21,7 @@
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
+#include "parallel/collective.hpp"
 
 namespace pv = paloverde;
 
@@ -66,15 +67,7 @@ int main(int argc, char** argv) {
         // Rank 0 reads and splits the mesh, as `paloverde run` does (a failure there stops every rank).
         auto start = Clock::now();
         pv::SimplexMesh whole;
-        std::string failure;
-        if (rank == 0) try {
-                whole = pv::read_mesh(argv[1]).mesh;
-            } catch (const std::exception& e) {
-                failure = e.what();
-            }
-        int read = failure.empty() ? 1 : 0;
-        MPI_Bcast(&read, 1, MPI_INT, 0, MPI_COMM_WORLD);
-        if (!read) throw pv::Error(rank == 0 ? failure : "rank 0 could not read the mesh");
+        pv::parallel::together(MPI_COMM_WORLD, rank == 0, [&] { whole = pv::read_mesh(argv[1]).mesh; });
         double read_seconds = seconds_since(start);
         MPI_Bcast(&read_seconds, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         auto part = pv::DistributedMesh::scatter(MPI_COMM_WORLD, rank == 0 ? &whole : nullptr, distribute);

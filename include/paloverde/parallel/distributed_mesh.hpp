@@ -45,8 +45,7 @@ struct ExchangeSchedule {
 struct DistributeOptions {
     ExchangeMode exchange = ExchangeMode::Colored;
     // read_pieces: the pieces' orientation convention, decided over all of them together (one
-    // total signed volume, summed across ranks), so that every rank flips alike. (A whole file
-    // read by improve_distributed is read with it too.)
+    // total signed volume, summed across ranks), so that every rank flips alike.
     OrientationMode orientation = OrientationMode::Auto;
     void validate() const {}
 };

@@ -23,7 +23,8 @@ public:
     SimplexMesh& mesh() const { return *mesh_; }
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
-    // This process moves vertex v (computes its gradient); other processes hold it as a ghost.
+    // This process owns vertex v: computes its gradient and moves it (if it can move); other
+    // processes hold it as a ghost.
     bool owns(VertexId v) const;
     // This process counts element e in sums over the whole mesh (each element has one counter).
     bool counts(ElementId e) const;

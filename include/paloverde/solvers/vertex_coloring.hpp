@@ -11,8 +11,6 @@
 namespace paloverde {
 
 class DistributedMesh;
-class Halo;
-class Reducer;
 
 enum class ColoringOrder {
     Greedy,       // first fit in vertex id order
@@ -33,11 +31,6 @@ VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order = Col
 // neighbours do not have; priorities are a hash of the global id). Every rank learns the colors
 // of its ghosts; the colors do not depend on the number of ranks. `count` is global.
 VertexColoring color_vertices(const DistributedMesh& part);
-// The same from its pieces: `ids` give the priorities (global ids), `owned` the vertices this
-// process colors; the halo brings the others' colors, the reducer makes the rounds and `count`
-// global. (For solvers that hold a distributed part's mesh but not the part.)
-VertexColoring color_vertices(const SimplexMesh& mesh, std::span<const GlobalId> ids, std::span<const std::uint8_t> owned,
-                              const Halo& halo, const Reducer& reducer);
 
 // Whether every free vertex has a color in [0, count), every fixed vertex -1, and no element
 // holds two free vertices of the same color.
