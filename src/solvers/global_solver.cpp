@@ -449,20 +449,16 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             return end(TerminationReason::GradientVanished, "the objective's gradient vanished");
         double decrement = 0.0;
         if (newton) {
-            const auto step = newton_.solve(metric_, x_, q_, curvature_weight_, curvature_, gradient_, newton_damping_,
+            // CG to a tenth of the preconditioned residual (a usual forcing term; not tuned).
+            const auto step = newton_.solve(metric_, objective_, x_, q_, curvature_weight_, curvature_, gradient_, newton_damping_,
                                             0.1, options_.newton_cg_iterations, direction_);
             summary_.quality_passes += step.products;
             summary_.gradient_passes += step.products;
             decrement = step.decrement;
-        } else if (precondition) {
-            apply_preconditioner();
-        } else {
-            preconditioned_ = gradient_;
-        }
-
-        if (newton) {
             if (!(decrement > 0.0)) direction_ = gradient_;
         } else {
+            if (precondition) apply_preconditioner();
+            else preconditioned_ = gradient_;
             // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
             // changes (mu) or the direction stops ascending.
             double beta = 0.0;

@@ -1,18 +1,21 @@
 #pragma once
 // Truncated Newton directions for the log-barrier's shape phase (issue 16). At fixed mu, the
 // barrier F(x) = max_t [t + mu sum_i log(q_i - t)] has (with t following x, by the envelope
-// theorem) the Hessian
-//     sum_i w_i Hess q_i  -  [ sum_i c_i g_i g_i^T  -  u u^T / C ],
+// theorem) the Hessian -A,
+//     A = -sum_i w_i Hess q_i + sum_i c_i g_i g_i^T - u u^T / C,
 // with w_i = mu/(q_i - t), c_i = mu/(q_i - t)^2, g_i = grad q_i, u = sum c_i g_i, C = sum c_i.
-// The bracket (Gauss-Newton, with t's own move) is positive semidefinite; its product with a
-// vertex field v is one gradient pass with the element weights c_i (g_i.v - s), s = u.v / C,
-// where g_i.v comes from a forward difference of the qualities (one quality pass): the existing
-// block kernels and lane sums, so the product is the same bit for bit at any thread and rank
-// count. The direction solves (A + Lambda) d = gradient by conjugate gradients preconditioned with
-// the per-vertex 3x3 blocks of A, Lambda a Levenberg-Marquardt damping per vertex.
+// A product A v is a forward difference of the gradient pass along v (one quality pass for the
+// weights, one gradient pass) plus t's move: the existing block kernels and lane sums, so it is
+// the same bit for bit at any thread and rank count. Without the first term (Gauss-Newton) the
+// worst elements' own curvature is lost, and with it the length of the steps that raise them
+// (measured: docs/global_solver.md). The direction solves (A + Lambda) d = gradient by conjugate
+// gradients preconditioned with the per-vertex 3x3 blocks of sum c_i g_i g_i^T, Lambda a
+// Marquardt damping per vertex, and stops at non-positive curvature (A is indefinite where the
+// quality is not concave).
 #include <span>
 #include <vector>
 
+#include "paloverde/objectives/objective_function.hpp"
 #include "workspace.hpp"
 
 namespace paloverde::detail {
@@ -43,8 +46,9 @@ class NewtonDirection {
 public:
     explicit NewtonDirection(Workspace& work) : work_(work) {}
 
-    // direction ~ (A + Lambda)^-1 gradient at x (qualities q, barrier curvature weights c_i,
-    // their per-vertex blocks `curvature` from the same gradient pass). Lambda per free owned
+    // direction ~ (A + Lambda)^-1 gradient at x (qualities q, the barrier `objective` whose
+    // weights give the gradient, its curvature weights c_i and their per-vertex blocks
+    // `curvature` from the gradient pass that gave `gradient`). Lambda per free owned
     // vertex: damping * its block's trace / 3 (Marquardt), plus 1e-8 of the mean trace so that
     // every block is invertible; the line search reins in vertices whose steps come out too long
     // (a Levenberg term, damping * the mean trace, measured worse: 0.12 against 0.17 on
@@ -52,20 +56,29 @@ public:
     // residual falls below `tolerance` of its start, after `max_products` products, or at
     // non-positive curvature (Steihaug). Collective; the direction is complete at owned vertices
     // (ghosts: the caller's halo update).
-    NewtonStep solve(const QualityMetric& metric, std::span<const double> x, std::span<const double> q,
+    NewtonStep solve(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
+                     std::span<const double> q,
                      std::span<const double> curvature_weight, std::span<const double> curvature,
                      std::span<const double> gradient, double damping, double tolerance, int max_products,
                      std::span<double> direction);
 
+    // out = A v (no damping) at x, v complete at ghosts: what solve() multiplies by, for checks.
+    void apply(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
+               std::span<const double> q, std::span<const double> curvature_weight, std::span<const double> gradient,
+               std::span<const double> v, std::span<double> out);
+
 private:
-    void product(const QualityMetric& metric, std::span<const double> x, std::span<const double> q,
-                 std::span<const double> c, double c_total);
+    // lambda_ zero, u_ = sum c_i g_i, buffers sized; returns C = sum c_i.
+    double prepare(const QualityMetric& metric, std::span<const double> x, std::size_t elements,
+                   std::span<const double> curvature_weight);
+    void product(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
+                 std::span<const double> q, std::span<const double> c, double c_total, std::span<const double> gradient);
     void precondition(std::span<const double> curvature);
     // The exact sum over the elements this process counts, over all processes.
     double element_sum(std::span<const double> values);
 
     Workspace& work_;
-    std::vector<double> lambda_, r_, z_, p_, ap_, xp_, qp_, w_, counted_;
+    std::vector<double> lambda_, r_, z_, p_, ap_, xp_, qp_, w_, counted_, u_;
 };
 
 }  // namespace paloverde::detail

@@ -45,4 +45,4 @@ with tempfile.TemporaryDirectory() as scratch:
         s = json.load(open(summary))
         worst = s["worst_after"]
         reference = worst if reference is None else reference
-        print("| %s | %.4f | %+.0f%% | %.1f |" % (label, worst, 100.0 * (worst / reference - 1.0), s["seconds"]), flush=True)
+        print("| %s | %.5f | %+.1f%% | %.1f |" % (label, worst, 100.0 * (worst / reference - 1.0), s["seconds"]), flush=True)

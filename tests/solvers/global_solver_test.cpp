@@ -234,7 +234,7 @@ BOOST_DATA_TEST_CASE(newton_directions_never_make_things_worse,
     auto again = mesh;
     pv::GlobalSolverOptions options;
     options.direction = pv::GlobalSolverOptions::Direction::Newton;
-    options.termination.max_iterations = 40;
+    options.termination.max_iterations = 25;
     options.threads = 1;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     BOOST_TEST_MESSAGE(name << ": " << summary.brief_report());

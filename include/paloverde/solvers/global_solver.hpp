@@ -46,7 +46,7 @@ struct GlobalSolverOptions {
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;
-    int newton_cg_iterations = 20;
+    int newton_cg_iterations = 100;
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it
