@@ -197,8 +197,10 @@ Tables::Tables() {
         .add(objective_field)
         .choice("direction", &GlobalSolverOptions::direction,
                 {{"conjugate_gradient", GlobalSolverOptions::Direction::ConjugateGradient},
-                 {"steepest_ascent", GlobalSolverOptions::Direction::SteepestAscent}},
-                "Search direction of each step.")
+                 {"steepest_ascent", GlobalSolverOptions::Direction::SteepestAscent},
+                 {"newton", GlobalSolverOptions::Direction::Newton}},
+                "Search direction of each step; newton: truncated Newton steps in the shape phase (log_barrier only), "
+                "mu shrinking once each barrier subproblem is solved.")
         .flag("untangle", &GlobalSolverOptions::untangle, "Untangle first when movable elements are inverted.")
         .flag("improve_shape", &GlobalSolverOptions::improve_shape, "Run the shape phase (false: stop once untangled).")
         .choice("untangling", &GlobalSolverOptions::untangling,
@@ -211,7 +213,12 @@ Tables::Tables() {
               "While untangling, scale each vertex's move by its block of the objective's curvature.")
         .integer("local_untangle_rounds", &GlobalSolverOptions::local_untangle_rounds,
                  "Rounds of local vertex untangling when the global ascent stalls with elements inverted, >= 0.")
-        .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu, "Steps at one mu before it shrinks, >= 1.")
+        .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu,
+                 "Steps at one mu before it shrinks, >= 1 (conjugate_gradient and steepest_ascent).")
+        .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
+              "direction newton: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
+        .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,
+                 "direction newton: at most this many conjugate-gradient iterations (Hessian products) per step, >= 1.")
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
         .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")

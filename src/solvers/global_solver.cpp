@@ -13,6 +13,7 @@
 #include "checkpointer.hpp"
 #include "energy_untangle.hpp"
 #include "local_untangle.hpp"
+#include "newton_direction.hpp"
 #include "run_support.hpp"
 #include "stopping.hpp"
 #include "workspace.hpp"
@@ -31,6 +32,11 @@ void GlobalSolverOptions::validate() const {
                           "inverse_condition or edge_ratio");
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (steps_per_mu < 1) throw OptionError("steps_per_mu must be >= 1");
+    if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
+        throw OptionError("newton_tolerance must be a positive number");
+    if (newton_cg_iterations < 1) throw OptionError("newton_cg_iterations must be >= 1");
+    if (direction == Direction::Newton && improve_shape && objective != "log_barrier")
+        throw OptionError("direction newton needs the log_barrier objective (its curvature), not '" + objective + "'");
     if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
     checkpoint.validate();
@@ -91,7 +97,10 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
 // Everything that changes the result, for the checkpoint's fingerprint.
 std::string options_text(const GlobalSolverOptions& o) {
     detail::OptionsText t;
-    t("direction", o.direction == GlobalSolverOptions::Direction::SteepestAscent ? "steepest_ascent" : "conjugate_gradient")
+    const char* direction = o.direction == GlobalSolverOptions::Direction::SteepestAscent ? "steepest_ascent"
+                            : o.direction == GlobalSolverOptions::Direction::Newton       ? "newton"
+                                                                                          : "conjugate_gradient";
+    t("direction", direction)
         ("objective", o.objective)("barrier_shrink", o.objective_options.barrier_shrink)
         ("initial_mu", o.objective_options.initial_mu)("barrier_initial_active", o.objective_options.barrier_initial_active)
         ("p", o.objective_options.p)("shape_metric", o.shape_metric)("hybrid_sharpness", o.metric_options.hybrid_sharpness)
@@ -100,6 +109,8 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("untangling", o.untangling == GlobalSolverOptions::Untangling::Energy ? "energy" : "barrier")
         ("local_untangle_rounds", o.local_untangle_rounds)("steps_per_mu", o.steps_per_mu)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
+    if (o.direction == GlobalSolverOptions::Direction::Newton)
+        t("newton_tolerance", o.newton_tolerance)("newton_cg_iterations", o.newton_cg_iterations);
     return t.text();
 }
 
@@ -165,6 +176,9 @@ private:
     int failures_ = 0;     // line searches in a row that found no step
     int steps_at_mu_ = 0;
     std::vector<double> best_history_, measure_history_, bad_history_;
+    // Newton directions (shape phase): the damping factor, adapted to how the last step went.
+    detail::NewtonDirection newton_{work_};
+    double newton_damping_ = 1e-2;
 };
 
 // A distributed run: the owner of a vertex holds all its elements, so its decision to damp the
@@ -283,20 +297,7 @@ void Phase::apply_preconditioner() {
     for (std::size_t v = 0; v < n; ++v) {
         const double* m = &curvature_[6 * v];
         const double lambda = 1e-3 * (m[0] + m[3] + m[5]) / 3.0 + floor;
-        const double a = m[0] + lambda, b = m[1], c = m[2], d = m[3] + lambda, e = m[4], f = m[5] + lambda;
-        // Symmetric [[a b c] [b d e] [c e f]]: inverse by cofactors (positive definite here).
-        const double A = d * f - e * e, B = c * e - b * f, C = b * e - c * d;
-        const double det = a * A + b * B + c * C;
-        const double* g = &gradient_[3 * v];
-        double* z = &preconditioned_[3 * v];
-        if (!(det > 0.0)) {
-            for (int k = 0; k < 3; ++k) z[k] = 0.0;
-            continue;
-        }
-        const double D = a * f - c * c, E = b * c - a * e, F = a * d - b * b;
-        z[0] = (A * g[0] + B * g[1] + C * g[2]) / det;
-        z[1] = (B * g[0] + D * g[1] + E * g[2]) / det;
-        z[2] = (C * g[0] + E * g[1] + F * g[2]) / det;
+        detail::solve_block(m, lambda, &gradient_[3 * v], &preconditioned_[3 * v]);
     }
 }
 
@@ -324,7 +325,8 @@ void Phase::save_checkpoint(int iteration) {
                      {"first_gradient_norm", first_gradient_norm_},
                      {"restart", restart_ ? 1.0 : 0.0},
                      {"failures", failures_},
-                     {"steps_at_mu", steps_at_mu_}};
+                     {"steps_at_mu", steps_at_mu_},
+                     {"newton_damping", newton_damping_}};
     state.lists = {{"objective", objective_.state()},
                    {"best_history", best_history_},
                    {"measure_history", measure_history_},
@@ -354,6 +356,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     restart_ = state.number("restart") != 0.0;
     failures_ = static_cast<int>(state.number("failures"));
     steps_at_mu_ = static_cast<int>(state.number("steps_at_mu"));
+    if (state.numbers.contains("newton_damping")) newton_damping_ = state.number("newton_damping");
     objective_.restore_state(state.list("objective"));
     best_history_ = state.list("best_history");
     measure_history_ = state.list("measure_history");
@@ -376,8 +379,9 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     previous_gradient_.assign(n3, 0.0);
     best_x_ = x_;
     damping_.assign(n3 / 3, 1.0);
-    // Only the preconditioner needs the curvature (8 bytes per element, 48 per vertex).
-    const bool precondition = untangling_ && options_.precondition_untangling;
+    // Only the preconditioner and Newton need the curvature (8 bytes per element, 48 per vertex).
+    const bool newton = !untangling_ && options_.direction == GlobalSolverOptions::Direction::Newton;
+    const bool precondition = (untangling_ && options_.precondition_untangling) || newton;
     curvature_weight_.assign(precondition ? m : 0, 0.0);
     curvature_.assign(precondition ? 2 * n3 : 0, 0.0);
     preconditioned_.assign(n3, 0.0);
@@ -440,30 +444,40 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         if (first_gradient_norm_ < 0.0) first_gradient_norm_ = gradient_norm;
         if (!(gradient_norm > stop_.gradient_tolerance * first_gradient_norm_))
             return end(TerminationReason::GradientVanished, "the objective's gradient vanished");
-        if (precondition) apply_preconditioner();
-        else preconditioned_ = gradient_;
-
-        // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
-        // changes (mu) or the direction stops ascending.
-        double beta = 0.0;
-        if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart_) {
-            const auto sums = detail::owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
-                double a = 0.0, b = 0.0;
-                for (std::size_t i = 3 * v; i < 3 * v + 3; ++i) {
-                    a += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
-                    b += previous_preconditioned_[i] * previous_gradient_[i];
-                }
-                acc[0].add(a);
-                acc[1].add(b);
-            });
-            beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
+        double decrement = 0.0;
+        if (newton) {
+            // CG to a tenth of the preconditioned residual (a usual forcing term; not tuned).
+            const auto step = newton_.solve(metric_, objective_, x_, q_, curvature_weight_, curvature_, gradient_, newton_damping_,
+                                            0.1, options_.newton_cg_iterations, direction_);
+            summary_.quality_passes += step.products;
+            summary_.gradient_passes += step.products;
+            decrement = step.decrement;
+            if (!(decrement > 0.0)) direction_ = gradient_;
+        } else {
+            if (precondition) apply_preconditioner();
+            else preconditioned_ = gradient_;
+            // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
+            // changes (mu) or the direction stops ascending.
+            double beta = 0.0;
+            if (options_.direction == GlobalSolverOptions::Direction::ConjugateGradient && !restart_) {
+                const auto sums = detail::owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
+                    double a = 0.0, b = 0.0;
+                    for (std::size_t i = 3 * v; i < 3 * v + 3; ++i) {
+                        a += preconditioned_[i] * (gradient_[i] - previous_gradient_[i]);
+                        b += previous_preconditioned_[i] * previous_gradient_[i];
+                    }
+                    acc[0].add(a);
+                    acc[1].add(b);
+                });
+                beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
+            }
+            for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
+            const double slope = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
+                acc[0].add(gradient_[3 * v] * direction_[3 * v] + gradient_[3 * v + 1] * direction_[3 * v + 1] +
+                           gradient_[3 * v + 2] * direction_[3 * v + 2]);
+            })[0];
+            if (!(slope > 0.0)) direction_ = preconditioned_;
         }
-        for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
-        const double slope = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
-            acc[0].add(gradient_[3 * v] * direction_[3 * v] + gradient_[3 * v + 1] * direction_[3 * v + 1] +
-                       gradient_[3 * v + 2] * direction_[3 * v + 2]);
-        })[0];
-        if (!(slope > 0.0)) direction_ = preconditioned_;
         // Ghosts move as their owners say: the exchange of the boundary vertices' directions.
         work_.halo().update(direction_, 3);
         previous_gradient_ = gradient_;
@@ -475,6 +489,9 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                 max_direction = std::max(max_direction, std::hypot(direction_[3 * v], direction_[3 * v + 1], direction_[3 * v + 2]));
         max_direction = reducer_.max(max_direction);
 
+        // Newton's first trial is its full step.
+        if (newton) step_ = std::min(max_direction / work_.reference_length(), 1e6);
+        const double first_trial = step_;
         const bool accepted = line_search(objective, max_direction);
         const double step = accepted ? step_ : 0.0;
         ++summary_.iterations;
@@ -487,7 +504,20 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // out (two_tets.vtk) and must be able to come back.
         if (accepted) step_ = std::min(2.0 * step_, 1e6);
         else step_ = 0.05;
-        if (!accepted || ++steps_at_mu_ >= options_.steps_per_mu) {
+        bool solved = false;
+        if (newton) {
+            // Levenberg-Marquardt: less damping after a full step that gained at least half of
+            // what the model promised (decrement / 2), more after a shortened or failed one.
+            const bool full = accepted && step == first_trial && gain_ >= 0.25 * decrement;
+            newton_damping_ = full ? std::max(newton_damping_ / 3.0, 1e-8) : std::min(newton_damping_ * 4.0, 1e8);
+            // The subproblem at this mu is solved when the Newton decrement (in the barrier's own
+            // units, F / mu) is small; a cap keeps a subproblem that cannot be solved from
+            // holding mu forever.
+            solved = decrement <= options_.newton_tolerance * dynamic_cast<const LogBarrier&>(objective_).mu() || ++steps_at_mu_ >= 50;
+        } else {
+            solved = ++steps_at_mu_ >= options_.steps_per_mu;
+        }
+        if (!accepted || solved) {
             objective_.advance();
             steps_at_mu_ = 0;
             restart_ = true;

@@ -206,6 +206,21 @@ BOOST_AUTO_TEST_CASE(the_dihedral_quality_gives_the_serial_answer) {
     BOOST_TEST(serial.quality_metric == "dihedral_sine");
 }
 
+// Newton directions (each a truncated CG solve over Hessian products through the halo) take the
+// same steps on any number of ranks as serially, on a mesh that is untangled first.
+BOOST_AUTO_TEST_CASE(newton_directions_give_the_serial_answer) {
+    pv::GlobalSolverOptions options;
+    options.direction = pv::GlobalSolverOptions::Direction::Newton;
+    options.newton_cg_iterations = 30;  // as many exchanges as needed to tell, at a fraction of the time
+    options.termination.max_iterations = 8;
+    options.untangle_termination.max_iterations = 150;
+    const auto [serial, distributed] =
+        serial_and_distributed(pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.05, 2), options);
+    BOOST_TEST(serial.after.inverted == 0);
+    BOOST_TEST(serial.worst_after > serial.worst_before);
+    BOOST_TEST(serial.gradient_passes > 2 * serial.iterations);  // the products are counted
+}
+
 // A heavy tangle (every interior vertex moved by up to 1.5 local edge lengths), which the barrier
 // ascent alone leaves tangled: the regularized energy frees it, and takes the same steps on any
 // number of ranks as serially.

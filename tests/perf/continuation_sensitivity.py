@@ -4,9 +4,11 @@
 
     python3 tests/perf/continuation_sensitivity.py MESH [--paloverde build/bin/paloverde]
                                                    [--iterations 40] [--active 10000]
+                                                   [--set KEY=VALUE]...
 
 --active is the default barrier_initial_active of MESH (0.5% of its elements, at least 10,000);
-the runs set it 10% lower and higher.
+the runs set it 10% lower and higher. --set adds a key to every run (e.g.
+queue[0].improve.direction=newton).
 """
 import argparse
 import json
@@ -19,6 +21,7 @@ parser.add_argument("mesh")
 parser.add_argument("--paloverde", default="build/bin/paloverde")
 parser.add_argument("--iterations", default="40")
 parser.add_argument("--active", type=float, default=10000.0)
+parser.add_argument("--set", action="append", default=[], help="a key for every run, as paloverde improve --set")
 args = parser.parse_args()
 
 barrier = "queue[0].improve.objective={name: log_barrier, %s: %s}"
@@ -37,8 +40,9 @@ with tempfile.TemporaryDirectory() as scratch:
     print("|---|---|---|---|")
     for label, extra in runs:
         subprocess.run([args.paloverde, "improve", args.mesh, "-o", os.path.join(scratch, "out.vtu"), "--iterations",
-                        args.iterations, "--threads", "1", "-q", "--summary", summary] + extra, check=True)
+                        args.iterations, "--threads", "1", "-q", "--summary", summary] + extra +
+                       [a for kv in args.set for a in ("--set", kv)], check=True)
         s = json.load(open(summary))
         worst = s["worst_after"]
         reference = worst if reference is None else reference
-        print("| %s | %.4f | %+.0f%% | %.1f |" % (label, worst, 100.0 * (worst / reference - 1.0), s["seconds"]), flush=True)
+        print("| %s | %.5f | %+.1f%% | %.1f |" % (label, worst, 100.0 * (worst / reference - 1.0), s["seconds"]), flush=True)

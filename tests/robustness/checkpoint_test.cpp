@@ -75,16 +75,15 @@ void check_resumes(const pv::SimplexMesh& input, Options options, const Checkpoi
 
 BOOST_AUTO_TEST_SUITE(checkpoint)
 
-BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
+// A shape run on tire, uninterrupted, then writing checkpoints every 10 iterations (it must end
+// the same), then resumed from copies of the checkpoint taken at iterations `first` and `second`.
+void check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const char* name, int first, int second) {
     const StopRequestCleared cleared;
-    const pv::test::ScratchDir dir("checkpoint_global_shape");
+    const pv::test::ScratchDir dir(name);
     const auto input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
-    pv::GlobalSolverOptions options;
-    options.termination.max_iterations = 150;
+    pv::GlobalSolverOptions options = given;
     const auto reference = run<pv::GlobalSolver>(input, options);
-
-    // The same run, writing checkpoints, ends the same; copies of its checkpoints taken on the way.
-    CheckpointCopies copies{dir / "run.ckpt", {{23, dir / "at20.ckpt"}, {104, dir / "at100.ckpt"}}, {}};
+    CheckpointCopies copies{dir / "run.ckpt", {{first, dir / "first.ckpt"}, {second, dir / "second.ckpt"}}, {}};
     options.checkpoint.file = copies.file.string();
     options.checkpoint.every_iterations = 10;
     const auto checkpointed = run<pv::GlobalSolver>(input, options, copies.observer());
@@ -95,6 +94,20 @@ BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_unin
     std::size_t files = 0;
     for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++files;
     BOOST_TEST(files == 3u);
+}
+
+BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 150;
+    check_global_shape_run_resumes(options, "checkpoint_global_shape", 23, 104);
+}
+
+// Newton directions carry their damping factor across iterations: it is in the checkpoint.
+BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.direction = pv::GlobalSolverOptions::Direction::Newton;
+    options.termination.max_iterations = 40;
+    check_global_shape_run_resumes(options, "checkpoint_global_newton", 13, 34);
 }
 
 // Untangling by the barrier ascent (it stalls, local sweeps finish it), then the shape phase:

@@ -223,6 +223,44 @@ BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things
     }
 }
 
+// Truncated Newton directions in the shape phase: never a worse worst element, never an inverted
+// one, the same mesh on one thread as on two.
+BOOST_DATA_TEST_CASE(newton_directions_never_make_things_worse,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
+                                  "mesquite/tris/tri_20258.vtk"}),
+                     name) {
+    auto mesh = shared_mesh(name);
+    const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+    auto again = mesh;
+    pv::GlobalSolverOptions options;
+    options.direction = pv::GlobalSolverOptions::Direction::Newton;
+    options.termination.max_iterations = 25;
+    options.threads = 1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE(name << ": " << summary.brief_report());
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    check_never_worse(summary);
+    check_fixed_unchanged(mesh, before);
+    options.threads = 2;
+    const auto twice = pv::GlobalSolver(options).improve(again);
+    BOOST_TEST(twice.iterations == summary.iterations);
+    BOOST_TEST(std::equal(mesh.coordinates().begin(), mesh.coordinates().end(), again.coordinates().begin()));
+}
+
+// A tangled mesh: untangled with conjugate gradients as before, then Newton steps.
+BOOST_AUTO_TEST_CASE(newton_directions_after_untangling) {
+    auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cube-clip-5.vtk", 0.3, 1);
+    pv::GlobalSolverOptions options;
+    options.direction = pv::GlobalSolverOptions::Direction::Newton;
+    options.termination.max_iterations = 30;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.before.inverted > 0);
+    BOOST_TEST(summary.after.inverted == 0);
+    check_never_worse(summary);
+}
+
 // The dihedral quality, raised by both solvers on a valid mesh: never worse, never an inverted
 // element, and the smallest dihedral angle of the movable tets up (house2: 1.85 degrees before).
 BOOST_AUTO_TEST_CASE(both_solvers_raise_the_dihedral_quality) {
@@ -282,6 +320,12 @@ BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
     expect([](auto& o) { o.objective_options.barrier_shrink = 0.0; }, "barrier_shrink");
     expect([](auto& o) { o.termination.max_iterations = -1; }, "max_iterations");
     expect([](auto& o) { o.threads = -2; }, "threads");
+    expect([](auto& o) { o.newton_tolerance = 0.0; }, "newton_tolerance");
+    expect([](auto& o) { o.newton_cg_iterations = 0; }, "newton_cg_iterations");
+    expect([](auto& o) {
+        o.direction = pv::GlobalSolverOptions::Direction::Newton;
+        o.objective = "p_mean";
+    }, "log_barrier");
 }
 
 BOOST_AUTO_TEST_CASE(surface_triangle_meshes_are_refused) {

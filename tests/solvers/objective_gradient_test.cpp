@@ -9,6 +9,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/perturb.hpp"
 #include "paloverde/objectives/objective_function.hpp"
+#include "solvers/newton_direction.hpp"
 #include "solvers/workspace.hpp"
 #include "support/test_support.hpp"
 
@@ -61,6 +62,62 @@ BOOST_AUTO_TEST_CASE(whole_mesh_gradient_matches_finite_differences) {
                 ++checked;
             }
             BOOST_TEST(checked > 10);
+        }
+    }
+}
+
+// The Newton direction's Hessian product (a difference of the gradient pass at fixed t, plus
+// t's move) against a central difference of the barrier's gradient with t solved afresh at each
+// point: -A v = (G(x + e v) - G(x - e v)) / 2e, G = sum mu/(q_i - t(x)) grad q_i.
+BOOST_AUTO_TEST_CASE(newton_hessian_product_matches_finite_differences) {
+    for (const char* metric_name : {"aspect_ratio", "mean_ratio"}) {
+        auto mesh = pv::read_mesh(pv::test::shared_data("stellar/house2.node")).mesh;
+        pv::detail::Workspace work(mesh, true);
+        auto metric = pv::make_metric(metric_name);
+        metric->set_scale(work.scale());
+        const pv::Reducer serial;
+        const auto m = static_cast<std::size_t>(work.movable_elements());
+        const std::vector<double> x(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
+        std::vector<double> q(m), w(m), c(m), g(x.size());
+        work.evaluate(*metric, x, q);
+        auto objective = pv::make_objective("log_barrier");
+        objective->update(q, serial);
+        objective->advance();  // a smaller mu than the start's, where the worst elements weigh more
+        objective->advance();
+        objective->update(q, serial);
+        objective->weights(q, w);
+        objective->curvature_weights(q, c);
+        work.gradient(*metric, x, w, g);
+        // A smooth direction on the free vertices.
+        std::vector<double> v(x.size(), 0.0);
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (!work.fixed()[i / 3]) v[i] = std::sin(0.37 * static_cast<double>(i) + 1.0);
+        std::vector<double> av(x.size());
+        pv::detail::NewtonDirection newton(work);
+        newton.apply(*metric, *objective, x, q, c, g, v, av);
+        // The reduced gradient at x + s v, t solved for the qualities there (at the same mu).
+        auto reduced_gradient = [&](double s) {
+            std::vector<double> at(x), qq(m), ww(m), gg(x.size());
+            for (std::size_t i = 0; i < x.size(); ++i) at[i] += s * v[i];
+            work.evaluate(*metric, at, qq);
+            auto there = pv::make_objective("log_barrier");
+            there->restore_state(objective->state());
+            there->update(qq, serial);
+            there->weights(qq, ww);
+            work.gradient(*metric, at, ww, gg);
+            return gg;
+        };
+        const double e = 1e-5 * work.reference_length();
+        const auto plus = reduced_gradient(e), minus = reduced_gradient(-e);
+        double largest = 0.0;
+        for (std::size_t i = 0; i < x.size(); ++i) largest = std::max(largest, std::abs(plus[i] - minus[i]) / (2 * e));
+        BOOST_TEST_REQUIRE(largest > 0.0);
+        double worst = 0.0;
+        for (std::size_t i = 0; i < x.size(); ++i)
+            worst = std::max(worst, std::abs(-av[i] - (plus[i] - minus[i]) / (2 * e)));
+        BOOST_TEST_MESSAGE(metric_name << ": largest entry " << largest << ", largest difference " << worst);
+        BOOST_TEST_CONTEXT(metric_name << ": largest entry " << largest << ", largest difference " << worst) {
+            BOOST_TEST(worst <= 1e-4 * largest);
         }
     }
 }

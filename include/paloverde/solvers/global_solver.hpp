@@ -16,7 +16,10 @@
 namespace paloverde {
 
 struct GlobalSolverOptions {
-    enum class Direction { SteepestAscent, ConjugateGradient };
+    // Newton: truncated Newton steps in the shape phase (docs/global_solver.md), mu shrinking once
+    // the barrier's subproblem is solved rather than after steps_per_mu steps; log_barrier only.
+    // Untangling keeps conjugate gradients.
+    enum class Direction { SteepestAscent, ConjugateGradient, Newton };
     Direction direction = Direction::ConjugateGradient;
     std::string objective = "log_barrier";
     ObjectiveOptions objective_options;
@@ -37,7 +40,11 @@ struct GlobalSolverOptions {
     // When the barrier ascent stalls with elements still inverted: rounds of local vertex
     // untangling (then the ascent resumes). 0 keeps untangling purely global.
     int local_untangle_rounds = 5;
-    int steps_per_mu = 5;             // steps at one mu before it shrinks
+    int steps_per_mu = 5;             // steps at one mu before it shrinks (not Newton's)
+    // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
+    // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
+    double newton_tolerance = 0.1;
+    int newton_cg_iterations = 100;
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it

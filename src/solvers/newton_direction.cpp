@@ -1,0 +1,156 @@
+#include "newton_direction.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/blocked_sum.hpp"
+#include "core/exact_sums.hpp"
+
+namespace paloverde::detail {
+
+double NewtonDirection::element_sum(std::span<const double> values) {
+    const auto counted = work_.counted(values, counted_);
+    double largest = 0.0;
+    for (double v : counted) largest = std::max(largest, std::abs(v));
+    largest = work_.reducer().max(largest);
+    auto sums = bounded_sums<1>(counted.size(), {largest}, [&](std::size_t i, auto& acc) { acc[0].add(counted[i]); });
+    work_.reducer().sum(sums);
+    return sums[0].value();
+}
+
+// ap_ = (A + Lambda) p_, p_ complete at ghosts, by a forward difference of the gradient pass
+// along p_ (t held fixed: sum w_i Hess q_i - sum c_i g_i g_i^T), plus t's move, u (u.p) / C, with
+// u.p = sum c_i g_i.p from the same difference of the qualities. The largest vertex move is 1e-6
+// reference lengths (1e-7 and 1e-5 gave the same worst quality on cube-clip-5 and tire), shrunk
+// should an element leave the barrier's domain.
+void NewtonDirection::product(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
+                              std::span<const double> q, std::span<const double> c, double c_total,
+                              std::span<const double> gradient) {
+    const auto owned = work_.owned();
+    const std::size_t n = owned.size();
+    const std::size_t m = q.size();
+    double largest = 0.0;
+    for (std::size_t v = 0; v < n; ++v)
+        if (owned[v]) largest = std::max(largest, std::hypot(p_[3 * v], p_[3 * v + 1], p_[3 * v + 2]));
+    largest = work_.reducer().max(largest);
+    std::fill(ap_.begin(), ap_.end(), 0.0);
+    if (!(largest > 0.0)) return;
+    const double floor = objective.domain_floor();
+    double h = 1e-6 * work_.reference_length() / largest;
+    for (int attempt = 0;; ++attempt, h *= 0.01) {
+#pragma omp parallel for schedule(static) if (n > kParallelThreshold)
+        for (std::size_t i = 0; i < 3 * n; ++i) xp_[i] = x[i] + h * p_[i];
+        work_.evaluate(metric, xp_, qp_);
+        double outside = 0.0;
+        for (std::size_t i = 0; i < m; ++i)
+            if (!(qp_[i] > floor)) outside = 1.0;
+        if (work_.reducer().max(outside) == 0.0) break;
+        if (attempt == 3) return;  // no curvature to be had along p: the caller sees p.Ap = 0
+    }
+    for (std::size_t i = 0; i < m; ++i) w_[i] = c[i] * ((qp_[i] - q[i]) / h);
+    const double s = c_total > 0.0 ? element_sum(w_) / c_total : 0.0;
+    objective.weights(qp_, w_);
+    work_.gradient(metric, xp_, w_, ap_);
+#pragma omp parallel for schedule(static) if (n > kParallelThreshold)
+    for (std::size_t i = 0; i < 3 * n; ++i) ap_[i] = (gradient[i] - ap_[i]) / h - s * u_[i] + lambda_[i / 3] * p_[i];
+}
+
+void NewtonDirection::precondition(std::span<const double> curvature) {
+    const auto owned = work_.owned();
+    const auto fixed = work_.fixed();
+#pragma omp parallel for schedule(static) if (owned.size() > kParallelThreshold)
+    for (std::size_t v = 0; v < owned.size(); ++v) {
+        if (owned[v] && !fixed[v]) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
+        else z_[3 * v] = z_[3 * v + 1] = z_[3 * v + 2] = 0.0;
+    }
+}
+
+double NewtonDirection::prepare(const QualityMetric& metric, std::span<const double> x, std::size_t elements,
+                                std::span<const double> curvature_weight) {
+    const std::size_t n = work_.owned().size();
+    lambda_.assign(n, 0.0);
+    z_.assign(3 * n, 0.0);
+    p_.assign(3 * n, 0.0);
+    ap_.assign(3 * n, 0.0);
+    xp_.resize(3 * n);
+    qp_.resize(elements);
+    w_.resize(elements);
+    // u = sum c_i g_i: how t moves along a direction.
+    u_.assign(3 * n, 0.0);
+    work_.gradient(metric, x, curvature_weight, u_);
+    return element_sum(curvature_weight);
+}
+
+void NewtonDirection::apply(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
+                            std::span<const double> q, std::span<const double> curvature_weight,
+                            std::span<const double> gradient, std::span<const double> v, std::span<double> out) {
+    const double c_total = prepare(metric, x, q.size(), curvature_weight);
+    p_.assign(v.begin(), v.end());
+    product(metric, objective, x, q, curvature_weight, c_total, gradient);
+    std::copy(ap_.begin(), ap_.end(), out.begin());
+}
+
+NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFunction& objective,
+                                  std::span<const double> x, std::span<const double> q,
+                                  std::span<const double> curvature_weight, std::span<const double> curvature,
+                                  std::span<const double> gradient, double damping, double tolerance, int max_products,
+                                  std::span<double> direction) {
+    const auto owned = work_.owned();
+    const auto fixed = work_.fixed();
+    const std::size_t n = owned.size();
+    const double c_total = prepare(metric, x, q.size(), curvature_weight);
+    r_.assign(gradient.begin(), gradient.end());
+    std::fill(direction.begin(), direction.end(), 0.0);
+
+    const auto [trace_sum, free_count] = owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
+        if (fixed[v]) return;
+        acc[0].add(curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]);
+        acc[1].add(1.0);
+    });
+    NewtonStep step;
+    if (!(trace_sum > 0.0)) return step;
+    const double mean_trace = trace_sum / free_count;
+    for (std::size_t v = 0; v < n; ++v)
+        if (owned[v] && !fixed[v])
+            lambda_[v] = damping * (curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]) / 3.0 + 1e-8 * mean_trace;
+
+    precondition(curvature);
+    p_ = z_;
+    double rz = owned_dot(work_, r_, z_);
+    const double rz_first = rz;
+    if (!(rz > 0.0)) return step;
+    for (int k = 0; k < max_products; ++k) {
+        work_.halo().update(p_, 3);  // the one exchange per product
+        product(metric, objective, x, q, curvature_weight, c_total, gradient);
+        ++step.products;
+        const double pap = owned_dot(work_, p_, ap_);
+        if (!(pap > 0.0)) {
+            // Steihaug: along non-positive curvature the model has no maximum; keep what CG has,
+            // or the preconditioned gradient when it has nothing yet.
+            step.negative_curvature = true;
+            if (k == 0)
+                for (std::size_t v = 0; v < n; ++v)
+                    if (owned[v])
+                        for (int c = 0; c < 3; ++c) direction[3 * v + c] = z_[3 * v + c];
+            break;
+        }
+        const double alpha = rz / pap;
+        for (std::size_t v = 0; v < n; ++v) {
+            if (!owned[v]) continue;
+            for (int c = 0; c < 3; ++c) {
+                direction[3 * v + c] += alpha * p_[3 * v + c];
+                r_[3 * v + c] -= alpha * ap_[3 * v + c];
+            }
+        }
+        precondition(curvature);
+        const double rz_next = owned_dot(work_, r_, z_);
+        if (!(rz_next > tolerance * tolerance * rz_first)) break;
+        const double beta = rz_next / rz;
+        rz = rz_next;
+        for (std::size_t i = 0; i < 3 * n; ++i) p_[i] = z_[i] + beta * p_[i];
+    }
+    step.decrement = owned_dot(work_, gradient, direction);
+    return step;
+}
+
+}  // namespace paloverde::detail
