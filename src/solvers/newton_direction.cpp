@@ -57,10 +57,10 @@ void NewtonDirection::product(const QualityMetric& metric, const ObjectiveFuncti
 
 void NewtonDirection::precondition(std::span<const double> curvature) {
     const auto owned = work_.owned();
-    const auto fixed = work_.fixed();
+    const SimplexMesh& mesh = work_.mesh();
 #pragma omp parallel for schedule(static) if (owned.size() > kParallelThreshold)
     for (std::size_t v = 0; v < owned.size(); ++v) {
-        if (owned[v] && !fixed[v]) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
+        if (owned[v] && mesh.can_move(static_cast<VertexId>(v))) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
         else z_[3 * v] = z_[3 * v + 1] = z_[3 * v + 2] = 0.0;
     }
 }
@@ -96,14 +96,14 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
                                   std::span<const double> gradient, double damping, double tolerance, int max_products,
                                   std::span<double> direction) {
     const auto owned = work_.owned();
-    const auto fixed = work_.fixed();
+    const SimplexMesh& mesh = work_.mesh();
     const std::size_t n = owned.size();
     const double c_total = prepare(metric, x, q.size(), curvature_weight);
     r_.assign(gradient.begin(), gradient.end());
     std::fill(direction.begin(), direction.end(), 0.0);
 
     const auto [trace_sum, free_count] = owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
-        if (fixed[v]) return;
+        if (!mesh.can_move(static_cast<VertexId>(v))) return;
         acc[0].add(curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]);
         acc[1].add(1.0);
     });
@@ -111,7 +111,7 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
     if (!(trace_sum > 0.0)) return step;
     const double mean_trace = trace_sum / free_count;
     for (std::size_t v = 0; v < n; ++v)
-        if (owned[v] && !fixed[v])
+        if (owned[v] && mesh.can_move(static_cast<VertexId>(v)))
             lambda_[v] = damping * (curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]) / 3.0 + 1e-8 * mean_trace;
 
     precondition(curvature);
