@@ -215,6 +215,9 @@ Tables::Tables() {
                  "Rounds of local vertex untangling when the global ascent stalls with elements inverted, >= 0.")
         .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu,
                  "Steps at one mu before it shrinks, >= 1 (conjugate_gradient and steepest_ascent).")
+        .real("focus_band", &GlobalSolverOptions::focus_band,
+              "Shape phase: iterate on the elements in this lowest fraction of worst..ideal quality and those around "
+              "their vertices, chosen anew as the worst climbs, in (0, 1]; 1: the whole mesh every iteration.")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,

@@ -32,6 +32,7 @@ void GlobalSolverOptions::validate() const {
                           "inverse_condition or edge_ratio");
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (steps_per_mu < 1) throw OptionError("steps_per_mu must be >= 1");
+    if (!(focus_band > 0.0 && focus_band <= 1.0)) throw OptionError("focus_band must be in (0, 1]");
     if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
         throw OptionError("newton_tolerance must be a positive number");
     if (newton_cg_iterations < 1) throw OptionError("newton_cg_iterations must be >= 1");
@@ -65,7 +66,35 @@ struct Stats {
     long nan;  // qualities that are not numbers
 };
 
-Stats quality_stats(const detail::Workspace& work, std::span<const double> all, std::vector<double>& buffer) {
+// The elements a focused phase holds still (global figures, fixed while the focus lasts).
+struct Frozen {
+    double worst = std::numeric_limits<double>::infinity();
+    double sum = 0.0, count = 0.0;
+    long bad = 0;
+};
+
+// Figures of the qualities `counted` (of counted elements) that are not +infinity.
+Frozen frozen_stats(const Reducer& reducer, std::span<const double> counted) {
+    Frozen f;
+    std::array<ExactSum, 3> sums;
+    for (double q : counted) {
+        if (q == std::numeric_limits<double>::infinity()) continue;
+        f.worst = std::min(f.worst, q);
+        sums[0].add(q);
+        sums[1].add(1.0);
+        if (q <= 0.0) sums[2].add(1.0);
+    }
+    reducer.sum(sums);
+    f.worst = reducer.min(f.worst);
+    f.sum = sums[0].value();
+    f.count = sums[1].value();
+    f.bad = static_cast<long>(sums[2].value());
+    return f;
+}
+
+// With `frozen`, the figures of the whole: the qualities given and the frozen elements.
+Stats quality_stats(const detail::Workspace& work, std::span<const double> all, std::vector<double>& buffer,
+                    const Frozen& frozen = {}) {
     const Reducer& reducer = work.reducer();
     const auto q = work.counted(all, buffer);
     Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
@@ -87,10 +116,11 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
     sums[1].add(static_cast<double>(s.bad));
     sums[2].add(static_cast<double>(s.nan));
     reducer.sum(sums);
-    s.worst = reducer.min(s.worst);
-    s.bad = static_cast<long>(sums[1].value());
+    s.worst = std::min(reducer.min(s.worst), frozen.worst);
+    s.bad = static_cast<long>(sums[1].value()) + frozen.bad;
     s.nan = static_cast<long>(sums[2].value());
-    s.mean = sums[0].value() / std::max(1.0, work.global_movable());
+    sums[0].add(frozen.sum);
+    s.mean = sums[0].value() / std::max(1.0, work.global_movable() + frozen.count);
     return s;
 }
 
@@ -109,6 +139,7 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("untangling", o.untangling == GlobalSolverOptions::Untangling::Energy ? "energy" : "barrier")
         ("local_untangle_rounds", o.local_untangle_rounds)("steps_per_mu", o.steps_per_mu)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
+    if (o.focus_band < 1.0) t("focus_band", o.focus_band);
     if (o.direction == GlobalSolverOptions::Direction::Newton)
         t("newton_tolerance", o.newton_tolerance)("newton_cg_iterations", o.newton_cg_iterations);
     return t.text();
@@ -131,7 +162,7 @@ public:
     PhaseResult run(const detail::SolverState* resume = nullptr);
 
 private:
-    Stats stats(std::span<const double> q) { return quality_stats(work_, q, counted_); }
+    Stats stats(std::span<const double> q) { return quality_stats(work_, q, counted_, frozen_); }
     double objective_value(std::span<const double> q) { return objective_.value(work_.counted(q, counted_), reducer_); }
     void damp_like_owners(std::vector<VertexId>& damped);
     bool line_search(double objective, double max_direction);
@@ -143,6 +174,11 @@ private:
     bool sound(const Stats& s, double objective) const;
     void save_checkpoint(int iteration);
     int restore(const detail::SolverState& state, double& objective);
+    void size_element_arrays();
+    // Focus on the elements below the band above the whole mesh's worst quality (focus_band).
+    void refocus();
+    // Focus on the elements around the vertices flagged in moving_ (frozen_: the others).
+    void focus_on_moving();
 
     detail::Workspace& work_;
     std::vector<double>& x_;
@@ -179,7 +215,72 @@ private:
     // Newton directions (shape phase): the damping factor, adapted to how the last step went.
     detail::NewtonDirection newton_{work_};
     double newton_damping_ = 1e-2;
+    // Focus (shape phase with focus_band < 1): which vertices move, the band it was made from
+    // (the whole mesh's worst quality then and the top of the band) and the elements outside it.
+    bool focusing_ = false;
+    std::vector<std::uint8_t> moving_;
+    double focus_base_ = 0.0, focus_top_ = 0.0;
+    long focus_vertices_ = 0;  // free vertices of the focus, over all processes
+    Frozen frozen_;
+    std::vector<double> whole_q_;
 };
+
+void Phase::size_element_arrays() {
+    const std::size_t m = static_cast<std::size_t>(work_.movable_elements());
+    q_.resize(m);
+    trial_q_.resize(m);
+    weight_.resize(m);
+    if (!curvature_.empty()) curvature_weight_.assign(m, 0.0);
+    element_stamp_.assign(m, 0);
+}
+
+void Phase::refocus() {
+    work_.unfocus();
+    frozen_ = {};
+    whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
+    work_.evaluate(metric_, x_, whole_q_);
+    ++summary_.quality_passes;
+    const SimplexMesh& mesh = work_.mesh();
+    focus_base_ = quality_stats(work_, whole_q_, counted_).worst;
+    focus_top_ = focus_base_ + options_.focus_band * (metric_.ideal_value() - focus_base_);
+    // A vertex moves when one of its elements lies in the band. The owner holds every element of
+    // its vertices, so its decision is complete; ghosts take it from the halo.
+    moving_.assign(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    for (ElementId e = 0; e < work_.movable_elements(); ++e)
+        if (whole_q_[e] < focus_top_)
+            for (VertexId v : mesh.element(e)) moving_[v] = 1;
+    if (work_.distributed()) {
+        for (std::size_t v = 0; v < moving_.size(); ++v) mark_[v] = moving_[v];
+        work_.halo().update(mark_, 1);
+        for (std::size_t v = 0; v < moving_.size(); ++v) moving_[v] = mark_[v] != 0.0;
+        std::fill(mark_.begin(), mark_.end(), 0.0);
+    }
+    focus_on_moving();
+}
+
+void Phase::focus_on_moving() {
+    work_.unfocus();
+    const SimplexMesh& whole = work_.mesh();
+    // The elements that stay out, at the positions they keep while the focus lasts.
+    whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
+    work_.evaluate(metric_, x_, whole_q_);
+    for (ElementId e = 0; e < work_.movable_elements(); ++e)
+        for (VertexId v : whole.element(e))
+            if (moving_[v] && whole.can_move(v)) {
+                whole_q_[e] = std::numeric_limits<double>::infinity();
+                break;
+            }
+    frozen_ = frozen_stats(reducer_, work_.counted(whole_q_, counted_));
+    work_.focus(moving_);
+    const SimplexMesh& focus = work_.mesh();
+    const auto owned = work_.owned();
+    double count = 0.0;
+    for (VertexId v = 0; v < focus.num_vertices(); ++v) count += owned[v] && focus.can_move(v);
+    focus_vertices_ = static_cast<long>(reducer_.total(count));
+    size_element_arrays();
+    work_.evaluate(metric_, x_, q_);
+    restart_ = true;
+}
 
 // A distributed run: the owner of a vertex holds all its elements, so its decision to damp the
 // vertex is complete; ghosts take their owners' decisions.
@@ -209,6 +310,7 @@ void Phase::record(const Stats& s, double objective, double step, double gain) {
     r.objective = objective;
     r.step = step;
     r.gain = gain;
+    r.moved = focusing_ ? focus_vertices_ : 0;
     r.seconds = seconds_since(start_);
     summary_.history.push_back(std::move(r));
     if (observer_) observer_(summary_.history.back());
@@ -302,6 +404,7 @@ void Phase::apply_preconditioner() {
 }
 
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
+    work_.unfocus();
     x_.swap(best_x_);  // the best iterate, which may be the current one
     return {reason, std::move(message)};
 }
@@ -326,7 +429,9 @@ void Phase::save_checkpoint(int iteration) {
                      {"restart", restart_ ? 1.0 : 0.0},
                      {"failures", failures_},
                      {"steps_at_mu", steps_at_mu_},
-                     {"newton_damping", newton_damping_}};
+                     {"newton_damping", newton_damping_},
+                     {"focus_base", focus_base_},
+                     {"focus_top", focus_top_}};
     state.lists = {{"objective", objective_.state()},
                    {"best_history", best_history_},
                    {"measure_history", measure_history_},
@@ -336,6 +441,11 @@ void Phase::save_checkpoint(int iteration) {
                            {"direction", direction_},
                            {"previous_gradient", previous_gradient_},
                            {"previous_preconditioned", previous_preconditioned_}};
+    if (focusing_) {
+        std::vector<double> moving(3 * moving_.size(), 0.0);
+        for (std::size_t v = 0; v < moving_.size(); ++v) moving[3 * v] = moving_[v];
+        state.vertex_fields["moving"] = std::move(moving);
+    }
     checkpointer_.save(summary_, state, seconds_since(start_));
 }
 
@@ -361,6 +471,14 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     best_history_ = state.list("best_history");
     measure_history_ = state.list("measure_history");
     bad_history_ = state.list("bad_history");
+    if (focusing_) {
+        const auto& moving = state.vertex_field("moving", n);
+        moving_.assign(n, 0);
+        for (std::size_t v = 0; v < n; ++v) moving_[v] = moving[3 * v] != 0.0;
+        focus_base_ = state.number("focus_base");
+        focus_top_ = state.number("focus_top");
+        focus_on_moving();
+    }
     work_.evaluate(metric_, x_, q_);
     objective = objective_value(q_);
     objective_.weights(q_, weight_);
@@ -368,11 +486,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
 }
 
 PhaseResult Phase::run(const detail::SolverState* resume) {
-    const std::size_t m = static_cast<std::size_t>(work_.movable_elements());
     const std::size_t n3 = x_.size();
-    q_.resize(m);
-    trial_q_.resize(m);
-    weight_.resize(m);
     trial_x_.resize(n3);
     gradient_.assign(n3, 0.0);
     direction_.assign(n3, 0.0);
@@ -382,13 +496,14 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     // Only the preconditioner and Newton need the curvature (8 bytes per element, 48 per vertex).
     const bool newton = !untangling_ && options_.direction == GlobalSolverOptions::Direction::Newton;
     const bool precondition = (untangling_ && options_.precondition_untangling) || newton;
-    curvature_weight_.assign(precondition ? m : 0, 0.0);
+    curvature_weight_.clear();
     curvature_.assign(precondition ? 2 * n3 : 0, 0.0);
     preconditioned_.assign(n3, 0.0);
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
     mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
-    element_stamp_.assign(m, 0);
+    focusing_ = !untangling_ && options_.focus_band < 1.0;
+    size_element_arrays();
 
     // The objective and its weights at the current iterate, for the history and the next step.
     double objective = 0.0;
@@ -398,7 +513,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     } else {
         work_.evaluate(metric_, x_, q_);
         ++summary_.quality_passes;
+        // The barrier's first mu comes from the whole mesh, focused or not: the focus's fewer
+        // terms would choose a looser barrier, under which its elements sink toward t.
         objective_.update(work_.counted(q_, counted_), reducer_);
+        if (focusing_) {
+            refocus();
+            objective_.update(work_.counted(q_, counted_), reducer_);
+        }
         const Stats s = stats(q_);
         best_worst_ = s.worst;
         best_bad_ = s.bad;
@@ -569,6 +690,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                 return end(TerminationReason::Converged,
                            "the worst element rose too slowly to become valid within the iteration budget (" +
                                std::to_string(pace) + " per iteration over the last " + std::to_string(window) + ")");
+        }
+        // Half way up the band, the elements above it start to matter: a new focus.
+        if (focusing_ && s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_)) {
+            refocus();
+            objective_.update(work_.counted(q_, counted_), reducer_);
+            objective = objective_value(q_);
+            objective_.weights(q_, weight_);
         }
     }
 }

@@ -133,38 +133,71 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
     reference_length_ = mesh_.kind() == ElementKind::Tetrahedron
                             ? std::cbrt(6.0 * std::numbers::sqrt2 * scale_.reference_volume)
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
-    build_lanes(element_order, global_elements);
+    lanes_ = make_lanes(mesh_, movable_, element_order, global_elements);
+    element_order_ = element_order;
+    global_elements_ = global_elements;
     return order;
 }
 
-void Workspace::build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements) {
+Workspace::Lanes Workspace::make_lanes(const SimplexMesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
+                                       GlobalId global_elements) {
     // A lane is a run of movable elements in one block of the canonical order. Lane partials are
     // added in lane order, elements within a lane in order: for an owned vertex, the same sums in
     // the same order as in the serial run.
     const GlobalId block = std::max<GlobalId>(1, (global_elements + kGradientBlocks - 1) / kGradientBlocks);
-    lanes_.clear();
+    Lanes lanes;
     std::size_t total = 0;
-    for (ElementId first = 0; first < movable_;) {
+    for (ElementId first = 0; first < movable;) {
         ElementId last = first + 1;
-        while (last < movable_ && element_order[last] / block == element_order[first] / block) ++last;
-        VertexId low = mesh_.num_vertices(), high = 0;
-        for (VertexId v : mesh_.connectivity().subspan(static_cast<std::size_t>(first) * mesh_.corners(),
-                                                       static_cast<std::size_t>(last - first) * mesh_.corners())) {
+        while (last < movable && element_order[last] / block == element_order[first] / block) ++last;
+        VertexId low = mesh.num_vertices(), high = 0;
+        for (VertexId v : mesh.connectivity().subspan(static_cast<std::size_t>(first) * mesh.corners(),
+                                                      static_cast<std::size_t>(last - first) * mesh.corners())) {
             low = std::min(low, v);
             high = std::max(high, v);
         }
-        lanes_.push_back({first, last, low, high, total});
+        lanes.list.push_back({first, last, low, high, total});
         total += static_cast<std::size_t>(high - low + 1);
         first = last;
     }
-    lane_vertices_ = total;
-    lane_gradient_.assign(3 * total, 0.0);
+    lanes.vertices = total;
+    lanes.gradient.assign(3 * total, 0.0);
+    return lanes;
+}
+
+void Workspace::focus(std::span<const std::uint8_t> moving) {
+    focus_.reset();
+    const VertexId n = mesh_.num_vertices();
+    auto moves = [&](VertexId v) { return moving[v] != 0 && mesh_.can_move(v); };
+    Focus f;
+    std::vector<VertexId> connectivity;
+    std::vector<GlobalId> positions;
+    for (ElementId e = 0; e < movable_; ++e) {
+        const auto corners = mesh_.element(e);
+        if (std::none_of(corners.begin(), corners.end(), moves)) continue;
+        f.elements.push_back(e);
+        connectivity.insert(connectivity.end(), corners.begin(), corners.end());
+        positions.push_back(element_order_[e]);
+    }
+    std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n));
+    for (VertexId v = 0; v < n; ++v) fixed[v] = !moves(v);
+    f.mesh = SimplexMesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
+                         std::move(connectivity));
+    f.mesh.set_fixed(std::move(fixed));
+    const auto size = static_cast<ElementId>(f.elements.size());
+    if (part_)
+        for (ElementId i = 0; i < size; ++i)
+            if (part_->counted[f.elements[i]]) f.counted.push_back(i);
+    f.global_count = reducer_->total(static_cast<double>(part_ ? f.counted.size() : f.elements.size()));
+    f.lanes = make_lanes(f.mesh, size, positions, global_elements_);
+    focus_ = std::move(f);
 }
 
 std::span<const double> Workspace::counted(std::span<const double> quality, std::vector<double>& buffer) const {
     if (!part_) return quality;
-    buffer.resize(counted_.size());
-    for (std::size_t i = 0; i < counted_.size(); ++i) buffer[i] = quality[counted_[i]];
+    const std::vector<ElementId>& counted = focus_ ? focus_->counted : counted_;
+    buffer.resize(counted.size());
+    for (std::size_t i = 0; i < counted.size(); ++i) buffer[i] = quality[counted[i]];
     return buffer;
 }
 
@@ -186,60 +219,65 @@ std::vector<double> Workspace::local_reference_volumes() const {
 }
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {
-    const ElementId chunks = (movable_ + kEvaluateChunk - 1) / kEvaluateChunk;
-#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
+    const SimplexMesh& mesh = this->mesh();
+    const ElementId movable = movable_elements();
+    const ElementId chunks = (movable + kEvaluateChunk - 1) / kEvaluateChunk;
+#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > kParallelThreshold)
     for (ElementId c = 0; c < chunks; ++c) {
-        const ElementId first = c * kEvaluateChunk, last = std::min(movable_, first + kEvaluateChunk);
-        metric.evaluate(mesh_, xyz, first, last, quality.data() + first);
+        const ElementId first = c * kEvaluateChunk, last = std::min(movable, first + kEvaluateChunk);
+        metric.evaluate(mesh, xyz, first, last, quality.data() + first);
     }
 }
 
 void Workspace::gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
                          std::span<double> gradient, std::span<const double> curvature_weight,
                          std::span<double> curvature) {
+    const SimplexMesh& mesh = this->mesh();
+    const ElementId movable = movable_elements();
+    Lanes& lanes = focus_ ? focus_->lanes : lanes_;
     const bool with_curvature = !curvature.empty();
-    if (with_curvature && lane_curvature_.empty()) lane_curvature_.assign(6 * lane_vertices_, 0.0);
-    const auto lanes = static_cast<std::ptrdiff_t>(lanes_.size());
-#pragma omp parallel for schedule(dynamic, 1) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
-    for (std::ptrdiff_t l = 0; l < lanes; ++l) {
-        const Lane& lane = lanes_[static_cast<std::size_t>(l)];
-        const auto count = static_cast<std::size_t>(lane.high - lane.low + 1);
+    if (with_curvature && lanes.curvature.empty()) lanes.curvature.assign(6 * lanes.vertices, 0.0);
+    const auto count = static_cast<std::ptrdiff_t>(lanes.list.size());
+#pragma omp parallel for schedule(dynamic, 1) if (static_cast<std::size_t>(movable) > kParallelThreshold)
+    for (std::ptrdiff_t l = 0; l < count; ++l) {
+        const Lane& lane = lanes.list[static_cast<std::size_t>(l)];
+        const auto touched = static_cast<std::size_t>(lane.high - lane.low + 1);
         QualityMetric::GradientTarget target;
         target.weight = weight.data() + lane.first;
-        target.gradient = lane_gradient_.data() + 3 * lane.offset;
-        std::fill(target.gradient, target.gradient + 3 * count, 0.0);
+        target.gradient = lanes.gradient.data() + 3 * lane.offset;
+        std::fill(target.gradient, target.gradient + 3 * touched, 0.0);
         if (with_curvature) {
             target.curvature_weight = curvature_weight.data() + lane.first;
-            target.curvature = lane_curvature_.data() + 6 * lane.offset;
-            std::fill(target.curvature, target.curvature + 6 * count, 0.0);
+            target.curvature = lanes.curvature.data() + 6 * lane.offset;
+            std::fill(target.curvature, target.curvature + 6 * touched, 0.0);
         }
         target.base = lane.low;
-        metric.accumulate_gradient(mesh_, xyz, lane.first, lane.last, target);
+        metric.accumulate_gradient(mesh, xyz, lane.first, lane.last, target);
     }
     // Each vertex sums the lanes that touch it in lane order; vertex blocks run in parallel.
     // Fixed vertices get zero; ghosts too, until the halo brings their owners' values.
-    const VertexId n = mesh_.num_vertices();
+    const VertexId n = mesh.num_vertices();
     const VertexId block = 4096;
     auto gather = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low, VertexId high) {
         std::fill(out.begin() + width * static_cast<std::size_t>(low), out.begin() + width * (static_cast<std::size_t>(high) + 1), 0.0);
-        for (const Lane& lane : lanes_) {
+        for (const Lane& lane : lanes.list) {
             const VertexId from = std::max(low, lane.low), to = std::min(high, lane.high);
             if (from > to) continue;
             // One flat run of doubles, which the compiler vectorizes.
             const double* source = buffer.data() + width * (lane.offset + static_cast<std::size_t>(from - lane.low));
             double* target = out.data() + width * static_cast<std::size_t>(from);
-            const std::size_t count = width * static_cast<std::size_t>(to - from + 1);
-            for (std::size_t i = 0; i < count; ++i) target[i] += source[i];
+            const std::size_t run = width * static_cast<std::size_t>(to - from + 1);
+            for (std::size_t i = 0; i < run; ++i) target[i] += source[i];
         }
         for (VertexId v = low; v <= high; ++v)
-            if (!mesh_.can_move(v) || !owned_[v])
+            if (!mesh.can_move(v) || !owned_[v])
                 for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
     };
-#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable_) > kParallelThreshold)
+#pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > kParallelThreshold)
     for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
         const VertexId low = b * block, high = std::min(n, low + block) - 1;
-        gather(gradient, lane_gradient_, 3, low, high);
-        if (with_curvature) gather(curvature, lane_curvature_, 6, low, high);
+        gather(gradient, lanes.gradient, 3, low, high);
+        if (with_curvature) gather(curvature, lanes.curvature, 6, low, high);
     }
 }
 

@@ -10,6 +10,7 @@
 // vertex computes bit for bit the gradient the serial run computes.
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -34,8 +35,9 @@ public:
     Workspace(const Workspace&) = delete;
     Workspace& operator=(const Workspace&) = delete;
 
-    const SimplexMesh& mesh() const { return mesh_; }
-    ElementId movable_elements() const { return movable_; }
+    // The elements a solver works on: the movable elements, or while focused those of the focus.
+    const SimplexMesh& mesh() const { return focus_ ? focus_->mesh : mesh_; }
+    ElementId movable_elements() const { return focus_ ? static_cast<ElementId>(focus_->elements.size()) : movable_; }
     // Per vertex: this process owns it (computes its gradient and moves it).
     std::span<const std::uint8_t> owned() const { return owned_; }
     // Vertices owned by other processes.
@@ -53,7 +55,18 @@ public:
     // The movable elements' qualities this process counts in global sums (all, serially).
     std::span<const double> counted(std::span<const double> quality, std::vector<double>& buffer) const;
     // Number of movable elements over all processes.
-    double global_movable() const { return global_movable_; }
+    double global_movable() const { return focus_ ? focus_->global_count : global_movable_; }
+
+    // Focus: until unfocus(), the workspace holds only the movable elements with a vertex in
+    // `moving` (a flag per vertex, equal at an owner and its ghosts), and only those vertices can
+    // move; mesh(), movable_elements(), counted(), evaluate() and gradient() then refer to them.
+    // The same vertices and vertex fields; each owned vertex's gradient is bit for bit the whole
+    // mesh's (a moving vertex has all its elements in the focus). Collective.
+    void focus(std::span<const std::uint8_t> moving);
+    void unfocus() { focus_.reset(); }
+    bool focused() const { return focus_.has_value(); }
+    // While focused: focus element i is movable element focus_elements()[i] of the whole.
+    std::span<const ElementId> focus_elements() const { return focus_->elements; }
 
     // Qualities of the movable elements at positions xyz.
     void evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const;
@@ -73,12 +86,27 @@ private:
         VertexId low, high;      // vertices they touch: [low, high]
         std::size_t offset;      // first vertex of the lane in the lane buffers
     };
+    struct Lanes {
+        std::vector<Lane> list;
+        std::size_t vertices = 0;       // total over the lanes
+        std::vector<double> gradient;   // 3 per lane vertex
+        std::vector<double> curvature;  // 6 per lane vertex, allocated on first use
+    };
+    struct Focus {
+        SimplexMesh mesh;                // every vertex, the focus elements; only moving vertices free
+        std::vector<ElementId> elements; // the whole's movable element of each focus element
+        std::vector<ElementId> counted;  // focus elements counted here (distributed runs)
+        double global_count = 0.0;
+        Lanes lanes;
+    };
     // Orders mesh_'s elements in place (movable first, then canonical), with `element_order` and
     // `counted` (empty: all counted), and sets up scale and lanes. Returns the order: element i
     // was element order[i].
     std::vector<ElementId> finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                   GlobalId global_elements);
-    void build_lanes(std::span<const GlobalId> element_order, GlobalId global_elements);
+    // Lanes over elements [0, movable) of `mesh`, whose canonical positions are `element_order`.
+    static Lanes make_lanes(const SimplexMesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
+                            GlobalId global_elements);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
 
     SimplexMesh* original_;             // the part's mesh
@@ -98,10 +126,10 @@ private:
     const Halo* halo_ = &serial_halo_;
     MetricScale scale_;
     double reference_length_ = 1.0;
-    std::vector<Lane> lanes_;
-    std::size_t lane_vertices_ = 0;       // total over the lanes
-    std::vector<double> lane_gradient_;   // 3 per lane vertex
-    std::vector<double> lane_curvature_;  // 6 per lane vertex, allocated on first use
+    Lanes lanes_;
+    std::vector<GlobalId> element_order_;  // canonical position of each element (workspace order)
+    GlobalId global_elements_ = 0;
+    std::optional<Focus> focus_;
 };
 
 // Exact sums of term(v, acc) over the vertices this process owns, then over all processes: the

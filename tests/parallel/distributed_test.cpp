@@ -206,6 +206,19 @@ BOOST_AUTO_TEST_CASE(the_dihedral_quality_gives_the_serial_answer) {
     BOOST_TEST(serial.quality_metric == "dihedral_sine");
 }
 
+// A focused shape phase: which vertices move is decided by their owners from the whole mesh's
+// qualities, so the focus, its refocusing and every step are the serial run's.
+BOOST_AUTO_TEST_CASE(a_focused_shape_phase_gives_the_serial_answer) {
+    pv::GlobalSolverOptions options;
+    options.focus_band = 0.1;
+    options.termination.max_iterations = 40;
+    const auto [serial, distributed] =
+        serial_and_distributed(pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.05, 2), options);
+    BOOST_TEST(serial.after.inverted == 0);
+    BOOST_TEST(serial.history.back().moved > 0);
+    for (std::size_t i = 0; i < serial.history.size(); ++i) BOOST_TEST(distributed.history[i].moved == serial.history[i].moved);
+}
+
 // Newton directions (each a truncated CG solve over Hessian products through the halo) take the
 // same steps on any number of ranks as serially, on a mesh that is untangled first.
 BOOST_AUTO_TEST_CASE(newton_directions_give_the_serial_answer) {

@@ -110,6 +110,14 @@ BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uni
     check_global_shape_run_resumes(options, "checkpoint_global_newton", 13, 34);
 }
 
+// A focused run saves which vertices its focus moves: resumed, it goes on with the same focus.
+BOOST_AUTO_TEST_CASE(global_focused_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.focus_band = 0.1;
+    options.termination.max_iterations = 80;
+    check_global_shape_run_resumes(options, "checkpoint_global_focus", 17, 53);
+}
+
 // Untangling by the barrier ascent (it stalls, local sweeps finish it), then the shape phase:
 // checkpoints in either phase and just before the local sweeps. (Untangling by the energy is
 // resumed in a_stopped_run_resumes_from_the_checkpoint_it_wrote_when_stopped.)

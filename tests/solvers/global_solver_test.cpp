@@ -208,6 +208,33 @@ BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
     BOOST_TEST(std::equal(one.coordinates().begin(), one.coordinates().end(), two.coordinates().begin()));
 }
 
+// A focused shape phase works on the elements near the worst and the vertices around them: fewer
+// vertices than the mesh's free ones, a new focus as the worst climbs, never a worse iterate,
+// never an inverted element, and a result near the whole mesh's (the same barrier, minus terms
+// that weigh almost nothing).
+BOOST_AUTO_TEST_CASE(a_focused_shape_phase_moves_the_vertices_near_the_worst_elements) {
+    const auto input = shared_mesh("mesquite/tets/cube-clip-5.vtk");
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 120;
+    auto whole = input;
+    const auto unfocused = pv::GlobalSolver(options).improve(whole);
+    options.focus_band = 0.1;
+    auto focused_mesh = input;
+    const auto focused = pv::GlobalSolver(options).improve(focused_mesh);
+    pv::test::check_never_worse(focused);
+    BOOST_TEST(focused.after.inverted == 0);
+    std::vector<long> sizes;
+    for (const auto& r : focused.history) {
+        BOOST_TEST(r.moved > 0);
+        BOOST_TEST(r.moved < static_cast<long>(input.num_free_vertices()));
+        if (sizes.empty() || sizes.back() != r.moved) sizes.push_back(r.moved);
+    }
+    BOOST_TEST(sizes.size() >= 2u);  // focused anew at least once
+    BOOST_TEST_MESSAGE("whole: " << unfocused.brief_report() << "\nfocused: " << focused.brief_report());
+    BOOST_TEST(focused.worst_after >= 0.9 * unfocused.worst_after);
+    for (const auto& r : unfocused.history) BOOST_TEST(r.moved == 0);
+}
+
 BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things_worse) {
     for (const char* objective : {"log_barrier", "p_mean", "min_quality"}) {
         auto mesh = shared_mesh("mesquite/tets/tire.vtk");

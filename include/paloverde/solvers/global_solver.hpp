@@ -41,6 +41,12 @@ struct GlobalSolverOptions {
     // untangling (then the ascent resumes). 0 keeps untangling purely global.
     int local_untangle_rounds = 5;
     int steps_per_mu = 5;             // steps at one mu before it shrinks (not Newton's)
+    // Shape phase: iterate on the elements whose quality lies in this lowest fraction of
+    // worst..ideal, and on every element around their vertices; the rest stand still until the
+    // worst has climbed half way up the band, when the focus is chosen anew. Terms of elements
+    // far above the worst weigh almost nothing in the barrier, and skipping them makes an
+    // iteration cost what the focus costs, not the whole mesh. 1: the whole mesh every iteration.
+    double focus_band = 1.0;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;

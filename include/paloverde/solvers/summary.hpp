@@ -35,7 +35,7 @@ struct IterationRecord {
     double objective = 0.0;
     double step = 0.0;   // largest vertex displacement of the accepted step, over the reference length
     double gain = 0.0;   // how much the accepted step raised the objective (0: no step)
-    long moved = 0;      // vertices moved, for solvers that move them one at a time
+    long moved = 0;      // vertices moved one at a time (local solvers); the focus's free vertices (global, focus_band < 1)
     double seconds = 0.0;
 };
 
