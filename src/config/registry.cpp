@@ -214,10 +214,15 @@ Tables::Tables() {
         .integer("local_untangle_rounds", &GlobalSolverOptions::local_untangle_rounds,
                  "Rounds of local vertex untangling when the global ascent stalls with elements inverted, >= 0.")
         .integer("steps_per_mu", &GlobalSolverOptions::steps_per_mu,
-                 "Steps at one mu before it shrinks, >= 1 (conjugate_gradient and steepest_ascent).")
+                 "Steps at one mu before it shrinks while untangling (and in the shape phase with gain_tolerance 0); "
+                 "in the shape phase the fewest steps at one mu, >= 1 (conjugate_gradient and steepest_ascent).")
+        .real("gain_tolerance", &GlobalSolverOptions::gain_tolerance,
+              "Shape phase (conjugate_gradient and steepest_ascent, log_barrier): mu shrinks once a step gains less "
+              "than this times mu (after at least steps_per_mu steps, at most 100), >= 0; 0: after steps_per_mu steps.")
         .real("focus_band", &GlobalSolverOptions::focus_band,
-              "Shape phase: iterate on the elements in this lowest fraction of worst..ideal quality and those around "
-              "their vertices, chosen anew as the worst climbs, in (0, 1]; 1: the whole mesh every iteration.")
+              "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
+              "their neighbours, chosen anew as the worst climbs and widened where it stalls, in (0, 1]; 1: the "
+              "whole mesh every iteration.")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,

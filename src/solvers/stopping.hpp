@@ -74,6 +74,11 @@ public:
         return spans(history) && history.back() >= history[history.size() - 1 - window_];
     }
 
+    // The history (a count) rose over the window.
+    bool rose(std::span<const double> history) const {
+        return spans(history) && history.back() > history[history.size() - 1 - window_];
+    }
+
 private:
     std::size_t window_;
     double tolerance_;

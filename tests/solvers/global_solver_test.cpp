@@ -216,6 +216,7 @@ BOOST_AUTO_TEST_CASE(a_focused_shape_phase_moves_the_vertices_near_the_worst_ele
     const auto input = shared_mesh("mesquite/tets/cube-clip-5.vtk");
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 120;
+    options.focus_band = 1.0;
     auto whole = input;
     const auto unfocused = pv::GlobalSolver(options).improve(whole);
     options.focus_band = 0.1;

@@ -40,13 +40,19 @@ struct GlobalSolverOptions {
     // When the barrier ascent stalls with elements still inverted: rounds of local vertex
     // untangling (then the ascent resumes). 0 keeps untangling purely global.
     int local_untangle_rounds = 5;
-    int steps_per_mu = 5;             // steps at one mu before it shrinks (not Newton's)
-    // Shape phase: iterate on the elements whose quality lies in this lowest fraction of
-    // worst..ideal, and on every element around their vertices; the rest stand still until the
-    // worst has climbed half way up the band, when the focus is chosen anew. Terms of elements
-    // far above the worst weigh almost nothing in the barrier, and skipping them makes an
-    // iteration cost what the focus costs, not the whole mesh. 1: the whole mesh every iteration.
-    double focus_band = 1.0;
+    // Shape phase: mu shrinks once an accepted step gains less than gain_tolerance * mu (the
+    // barrier's subproblem nearly solved), after at least steps_per_mu and at most 100 steps at
+    // one mu. Untangling, and the shape phase with gain_tolerance 0: after steps_per_mu steps.
+    // Newton has its own rule (newton_tolerance).
+    double gain_tolerance = 0.1;
+    int steps_per_mu = 5;
+    // Shape phase: iterate on the vertices of the elements whose quality lies in this lowest
+    // fraction of worst..ideal and on their neighbours (with every element around them); the rest
+    // stand still until the worst has climbed half way up the band, when the focus is chosen
+    // anew, or the focus stalls, when it is widened (twice the band, while widening pays). Terms
+    // of elements far above the worst weigh almost nothing in the barrier, and skipping them
+    // makes an iteration cost what the focus costs, not the whole mesh. 1: the whole mesh.
+    double focus_band = 0.05;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;
