@@ -16,9 +16,22 @@
 #include <vector>
 
 #include "paloverde/mesh/boundary_surface.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
+#include "paloverde/solvers/termination.hpp"
 
 namespace paloverde::detail {
+
+// The options a solver's boundary: slide comes with (throws OptionError): a good feature angle,
+// and no checkpoints (a sliding run is two runs, which one checkpoint cannot resume).
+void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint);
+// Throws OptionError for a part of a distributed run: sliding is serial only so far.
+void refuse_distributed_sliding(const MeshPart& part);
+// What the boundary-fixed run `fixed` left of the shape phase's budget `termination` for the
+// sliding run: none when it spent it, or ended where sliding does not go on from (tangled,
+// interrupted, at its target); a spent budget is then noted in fixed.message.
+std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed);
 
 class SlidingBoundary {
 public:
