@@ -959,7 +959,7 @@ Summary GlobalSolver::improve(MeshPart part) {
     if (!budget || !options_.improve_shape) return sliding.join(std::move(fixed), std::nullopt);
     GlobalSolverOptions slide = options_;
     slide.termination = *budget;
-    slide.untangle = false;
+    slide.untangle = false;  // the mesh is valid; untangling would not keep the boundary on the surface
     sliding.release();
     Summary slid = improve_part(slide, observer(), part, &sliding);
     return sliding.join(std::move(fixed), std::move(slid));

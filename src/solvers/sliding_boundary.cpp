@@ -39,8 +39,10 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
     if (left.max_seconds > 0.0) left.max_seconds -= fixed.seconds;
     const bool budget_left = left.max_iterations > 0 && (termination.max_seconds == 0.0 || left.max_seconds > 0.0);
     const TerminationReason r = fixed.reason;
-    const bool go_on = r == TerminationReason::Converged || r == TerminationReason::NothingToMove ||
-                       r == TerminationReason::NoImprovingStep || r == TerminationReason::GradientVanished;
+    // The sliding run improves shapes only: it starts from a valid mesh.
+    const bool valid = fixed.after.inverted == 0 && fixed.after.degenerate == 0;
+    const bool go_on = valid && (r == TerminationReason::Converged || r == TerminationReason::NothingToMove ||
+                                 r == TerminationReason::NoImprovingStep || r == TerminationReason::GradientVanished);
     if (go_on && budget_left) return left;
     if (r == TerminationReason::IterationLimit || r == TerminationReason::TimeLimit)
         fixed.message += "; the boundary did not slide (the budget was spent with it fixed)";

@@ -29,8 +29,9 @@ void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& ch
 // Throws OptionError for a part of a distributed run: sliding is serial only so far.
 void refuse_distributed_sliding(const MeshPart& part);
 // What the boundary-fixed run `fixed` left of the shape phase's budget `termination` for the
-// sliding run: none when it spent it, or ended where sliding does not go on from (tangled,
-// interrupted, at its target); a spent budget is then noted in fixed.message.
+// sliding run: none when it spent it, or ended where sliding does not go on from (an element
+// inverted or degenerate, interrupted, at its target); a spent budget is then noted in
+// fixed.message.
 std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed);
 
 class SlidingBoundary {
