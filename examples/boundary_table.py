@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """Improves meshes with the boundary fixed and with sliding boundary vertices, and prints the
-table of docs/local_solver.md: the smallest dihedral angle over *all* tetrahedra (boundary ones
+tables of docs/local_solver.md (--method local) and docs/global_solver.md (--method global): the smallest dihedral angle over *all* tetrahedra (boundary ones
 too), the smallest and mean aspect ratio, how far the boundary moved and the volume change.
 
     python3 examples/boundary_table.py [--paloverde build/bin/paloverde] [--data ../shared/data]
-                                       [--method local] [--metric aspect_ratio|dihedral_sine|...]
+                                       [--method local|global] [--metric aspect_ratio|dihedral_sine|...]
                                        [--feature-angle DEG] [MESH ...]
 
 MESH defaults to the shared tet meshes; others (a Gmsh mesh, fandisk-100k.node) may be added.

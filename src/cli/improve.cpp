@@ -66,11 +66,11 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     cmd->add_option("--improve-below", o->improve_below, "improve_below (local): " + help_of("solver", "local", "improve_below"))
         ->type_name("X");
     cmd->add_option("--boundary", o->boundary,
-                    "boundary (local): fixed, or slide: boundary vertices move on the input's boundary, feature "
-                    "curves kept, corners fixed (with --method local; serial runs)")
+                    "boundary (global, local): fixed, or slide: boundary vertices move on the input's boundary, "
+                    "feature curves kept, corners fixed (serial runs)")
         ->type_name("MODE");
     cmd->add_option("--feature-angle", o->feature_angle,
-                    "surface.feature_angle (local, with --boundary slide): boundary faces meeting at more than this "
+                    "surface.feature_angle (global, local, with --boundary slide): boundary faces meeting at more than this "
                     "angle (degrees; default 40) make a feature curve that stays")
         ->type_name("DEG");
     cmd->add_option("--fixed", o->fixed, "input.fixed: auto, boundary, file or none (which vertices stay put)")
@@ -134,15 +134,15 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         if (!o->barrier_shrink.empty()) flag(step + "objective.barrier_shrink", o->barrier_shrink, "--barrier-shrink");
         if (!o->improve_below.empty()) flag(step + "improve_below", o->improve_below, "--improve-below");
         if (!o->boundary.empty() || !o->feature_angle.empty()) {
-            // Only the local smoother slides boundary vertices so far; the others keep them fixed.
-            if (method == "local") {
+            // The global solver (the default) and the local smoother slide boundary vertices;
+            // Laplace smoothing keeps them fixed.
+            if (method.empty() || method == "global" || method == "local") {
                 if (!o->boundary.empty()) flag(step + "boundary", o->boundary, "--boundary");
                 if (!o->feature_angle.empty()) flag(step + "surface.feature_angle", o->feature_angle, "--feature-angle");
             } else if (!o->feature_angle.empty() || o->boundary != "fixed") {
                 throw OptionError(std::string(o->feature_angle.empty() ? "--boundary " + o->boundary : "--feature-angle") +
-                                  ": only the local smoother slides boundary vertices so far (add --method local); "
-                                  "the " + (method.empty() ? std::string("default") : method) +
-                                  " method keeps the boundary fixed");
+                                  ": only the global solver and the local smoother slide boundary vertices (--method "
+                                  "global or local); the " + method + " method keeps the boundary fixed");
             }
         }
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");

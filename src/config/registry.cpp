@@ -185,6 +185,10 @@ Tables::Tables() {
         .path("resume", &CheckpointOptions::resume,
               "Continue from this checkpoint (same mesh and options) to the result the uninterrupted run gives; ~: start afresh.");
 
+    const char* surface_help =
+        "The boundary surface slid on (boundary: slide): feature_angle, in degrees in (0, 180): boundary faces "
+        "meeting at a sharper angle make a feature curve, which stays; curves turning more sharply make corners, "
+        "which stay put.";
     const auto objective_field = named_field<GlobalSolverOptions, ObjectiveOptions>(
         "objective", "objective", "What the global solver maximizes: log_barrier, p_mean or min_quality.",
         &GlobalSolverOptions::objective, &GlobalSolverOptions::objective_options,
@@ -230,6 +234,11 @@ Tables::Tables() {
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
         .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")
+        .choice("boundary", &GlobalSolverOptions::boundary,
+                {{"fixed", GlobalSolverOptions::Boundary::Fixed}, {"slide", GlobalSolverOptions::Boundary::Slide}},
+                "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in a shape phase "
+                "after the run with them fixed (feature curves kept, corners fixed; serial runs; not with direction newton).")
+        .object("surface", &GlobalSolverOptions::surface, surface, surface_help)
         .object("checkpoint", &GlobalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 
@@ -255,10 +264,7 @@ Tables::Tables() {
                 {{"fixed", LocalSolverOptions::Boundary::Fixed}, {"slide", LocalSolverOptions::Boundary::Slide}},
                 "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in the shape "
                 "sweeps (feature curves kept, corners fixed; serial runs).")
-        .object("surface", &LocalSolverOptions::surface, surface,
-                "The boundary surface slid on (boundary: slide): feature_angle, in degrees in (0, 180): boundary "
-                "faces meeting at a sharper angle make a feature curve, which stays; curves turning more sharply "
-                "make corners, which stay put.")
+        .object("surface", &LocalSolverOptions::surface, surface, surface_help)
         .object("checkpoint", &LocalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run, at sweep boundaries: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 

@@ -15,6 +15,7 @@
 #include "local_untangle.hpp"
 #include "newton_direction.hpp"
 #include "run_support.hpp"
+#include "sliding_boundary.hpp"
 #include "stopping.hpp"
 #include "workspace.hpp"
 
@@ -42,6 +43,13 @@ void GlobalSolverOptions::validate() const {
         throw OptionError("direction newton needs the log_barrier objective (its curvature), not '" + objective + "'");
     if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
+    surface.validate();
+    if (boundary == Boundary::Slide) {
+        detail::validate_sliding(surface, checkpoint);
+        if (direction == Direction::Newton)
+            throw OptionError("direction newton does not go with boundary: slide yet (its Hessian solves know nothing "
+                              "of the surface the boundary slides on); use conjugate_gradient or steepest_ascent");
+    }
     checkpoint.validate();
 }
 
@@ -148,6 +156,51 @@ std::string options_text(const GlobalSolverOptions& o) {
     return t.text();
 }
 
+// The workspace's vertices that slide on the input's boundary (boundary: slide), and how their
+// moves stay on it: gradients and directions keep their tangential part, trial positions are
+// projected back onto each vertex's patch or curve. The SlidingBoundary speaks the caller's ids.
+class SlidingVertices {
+public:
+    SlidingVertices(const detail::Workspace& work, const detail::SlidingBoundary& boundary) : boundary_(boundary) {
+        const VertexId n = work.mesh().num_vertices();
+        caller_.assign(static_cast<std::size_t>(n), -1);
+        for (VertexId v = 0; v < n; ++v)
+            if (const VertexId id = work.caller_vertex(v); boundary.slides(id)) {
+                caller_[v] = id;
+                vertices_.push_back(v);
+            }
+    }
+
+    // Replaces each sliding vertex's part of `field` (3 doubles per vertex) by its tangential part.
+    void tangent(std::span<double> field) const {
+#pragma omp parallel for schedule(static) if (vertices_.size() > detail::kParallelThreshold)
+        for (std::size_t i = 0; i < vertices_.size(); ++i) {
+            double* d = &field[3 * static_cast<std::size_t>(vertices_[i])];
+            const Vec3 t = boundary_.tangent(caller_[vertices_[i]], {d[0], d[1], d[2]});
+            for (int c = 0; c < 3; ++c) d[c] = t[c];
+        }
+    }
+    // Every sliding vertex that `mesh` lets move, back onto its patch or curve.
+    void project(const SimplexMesh& mesh, std::span<double> xyz) const {
+#pragma omp parallel for schedule(static) if (vertices_.size() > detail::kParallelThreshold / 16)
+        for (std::size_t i = 0; i < vertices_.size(); ++i)
+            if (mesh.can_move(vertices_[i])) project(vertices_[i], xyz);
+    }
+    // Vertex v back onto its patch or curve, if it slides.
+    void project(VertexId v, std::span<double> xyz) const {
+        const VertexId id = caller_[v];
+        if (id < 0) return;
+        double* p = &xyz[3 * static_cast<std::size_t>(v)];
+        const Vec3 q = boundary_.project(id, {p[0], p[1], p[2]});
+        for (int c = 0; c < 3; ++c) p[c] = q[c];
+    }
+
+private:
+    const detail::SlidingBoundary& boundary_;
+    std::vector<VertexId> caller_;    // per workspace vertex: its id in the caller's mesh if it slides, else -1
+    std::vector<VertexId> vertices_;  // the workspace's sliding vertices
+};
+
 // One phase (untangle or shape) of the barrier ascent over the workspace's movable elements.
 // Steps are accepted when they raise the objective (Armijo), stay in its domain and do not add
 // non-positive elements; the worst quality of an iterate may dip while the barrier rebalances,
@@ -156,10 +209,11 @@ class Phase {
 public:
     Phase(detail::Workspace& work, std::vector<double>& xyz, const QualityMetric& metric, ObjectiveFunction& objective,
           const TerminationCriterion& stop, const GlobalSolverOptions& options, Stage stage, Summary& summary,
-          const IterationObserver& observer, Clock::time_point start, detail::Checkpointer& checkpointer)
+          const IterationObserver& observer, Clock::time_point start, detail::Checkpointer& checkpointer,
+          const SlidingVertices* sliding = nullptr)
         : work_(work), x_(xyz), metric_(metric), objective_(objective), stop_(stop), options_(options),
           untangling_(stage.untangling), stage_(stage), summary_(summary), observer_(observer), start_(start),
-          checkpointer_(checkpointer) {}
+          checkpointer_(checkpointer), sliding_(sliding) {}
 
     // From the phase's start, or from a checkpoint's state at an iteration boundary.
     PhaseResult run(const detail::SolverState* resume = nullptr);
@@ -195,6 +249,7 @@ private:
     const IterationObserver& observer_;
     Clock::time_point start_;
     detail::Checkpointer& checkpointer_;
+    const SlidingVertices* sliding_;  // the boundary vertices that slide, if any
     const Reducer& reducer_ = work_.reducer();
 
     std::vector<double> q_, trial_q_, weight_, trial_x_, gradient_, direction_, previous_gradient_, best_x_;
@@ -356,6 +411,8 @@ bool Phase::line_search(double objective, double max_direction) {
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > detail::kParallelThreshold)
         for (VertexId v = 0; v < n; ++v)
             for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + s * direction_[3 * v + c];
+        // Sliding vertices are rated where they would go: on the boundary.
+        if (sliding_) sliding_->project(mesh, trial_x_);
         work_.evaluate(metric_, trial_x_, trial_q_);
         ++summary_.quality_passes;
         bool blocked = true;
@@ -375,6 +432,7 @@ bool Phase::line_search(double objective, double max_direction) {
             for (VertexId v : damped) {
                 damping_[v] *= 0.25;
                 for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + damping_[v] * s * direction_[3 * v + c];
+                if (sliding_) sliding_->project(v, trial_x_);
             }
             for (VertexId v : damped)
                 for (ElementId e : mesh.elements_of(v)) {
@@ -586,6 +644,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             work_.gradient(metric_, x_, weight_, gradient_);
         }
         ++summary_.gradient_passes;
+        // A sliding vertex ascends along its surface or curve.
+        if (sliding_) sliding_->tangent(gradient_);
         const double g2 = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             acc[0].add(gradient_[3 * v] * gradient_[3 * v] + gradient_[3 * v + 1] * gradient_[3 * v + 1] +
                        gradient_[3 * v + 2] * gradient_[3 * v + 2]);
@@ -610,6 +670,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         } else {
             if (precondition) apply_preconditioner();
             else preconditioned_ = gradient_;
+            if (sliding_ && precondition) sliding_->tangent(preconditioned_);
             // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
             // changes (mu) or the direction stops ascending.
             double beta = 0.0;
@@ -626,6 +687,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                 beta = sums[1] > 0.0 ? std::max(0.0, sums[0] / sums[1]) : 0.0;
             }
             for (std::size_t i = 0; i < n3; ++i) direction_[i] = preconditioned_[i] + beta * direction_[i];
+            // Both terms are tangential already; this keeps their sum so despite rounding.
+            if (sliding_) sliding_->tangent(direction_);
             const double slope = detail::owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
                 acc[0].add(gradient_[3 * v] * direction_[3 * v] + gradient_[3 * v + 1] * direction_[3 * v + 1] +
                            gradient_[3 * v + 2] * direction_[3 * v + 2]);
@@ -826,8 +889,9 @@ GlobalSolver::GlobalSolver(GlobalSolverOptions options) : options_(std::move(opt
 namespace {
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
+// With `sliding`, its vertices slide in the shape phase.
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
-              detail::Workspace& work, detail::Checkpointer& checkpointer) {
+              detail::Workspace& work, detail::Checkpointer& checkpointer, const detail::SlidingBoundary* sliding) {
     Summary& summary = run.summary;
     // A resumed run enters the phase (and untangling round) it was checkpointed in.
     std::optional<detail::SolverState> resume;
@@ -909,8 +973,10 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         auto metric = make_metric(options.shape_metric, options.metric_options);
         metric->set_scale(work.scale());
         auto objective = make_objective(options.objective, options.objective_options);
+        std::optional<SlidingVertices> sliding_vertices;
+        if (sliding) sliding_vertices.emplace(work, *sliding);
         result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0}, summary, observer,
-                       start, checkpointer)
+                       start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
                      .run(resume ? &*resume : nullptr);
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
@@ -927,15 +993,39 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     return finish(result.reason, result.message);
 }
 
+// One run on the part, with the boundary sliding (`sliding`) or not (nullptr).
+Summary improve_part(const GlobalSolverOptions& options, const IterationObserver& observer, MeshPart part,
+                     detail::SlidingBoundary* sliding) {
+    const std::string name = "global";
+    detail::SolverRun run(part, name, options.shape_metric);
+    if (sliding) sliding->set_scale_exponent(run.scale_exponent());
+    if (auto nothing = run.nothing_to_move()) return *nothing;
+    detail::Checkpointer checkpointer(options.checkpoint, name, options_text(options), part);
+    detail::Workspace work(part, options.renumber);
+    return solve(options, observer, run, work, checkpointer, sliding);
+}
+
 }  // namespace
 
 Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(part, std::string(name()), options_.shape_metric);
-    if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), part);
-    detail::Workspace work(part, options_.renumber);
-    return solve(options_, observer(), run, work, checkpointer);
+    if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
+    detail::refuse_distributed_sliding(part);
+    // The input's boundary, which the boundary-fixed run leaves where it is.
+    detail::SlidingBoundary sliding(part.mesh(), options_.surface);
+    GlobalSolverOptions first = options_;
+    first.termination = detail::fixed_run_budget(options_.termination);
+    Summary fixed = improve_part(first, observer(), part, nullptr);
+    // Then a shape phase with the boundary sliding, from the valid mesh the first run left, on
+    // what budget is left.
+    const auto budget = detail::sliding_budget(options_.termination, fixed);
+    if (!budget || !options_.improve_shape) return sliding.join(std::move(fixed), std::nullopt);
+    GlobalSolverOptions slide = options_;
+    slide.termination = *budget;
+    slide.untangle = false;  // the mesh is valid; untangling would not keep the boundary on the surface
+    sliding.release();
+    Summary slid = improve_part(slide, observer(), part, &sliding);
+    return sliding.join(std::move(fixed), std::move(slid));
 }
 
 }  // namespace paloverde

@@ -28,9 +28,7 @@ void LocalSolverOptions::validate() const {
         throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
                           "inverse_condition or edge_ratio");
     surface.validate();
-    if (boundary == Boundary::Slide && (!checkpoint.file.empty() || !checkpoint.resume.empty()))
-        throw OptionError("checkpoints do not go with boundary: slide yet (a sliding run is two runs: the boundary "
-                          "fixed, then sliding); keep the boundary fixed to checkpoint");
+    if (boundary == Boundary::Slide) detail::validate_sliding(surface, checkpoint);
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
@@ -200,25 +198,19 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
-    if (whole_or_part.distributed())
-        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17); run serially "
-                          "(threads work), or keep the boundary fixed");
+    detail::refuse_distributed_sliding(whole_or_part);
     // The input's boundary, which the boundary-fixed run leaves where it is.
     detail::SlidingBoundary sliding(whole_or_part.mesh(), options_.surface);
-    Summary fixed = improve_part(whole_or_part, nullptr);
+    LocalSolverOptions fixed_options = options_;
+    fixed_options.termination = detail::fixed_run_budget(options_.termination);
+    LocalSolver first(fixed_options);
+    first.set_observer(observer());
+    Summary fixed = first.improve_part(whole_or_part, nullptr);
     // Then the shape sweeps with the boundary sliding, on what budget is left.
+    const auto budget = detail::sliding_budget(options_.termination, fixed);
+    if (!budget) return sliding.join(std::move(fixed), std::nullopt);
     LocalSolverOptions slide = options_;
-    slide.termination.max_iterations -= fixed.iterations - fixed.untangle_iterations;
-    if (slide.termination.max_seconds > 0.0) slide.termination.max_seconds -= fixed.seconds;
-    const bool budget_left = slide.termination.max_iterations > 0 &&
-                             (options_.termination.max_seconds == 0.0 || slide.termination.max_seconds > 0.0);
-    const bool go_on = fixed.reason == TerminationReason::Converged || fixed.reason == TerminationReason::NothingToMove ||
-                       fixed.reason == TerminationReason::NoImprovingStep;
-    if (!go_on || !budget_left) {
-        if (fixed.reason == TerminationReason::IterationLimit || fixed.reason == TerminationReason::TimeLimit)
-            fixed.message += "; the boundary did not slide (the budget was spent with it fixed)";
-        return sliding.join(std::move(fixed), std::nullopt);
-    }
+    slide.termination = *budget;
     sliding.release();
     LocalSolver second(slide);
     second.set_observer(observer());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 
 namespace paloverde::detail {
@@ -18,6 +19,43 @@ double volume_of(const SimplexMesh& mesh) {
 }
 
 }  // namespace
+
+void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint) {
+    surface.validate();
+    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
+        throw OptionError("checkpoints do not go with boundary: slide yet (a sliding run is two runs: the boundary "
+                          "fixed, then sliding); keep the boundary fixed to checkpoint");
+}
+
+void refuse_distributed_sliding(const MeshPart& part) {
+    if (part.distributed())
+        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17: distributed sliding "
+                          "is not built yet); run serially (threads work), or keep the boundary fixed");
+}
+
+TerminationCriterion fixed_run_budget(const TerminationCriterion& termination) {
+    TerminationCriterion half = termination;
+    half.max_iterations = (termination.max_iterations + 1) / 2;
+    half.max_seconds = termination.max_seconds / 2.0;
+    return half;
+}
+
+std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed) {
+    TerminationCriterion left = termination;
+    left.max_iterations -= fixed.iterations - fixed.untangle_iterations;
+    if (left.max_seconds > 0.0) left.max_seconds -= fixed.seconds;
+    const bool budget_left = left.max_iterations > 0 && (termination.max_seconds == 0.0 || left.max_seconds > 0.0);
+    const TerminationReason r = fixed.reason;
+    // The sliding run improves shapes only: it starts from a valid mesh.
+    const bool valid = fixed.after.inverted == 0 && fixed.after.degenerate == 0;
+    const bool go_on = valid && (r == TerminationReason::Converged || r == TerminationReason::NothingToMove ||
+                                 r == TerminationReason::NoImprovingStep || r == TerminationReason::GradientVanished ||
+                                 r == TerminationReason::IterationLimit || r == TerminationReason::TimeLimit);
+    if (go_on && budget_left) return left;
+    if (r == TerminationReason::IterationLimit || r == TerminationReason::TimeLimit)
+        fixed.message += "; the boundary did not slide (the budget was spent with it fixed)";
+    return std::nullopt;
+}
 
 SlidingBoundary::SlidingBoundary(SimplexMesh& mesh, const SurfaceOptions& options)
     : mesh_(mesh), surface_(mesh, options), fixed_(mesh.fixed().begin(), mesh.fixed().end()),

@@ -16,9 +16,27 @@
 #include <vector>
 
 #include "paloverde/mesh/boundary_surface.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
+#include "paloverde/solvers/termination.hpp"
 
 namespace paloverde::detail {
+
+// The options a solver's boundary: slide comes with (throws OptionError): a good feature angle,
+// and no checkpoints (a sliding run is two runs, which one checkpoint cannot resume).
+void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint);
+// Throws OptionError for a part of a distributed run: sliding is serial only so far.
+void refuse_distributed_sliding(const MeshPart& part);
+// The boundary-fixed run's share of the shape budget `termination`: half its iterations and
+// seconds, so that a run which would use them all (a focused global run creeping up) still
+// leaves the sliding run its turn.
+TerminationCriterion fixed_run_budget(const TerminationCriterion& termination);
+// What the boundary-fixed run `fixed` left of the shape phase's budget `termination` for the
+// sliding run: none when it spent it, or ended where sliding does not go on from (an element
+// inverted or degenerate, interrupted, at its target); a spent budget is then noted in
+// fixed.message.
+std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed);
 
 class SlidingBoundary {
 public:

@@ -289,7 +289,7 @@ void Workspace::copy_back(std::span<const double> xyz) const {
     }
     auto out = original_->coordinates();
     for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
-        const VertexId old = old_vertex_.empty() ? v : old_vertex_[v];
+        const VertexId old = caller_vertex(v);
         for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(old) + c] = xyz[3 * static_cast<std::size_t>(v) + c];
     }
 }

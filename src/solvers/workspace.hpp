@@ -77,6 +77,8 @@ public:
                   std::span<double> gradient, std::span<const double> curvature_weight = {},
                   std::span<double> curvature = {});
 
+    // The id in the part it was made from of the workspace's vertex v.
+    VertexId caller_vertex(VertexId v) const { return old_vertex_.empty() ? v : old_vertex_[v]; }
     // Coordinates xyz (the workspace's) into the part it was made from, in the part's numbering.
     void copy_back(std::span<const double> xyz) const;
 

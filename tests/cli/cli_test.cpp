@@ -280,8 +280,9 @@ BOOST_AUTO_TEST_CASE(untangle_only_works_for_global_and_local) {
     }
 }
 
-// --boundary slide: the local smoother slides the boundary and the summary says how far it went;
-// the other methods keep the boundary fixed and say so; a bad mode or angle is a usage error.
+// --boundary slide: the local smoother and the global solver slide the boundary and the summary
+// says how far it went; Laplace smoothing keeps the boundary fixed and says so; a bad mode or
+// angle is a usage error.
 BOOST_AUTO_TEST_CASE(boundary_slide_with_the_local_smoother) {
     const pv::test::ScratchDir dir("cli_slide");
     const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
@@ -299,10 +300,19 @@ BOOST_AUTO_TEST_CASE(boundary_slide_with_the_local_smoother) {
     // The config the flags stand for.
     const auto config = run_cli("improve " + quoted(input) + " -o " + out + " --method local --boundary slide --print-config");
     BOOST_TEST(has(config.output, "boundary: slide"), config.output);
-    for (const std::string flags : {"--boundary slide", "--method global --boundary slide", "--method laplace --feature-angle 30"}) {
+    // The global solver (the default method) slides too; Laplace smoothing refuses.
+    for (const std::string method : {"", " --method global"}) {
+        const auto global = run_cli("improve -q " + quoted(input) + " -o " + out + method +
+                                    " --boundary slide --feature-angle 35 --summary " + quoted(dir / "g.json"));
+        BOOST_TEST_REQUIRE(global.exit_code == 0, global.output);
+        const auto g = nlohmann::json::parse(read_text(dir / "g.json"));
+        BOOST_TEST(g["steps"][0]["summary"]["boundary"]["moved"].get<long>() > 0, method);
+        BOOST_TEST(g["steps"][0]["summary"]["boundary"]["largest_distance"].get<double>() <= 1e-9, method);
+    }
+    for (const std::string flags : {"--method laplace --boundary slide", "--method smart-laplace --feature-angle 30"}) {
         const auto refused = run_cli("improve " + quoted(input) + " -o " + out + " " + flags);
         BOOST_TEST(refused.exit_code == 2, flags);
-        BOOST_TEST(has(refused.output, "only the local smoother slides boundary vertices"), refused.output);
+        BOOST_TEST(has(refused.output, "only the global solver and the local smoother slide boundary vertices"), refused.output);
     }
     BOOST_TEST(run_cli("improve -q " + quoted(input) + " -o " + out + " --boundary fixed --iterations 2").exit_code == 0);
     for (const std::string flags : {"--boundary sideways", "--feature-angle 190"}) {

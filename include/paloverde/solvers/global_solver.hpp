@@ -7,6 +7,7 @@
 // (stop.hpp) or a NaN ends the run on its best iterate.
 #include <string>
 
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
@@ -59,6 +60,13 @@ struct GlobalSolverOptions {
     int newton_cg_iterations = 100;
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
+    // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the boundary
+    // fixed, a shape phase in which they move too, on the input's boundary, along feature curves,
+    // corners fixed (mesh/boundary_surface.hpp; docs/global_solver.md). Serial runs only; no
+    // checkpoints, no newton directions.
+    enum class Boundary { Fixed, Slide };
+    Boundary boundary = Boundary::Fixed;
+    SurfaceOptions surface;           // with slide: the feature angle
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it
     CheckpointOptions checkpoint;     // periodic checkpoints, resuming (checkpoint.hpp)
 
