@@ -226,7 +226,7 @@ Tables::Tables() {
         .real("focus_band", &GlobalSolverOptions::focus_band,
               "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
               "their neighbours, chosen anew as the worst climbs and widened where it stalls, in (0, 1]; 1: the "
-              "whole mesh every iteration.")
+              "whole mesh every iteration (direction newton: always the whole mesh).")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,

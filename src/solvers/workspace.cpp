@@ -134,6 +134,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
                             ? std::cbrt(6.0 * std::numbers::sqrt2 * scale_.reference_volume)
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
     lanes_ = make_lanes(mesh_, movable_, element_order, global_elements);
+    free_ = free_vertices_of(mesh_);
     element_order_ = element_order;
     global_elements_ = global_elements;
     return order;
@@ -165,6 +166,13 @@ Workspace::Lanes Workspace::make_lanes(const SimplexMesh& mesh, ElementId movabl
     return lanes;
 }
 
+std::vector<VertexId> Workspace::free_vertices_of(const SimplexMesh& mesh) {
+    std::vector<VertexId> free;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.can_move(v)) free.push_back(v);
+    return free;
+}
+
 void Workspace::focus(std::span<const std::uint8_t> moving) {
     focus_.reset();
     const VertexId n = mesh_.num_vertices();
@@ -190,6 +198,7 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
             if (part_->counted[f.elements[i]]) f.counted.push_back(i);
     f.global_count = reducer_->total(static_cast<double>(part_ ? f.counted.size() : f.elements.size()));
     f.lanes = make_lanes(f.mesh, size, positions, global_elements_);
+    f.free = free_vertices_of(f.mesh);
     focus_ = std::move(f);
 }
 

@@ -40,6 +40,10 @@ public:
     ElementId movable_elements() const { return focus_ ? static_cast<ElementId>(focus_->elements.size()) : movable_; }
     // Per vertex: this process owns it (computes its gradient and moves it).
     std::span<const std::uint8_t> owned() const { return owned_; }
+    // The vertices of mesh() that can move, ghosts included, in increasing order. A vertex field
+    // that vanishes elsewhere (a gradient, a direction) needs only these: a focus is a fraction
+    // of the mesh, and loops over every vertex would cost what the whole mesh costs.
+    std::span<const VertexId> free_vertices() const { return focus_ ? focus_->free : free_; }
     // Vertices owned by other processes.
     std::span<const VertexId> ghosts() const { return ghosts_; }
     double reference_length() const { return reference_length_; }
@@ -100,6 +104,7 @@ private:
         std::vector<ElementId> counted;  // focus elements counted here (distributed runs)
         double global_count = 0.0;
         Lanes lanes;
+        std::vector<VertexId> free;      // its moving vertices
     };
     // Orders mesh_'s elements in place (movable first, then canonical), with `element_order` and
     // `counted` (empty: all counted), and sets up scale and lanes. Returns the order: element i
@@ -110,6 +115,7 @@ private:
     static Lanes make_lanes(const SimplexMesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
                             GlobalId global_elements);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
+    static std::vector<VertexId> free_vertices_of(const SimplexMesh& mesh);
 
     SimplexMesh* original_;             // the part's mesh
     SimplexMesh own_;                   // serial runs: the mesh in canonical order
@@ -129,23 +135,39 @@ private:
     MetricScale scale_;
     double reference_length_ = 1.0;
     Lanes lanes_;
+    std::vector<VertexId> free_;
     std::vector<GlobalId> element_order_;  // canonical position of each element (workspace order)
     GlobalId global_elements_ = 0;
     std::optional<Focus> focus_;
 };
 
-// Exact sums of term(v, acc) over the vertices this process owns, then over all processes: the
-// same bits for any number of threads and processes.
-template <int K, class Term>
-std::array<double, K> owned_sums(const Workspace& work, Term term) {
+// Exact sums of term(vertex(i), acc) for i < count over the vertices this process owns, then
+// over all processes: the same bits for any number of threads and processes, and in any order.
+template <int K, class Vertex, class Term>
+std::array<double, K> owned_sums_over(const Workspace& work, std::size_t count, Vertex vertex, Term term) {
     const auto owned = work.owned();
-    auto sums = exact_sums<K>(owned.size(), [&](std::size_t v, auto& acc) {
+    auto sums = exact_sums<K>(count, [&](std::size_t i, auto& acc) {
+        const auto v = static_cast<std::size_t>(vertex(i));
         if (owned[v]) term(v, acc);
     });
     work.reducer().sum(sums);
     std::array<double, K> out{};
     for (int k = 0; k < K; ++k) out[k] = sums[k].value();
     return out;
+}
+
+// Over every owned vertex.
+template <int K, class Term>
+std::array<double, K> owned_sums(const Workspace& work, Term term) {
+    return owned_sums_over<K>(work, work.owned().size(), [](std::size_t v) { return v; }, term);
+}
+
+// Over the free ones only (Workspace::free_vertices): the same sums, bit for bit, for terms that
+// vanish at the vertices that cannot move.
+template <int K, class Term>
+std::array<double, K> free_owned_sums(const Workspace& work, Term term) {
+    const auto free = work.free_vertices();
+    return owned_sums_over<K>(work, free.size(), [&](std::size_t i) { return free[i]; }, term);
 }
 
 // The dot product of two vertex fields (3 doubles per vertex) over the owned vertices of all
