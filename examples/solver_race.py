@@ -1,0 +1,92 @@
+#!/usr/bin/env python3
+"""The global solver against the local smoother on the same meshes, one thread each: final worst
+and mean quality, the solver's seconds, when each first reached its own final worst quality, and
+when the global solver passed the local smoother's. With --old, the global solver as it was
+before issue 16's focus and adaptive mu (--set gain_tolerance=0, focus_band=1) runs too. Prints a
+markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
+python3-matplotlib), writes one plot per mesh of the best worst quality against seconds.
+
+    python3 examples/solver_race.py MESH [MESH ...] [--old] [--plot PREFIX] [--set KEY=VALUE ...]
+                                    [--paloverde build/bin/paloverde] [--threads 1]
+
+--set passes options to the default global solver (queue[0].improve.KEY=VALUE), for sensitivity
+runs; the local smoother and the old global solver ignore them.
+"""
+import argparse
+import json
+import os
+import resource
+import subprocess
+import tempfile
+
+parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+parser.add_argument("meshes", nargs="+")
+parser.add_argument("--paloverde", default="build/bin/paloverde")
+parser.add_argument("--threads", default="1")
+parser.add_argument("--old", action="store_true", help="also run the global solver with the old defaults")
+parser.add_argument("--plot", default=None, help="prefix of the PNG files written (one per mesh)")
+parser.add_argument("--set", action="append", default=[], help="an option of the default global solver")
+args = parser.parse_args()
+
+OLD = ["--set", "queue[0].improve.gain_tolerance=0", "--set", "queue[0].improve.focus_band=1"]
+methods = [("global", ["--method", "global"] + [a for kv in args.set for a in ("--set", "queue[0].improve." + kv)])]
+if args.old:
+    methods.append(("old global", ["--method", "global"] + OLD))
+methods.append(("local", ["--method", "local"]))
+
+
+def run(mesh, extra, scratch):
+    summary = os.path.join(scratch, "s.json")
+    env = dict(os.environ, OMP_NUM_THREADS=args.threads)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime
+    subprocess.run([args.paloverde, "improve", mesh, "-o", os.path.join(scratch, "out.vtu"), "--threads", args.threads,
+                    "--summary", summary, "-q"] + extra, check=True, env=env)
+    cpu = resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime - before
+    with open(summary) as f:
+        s = json.load(f)
+    return s, cpu
+
+
+def reached(history, level):
+    """Seconds at which the best worst quality first reached `level` (None: never)."""
+    return next((r["seconds"] for r in history if r["best_worst_quality"] >= level - 1e-12), None)
+
+
+def fmt(seconds):
+    return "-" if seconds is None else "%.2f" % seconds
+
+
+print("| mesh | elements | input worst / mean | method | worst | mean | solver s | own worst at s | "
+      "local's worst at s | iterations | stopped |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
+with tempfile.TemporaryDirectory() as scratch:
+    for mesh in args.meshes:
+        results = {}
+        for name, extra in methods:
+            results[name] = run(mesh, extra, scratch)
+        local_worst = results["local"][0]["worst_after"]
+        curves = {}
+        for name, _ in methods:
+            s, cpu = results[name]
+            step = s["steps"][0]["summary"]
+            history = [r for step_ in s["steps"] for r in step_["summary"]["history"]]
+            curves[name] = history
+            before = step["before"]["metrics"][s["metric"]]
+            print("| %s | %d | %.4f / %.4f | %s | %.5f | %.4f | %.2f | %s | %s | %d | %s |" % (
+                os.path.basename(mesh), step["before"]["elements"], s["worst_before"], before["mean"], name,
+                s["worst_after"], s["mean_after"], step["seconds"], fmt(reached(history, s["worst_after"])),
+                fmt(reached(history, local_worst)), s["iterations"], step["message"]), flush=True)
+        if args.plot:
+            import matplotlib
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+            fig, ax = plt.subplots(figsize=(6, 4))
+            for name, history in curves.items():
+                ax.plot([r["seconds"] for r in history], [r["best_worst_quality"] for r in history], label=name)
+            ax.set_xlabel("seconds (one thread)")
+            ax.set_ylabel("worst quality (best so far)")
+            ax.set_title(os.path.basename(mesh))
+            ax.legend()
+            fig.tight_layout()
+            fig.savefig("%s-%s.png" % (args.plot, os.path.splitext(os.path.basename(mesh))[0]), dpi=90)
+            plt.close(fig)
