@@ -67,7 +67,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         ->type_name("X");
     cmd->add_option("--boundary", o->boundary,
                     "boundary (global, local): fixed, or slide: boundary vertices move on the input's boundary, "
-                    "feature curves kept, corners fixed (serial runs)")
+                    "feature curves kept, corners fixed")
         ->type_name("MODE");
     cmd->add_option("--feature-angle", o->feature_angle,
                     "surface.feature_angle (global, local, with --boundary slide): boundary faces meeting at more than this "

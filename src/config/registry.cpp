@@ -237,7 +237,7 @@ Tables::Tables() {
         .choice("boundary", &GlobalSolverOptions::boundary,
                 {{"fixed", GlobalSolverOptions::Boundary::Fixed}, {"slide", GlobalSolverOptions::Boundary::Slide}},
                 "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in a shape phase "
-                "after the run with them fixed (feature curves kept, corners fixed; serial runs; not with direction newton).")
+                "after the run with them fixed (feature curves kept, corners fixed; not with direction newton).")
         .object("surface", &GlobalSolverOptions::surface, surface, surface_help)
         .object("checkpoint", &GlobalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
@@ -263,7 +263,7 @@ Tables::Tables() {
         .choice("boundary", &LocalSolverOptions::boundary,
                 {{"fixed", LocalSolverOptions::Boundary::Fixed}, {"slide", LocalSolverOptions::Boundary::Slide}},
                 "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in the shape "
-                "sweeps (feature curves kept, corners fixed; serial runs).")
+                "sweeps (feature curves kept, corners fixed).")
         .object("surface", &LocalSolverOptions::surface, surface, surface_help)
         .object("checkpoint", &LocalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run, at sweep boundaries: file, every_iterations, every_seconds; and resume (docs/robustness.md).");

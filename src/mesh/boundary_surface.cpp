@@ -43,8 +43,8 @@ double angle_between(const Vec3& a, const Vec3& b) {
 // A boundary facet: a triangle of a tet mesh's boundary, or an edge of a triangle mesh's (the
 // third vertex then -1), its corners in the order that makes it face outward.
 struct Facet {
-    std::array<VertexId, 3> corner;
-    std::array<VertexId, 3> key;  // the corners sorted
+    std::array<GlobalId, 3> corner;
+    std::array<GlobalId, 3> key;  // the corners sorted
 };
 
 // The outward faces of a positively oriented tetrahedron (0, 1, 2, 3), and the outward edges of a
@@ -52,30 +52,9 @@ struct Facet {
 constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 constexpr int kTriEdges[3][2] = {{0, 1}, {1, 2}, {2, 0}};
 
-std::vector<Facet> boundary_facets(const SimplexMesh& mesh) {
-    std::vector<Facet> all;
-    const bool tets = mesh.kind() == ElementKind::Tetrahedron;
-    all.reserve(static_cast<std::size_t>(mesh.num_elements()) * (tets ? 4 : 3));
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        const auto c = mesh.element(e);
-        for (int f = 0; f < (tets ? 4 : 3); ++f) {
-            Facet facet;
-            facet.corner = tets ? std::array<VertexId, 3>{c[kTetFaces[f][0]], c[kTetFaces[f][1]], c[kTetFaces[f][2]]}
-                                : std::array<VertexId, 3>{c[kTriEdges[f][0]], c[kTriEdges[f][1]], -1};
-            facet.key = facet.corner;
-            std::sort(facet.key.begin(), facet.key.end());
-            all.push_back(facet);
-        }
-    }
-    std::sort(all.begin(), all.end(), [](const Facet& a, const Facet& b) { return a.key < b.key; });
-    std::vector<Facet> boundary;
-    for (std::size_t i = 0; i < all.size();) {
-        std::size_t j = i + 1;
-        while (j < all.size() && all[j].key == all[i].key) ++j;
-        if (j - i == 1) boundary.push_back(all[i]);
-        i = j;
-    }
-    return boundary;
+// Facets sorted by key.
+void sort_by_key(std::vector<Facet>& facets) {
+    std::sort(facets.begin(), facets.end(), [](const Facet& a, const Facet& b) { return a.key < b.key; });
 }
 
 Vec3 unit(const Vec3& a) {
@@ -143,37 +122,121 @@ BoundarySurface::~BoundarySurface() = default;
 BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
 BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
 
-BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& options)
-    : kind_(mesh.kind()), trees_(std::make_unique<Trees>()) {
-    options.validate();
-    const bool tets = kind_ == ElementKind::Tetrahedron;
+BoundaryFacets BoundaryFacets::of(const SimplexMesh& mesh) {
+    BoundaryFacets out;
+    out.kind = mesh.kind();
+    const bool tets = out.kind == ElementKind::Tetrahedron;
     if (!tets && !mesh.is_planar())
         throw MeshError("the triangles do not lie in one plane: a surface mesh has no boundary to slide on");
-    const auto n = static_cast<std::size_t>(mesh.num_vertices());
-    const auto xyz = mesh.coordinates();
-    original_.resize(n);
-    for (std::size_t v = 0; v < n; ++v) original_[v] = {xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
-    if (n > 0) {
-        Vec3 low = original_[0], high = original_[0];
-        for (const auto& p : original_)
-            for (int d = 0; d < 3; ++d) low[d] = std::min(low[d], p[d]), high[d] = std::max(high[d], p[d]);
-        diagonal_ = norm(minus(high, low));
+    std::vector<Facet> all;
+    all.reserve(static_cast<std::size_t>(mesh.num_elements()) * (tets ? 4 : 3));
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto c = mesh.element(e);
+        for (int f = 0; f < (tets ? 4 : 3); ++f) {
+            Facet facet;
+            facet.corner = tets ? std::array<GlobalId, 3>{c[kTetFaces[f][0]], c[kTetFaces[f][1]], c[kTetFaces[f][2]]}
+                                : std::array<GlobalId, 3>{c[kTriEdges[f][0]], c[kTriEdges[f][1]], -1};
+            facet.key = facet.corner;
+            std::sort(facet.key.begin(), facet.key.end());
+            all.push_back(facet);
+        }
     }
-    roles_.assign(n, BoundaryRole::Interior);
+    sort_by_key(all);
+    const auto xyz = mesh.coordinates();
+    std::vector<std::uint8_t> on_boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    for (std::size_t i = 0; i < all.size();) {
+        std::size_t j = i + 1;
+        while (j < all.size() && all[j].key == all[i].key) ++j;
+        if (j - i == 1) {
+            out.facets.push_back(all[i].corner);
+            for (GlobalId v : all[i].corner)
+                if (v >= 0) on_boundary[static_cast<std::size_t>(v)] = 1;
+        }
+        i = j;
+    }
+    for (std::size_t v = 0; v < on_boundary.size(); ++v) {
+        if (!on_boundary[v]) continue;
+        out.ids.push_back(static_cast<GlobalId>(v));
+        out.xyz.insert(out.xyz.end(), xyz.begin() + static_cast<std::ptrdiff_t>(3 * v),
+                       xyz.begin() + static_cast<std::ptrdiff_t>(3 * v + 3));
+    }
+    if (!xyz.empty()) {
+        Vec3 low = {xyz[0], xyz[1], xyz[2]}, high = low;
+        for (std::size_t i = 0; i < xyz.size(); ++i) low[i % 3] = std::min(low[i % 3], xyz[i]), high[i % 3] = std::max(high[i % 3], xyz[i]);
+        out.diagonal = norm(minus(high, low));
+    }
+    return out;
+}
 
-    const std::vector<Facet> facets = boundary_facets(mesh);
+namespace {
+std::vector<GlobalId> identity(VertexId n) {
+    std::vector<GlobalId> ids(static_cast<std::size_t>(n));
+    for (std::size_t v = 0; v < ids.size(); ++v) ids[v] = static_cast<GlobalId>(v);
+    return ids;
+}
+}  // namespace
+
+BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& options)
+    : BoundarySurface(BoundaryFacets::of(mesh), identity(mesh.num_vertices()), options) {}
+
+BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,
+                                 const SurfaceOptions& options)
+    : kind_(boundary.kind), diagonal_(boundary.diagonal), trees_(std::make_unique<Trees>()) {
+    options.validate();
+    const bool tets = kind_ == ElementKind::Tetrahedron;
+    // Boundary vertices numbered by their coordinates (ties by id), so that neither the numbering
+    // nor the corner order of the elements changes which facet comes first, which corner a
+    // normal is taken from, or in which order sums are made.
+    const std::size_t n = boundary.ids.size();
+    auto place = [&](std::size_t i) { return Vec3{boundary.xyz[3 * i], boundary.xyz[3 * i + 1], boundary.xyz[3 * i + 2]}; };
+    std::vector<std::size_t> by_place(n);
+    for (std::size_t i = 0; i < n; ++i) by_place[i] = i;
+    std::sort(by_place.begin(), by_place.end(), [&](std::size_t a, std::size_t b) {
+        const Vec3 pa = place(a), pb = place(b);
+        return pa != pb ? pa < pb : boundary.ids[a] < boundary.ids[b];
+    });
+    std::vector<std::int32_t> rank_of(n);
+    original_.resize(n);
+    for (std::size_t r = 0; r < n; ++r) {
+        rank_of[by_place[r]] = static_cast<std::int32_t>(r);
+        original_[r] = place(by_place[r]);
+    }
+    auto boundary_vertex = [&](GlobalId id) -> std::int32_t {
+        const auto at = std::lower_bound(boundary.ids.begin(), boundary.ids.end(), id);
+        if (at == boundary.ids.end() || *at != id) return -1;
+        return rank_of[static_cast<std::size_t>(at - boundary.ids.begin())];
+    };
+    index_.resize(vertex_ids.size());
+    for (std::size_t v = 0; v < vertex_ids.size(); ++v) index_[v] = boundary_vertex(vertex_ids[v]);
+    auto id_of = [&](GlobalId r) { return boundary.ids[by_place[static_cast<std::size_t>(r)]]; };
+    roles_.assign(n, BoundaryRole::Surface);
+
+    // The facets in boundary vertices, each turned to start at its first corner (keeping its
+    // orientation), in the order of their sorted corners.
+    std::vector<Facet> facets(boundary.facets.size());
+    for (std::size_t f = 0; f < facets.size(); ++f) {
+        auto& c = facets[f].corner;
+        for (int k = 0; k < 3; ++k) {
+            const GlobalId id = boundary.facets[f][k];
+            c[k] = id < 0 ? -1 : boundary_vertex(id);
+            if (id >= 0 && c[k] < 0)
+                throw MeshError("boundary vertex " + std::to_string(id) + " of a boundary face has no coordinates");
+        }
+        if (tets) std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+        facets[f].key = c;
+        std::sort(facets[f].key.begin(), facets[f].key.end());
+    }
+    sort_by_key(facets);
     face_count_ = facets.size();
     // Boundary edges with the facets on them: for a tet mesh, the edges of its boundary faces;
     // for a triangle mesh, the boundary edges themselves (each on a curve).
     struct EdgeUse {
-        std::array<VertexId, 2> key;
+        std::array<GlobalId, 2> key;
         std::size_t facet;
     };
     std::vector<EdgeUse> uses;
     for (std::size_t f = 0; f < facets.size(); ++f) {
         const auto& c = facets[f].corner;
-        for (VertexId v : c)
-            if (v >= 0) roles_[static_cast<std::size_t>(v)] = BoundaryRole::Surface;
         if (tets) {
             for (int i = 0; i < 3; ++i) uses.push_back({{std::min(c[i], c[(i + 1) % 3]), std::max(c[i], c[(i + 1) % 3])}, f});
         } else {
@@ -187,8 +250,8 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
     };
     // Feature edges, each vertex's feature edges by the vertex at their other end, and the faces
     // joined into patches across the smooth edges.
-    std::vector<std::array<VertexId, 2>> features;
-    std::vector<std::vector<VertexId>> along(n);
+    std::vector<std::array<GlobalId, 2>> features;
+    std::vector<std::vector<GlobalId>> along(n);
     Groups faces(facets.size());
     for (std::size_t i = 0; i < uses.size();) {
         std::size_t j = i + 1;
@@ -196,8 +259,8 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
         const auto [a, b] = uses[i].key;
         if (tets && j - i > 2)
             throw MeshError("the boundary is not a manifold surface: " + std::to_string(j - i) +
-                            " boundary faces meet at the edge of vertices " + std::to_string(a) + " and " +
-                            std::to_string(b) + ", so no surface to slide on is defined there");
+                            " boundary faces meet at the edge of vertices " + std::to_string(id_of(a)) + " and " +
+                            std::to_string(id_of(b)) + ", so no surface to slide on is defined there");
         const bool feature = !tets || j - i != 2 || angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
         if (feature) {
             along[static_cast<std::size_t>(a)].push_back(b);
@@ -210,7 +273,7 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
     }
     feature_count_ = features.size();
     for (std::size_t v = 0; v < n; ++v) {
-        if (roles_[v] == BoundaryRole::Interior || along[v].empty()) continue;
+        if (along[v].empty()) continue;
         bool corner = along[v].size() != 2;
         if (!corner) {
             // A curve through v turns by 180 degrees less the angle between its two edges there.
@@ -221,7 +284,7 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
         roles_[v] = corner ? BoundaryRole::Corner : BoundaryRole::Curve;
     }
 
-    auto point = [&](VertexId v) {
+    auto point = [&](GlobalId v) {
         const Vec3& x = original_[static_cast<std::size_t>(v)];
         return Kernel::Point_3(x[0], x[1], x[2]);
     };
@@ -236,7 +299,7 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
         if (!tets) break;
         const auto& c = facets[f].corner;
         const Vec3 nf = normal(f);
-        for (VertexId v : c)
+        for (GlobalId v : c)
             if (roles_[static_cast<std::size_t>(v)] == BoundaryRole::Surface) {
                 auto& d = direction_[static_cast<std::size_t>(v)];
                 for (int k = 0; k < 3; ++k) d[k] += nf[k];
@@ -252,7 +315,7 @@ BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& 
     Groups edges(features.size());
     std::vector<std::int32_t> first_edge(n, -1);
     for (std::size_t e = 0; e < features.size(); ++e)
-        for (VertexId v : features[e]) {
+        for (GlobalId v : features[e]) {
             if (roles_[static_cast<std::size_t>(v)] != BoundaryRole::Curve) continue;
             auto& first = first_edge[static_cast<std::size_t>(v)];
             if (first < 0) first = static_cast<std::int32_t>(e);
@@ -293,7 +356,7 @@ int BoundarySurface::freedom(VertexId v) const {
 }
 
 Vec3 BoundarySurface::project(VertexId v, const Vec3& p) const {
-    const auto i = static_cast<std::size_t>(v);
+    const auto i = static_cast<std::size_t>(index_[static_cast<std::size_t>(v)]);
     const Kernel::Point_3 q(p[0], p[1], p[2]);
     auto nearest = [&](const auto& piece) {
         if (piece.primitives.empty()) return original_[i];
@@ -312,9 +375,11 @@ Vec3 BoundarySurface::project(VertexId v, const Vec3& p) const {
 }
 
 Vec3 BoundarySurface::tangent(VertexId v, const Vec3& d) const {
-    const Vec3& u = direction_[static_cast<std::size_t>(v)];
+    const BoundaryRole r = role(v);
+    if (r == BoundaryRole::Interior) return d;
+    const Vec3& u = direction_[static_cast<std::size_t>(index_[static_cast<std::size_t>(v)])];
     const double along = dot(d, u);
-    switch (role(v)) {
+    switch (r) {
         case BoundaryRole::Interior: return d;
         case BoundaryRole::Surface: return {d[0] - along * u[0], d[1] - along * u[1], d[2] - along * u[2]};
         case BoundaryRole::Curve: return {along * u[0], along * u[1], along * u[2]};
@@ -333,7 +398,9 @@ double BoundarySurface::distance(const Vec3& p) const {
 }
 
 std::size_t BoundarySurface::count(BoundaryRole r) const {
-    return static_cast<std::size_t>(std::count(roles_.begin(), roles_.end(), r));
+    std::size_t count = 0;
+    for (std::size_t v = 0; v < index_.size(); ++v) count += role(static_cast<VertexId>(v)) == r;
+    return count;
 }
 
 }  // namespace paloverde

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <type_traits>
 
@@ -339,6 +340,68 @@ void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, con
         write_piece(piece_path(path, p), piece, owner, counted, p, path.extension() != ".pvtu");
     }
     if (path.extension() == ".pvtu") write_pvtu(path, parts);
+}
+
+BoundaryFacets DistributedMesh::gather_boundary() const {
+    // A part holds every element around the vertices it owns, so a facet on its boundary with a
+    // corner it owns is on the whole mesh's boundary; the owner of its corner with the smallest
+    // global id reports it. (The faces where the part was cut have no owned corner.)
+    BoundaryFacets local;
+    std::string failure;
+    try {
+        local = BoundaryFacets::of(mesh);
+    } catch (const MeshError& e) {
+        failure = e.what();
+    }
+    agree(comm, failure);
+    const auto global = mesh.global_ids();
+    auto owned = [&](GlobalId v) { return vertex_owner[static_cast<std::size_t>(v)] == rank; };
+    std::vector<std::int64_t> facets;
+    for (const auto& f : local.facets) {
+        GlobalId first = f[0];
+        for (GlobalId v : f)
+            if (v >= 0 && global[v] < global[first]) first = v;
+        if (!owned(first)) continue;
+        for (GlobalId v : f) facets.push_back(v < 0 ? -1 : global[v]);
+    }
+    std::vector<std::int64_t> ids;
+    std::vector<double> xyz;
+    for (std::size_t i = 0; i < local.ids.size(); ++i)
+        if (owned(local.ids[i])) {
+            ids.push_back(global[local.ids[i]]);
+            xyz.insert(xyz.end(), local.xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i),
+                       local.xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i + 1));
+        }
+    // The bounding box of all vertices, as the serial mesh's.
+    std::array<double, 6> box;
+    box.fill(std::numeric_limits<double>::infinity());
+    const auto coordinates = mesh.coordinates();
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        for (int c = 0; c < 3; ++c) {
+            const double x = coordinates[3 * static_cast<std::size_t>(v) + c];
+            box[c] = std::min(box[c], x);
+            box[3 + c] = std::min(box[3 + c], -x);
+        }
+    MPI_Allreduce(MPI_IN_PLACE, box.data(), 6, MPI_DOUBLE, MPI_MIN, comm);
+
+    BoundaryFacets out;
+    out.kind = mesh.kind();
+    const auto all_facets = gather_to_all(comm, facets);
+    for (std::size_t i = 0; i + 2 < all_facets.size(); i += 3)
+        out.facets.push_back({all_facets[i], all_facets[i + 1], all_facets[i + 2]});
+    const auto all_ids = gather_to_all(comm, ids);
+    const auto all_xyz = gather_to_all(comm, xyz);
+    std::vector<std::size_t> order(all_ids.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all_ids[a] < all_ids[b]; });
+    for (std::size_t i : order) {
+        out.ids.push_back(all_ids[i]);
+        out.xyz.insert(out.xyz.end(), all_xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i),
+                       all_xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i + 1));
+    }
+    const double dx = -box[3] - box[0], dy = -box[4] - box[1], dz = -box[5] - box[2];
+    out.diagonal = global_vertices > 0 ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0;
+    return out;
 }
 
 void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }

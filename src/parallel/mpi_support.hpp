@@ -60,7 +60,21 @@ Gathered<T> gather_to_root(MPI_Comm comm, const std::vector<T>& mine) {
     MPI_Gatherv(mine.data(), count, mpi_type<T>(), out.values.data(), out.counts.data(), offsets.data(), mpi_type<T>(), 0, comm);
     return out;
 }
-// The inverse: rank 0's values cut by `counts`, `expected` of them to each rank.
+// Collective: each rank's values, concatenated in rank order on every rank.
+template <class T>
+std::vector<T> gather_to_all(MPI_Comm comm, const std::vector<T>& mine) {
+    int ranks = 1;
+    MPI_Comm_size(comm, &ranks);
+    int count = static_cast<int>(mine.size());
+    std::vector<int> counts(static_cast<std::size_t>(ranks));
+    MPI_Allgather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, comm);
+    std::vector<int> offsets(counts.size(), 0);
+    for (std::size_t p = 1; p < offsets.size(); ++p) offsets[p] = offsets[p - 1] + counts[p - 1];
+    std::vector<T> all(static_cast<std::size_t>(offsets.back() + counts.back()));
+    MPI_Allgatherv(mine.data(), count, mpi_type<T>(), all.data(), counts.data(), offsets.data(), mpi_type<T>(), comm);
+    return all;
+}
+// The inverse of gather_to_root: rank 0's values cut by `counts`, `expected` of them to each rank.
 inline std::vector<std::int64_t> scatter_from_root(MPI_Comm comm, const std::vector<std::int64_t>& values,
                                             const std::vector<int>& counts, std::size_t expected) {
     std::vector<int> offsets(counts.size(), 0);

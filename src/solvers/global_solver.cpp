@@ -1039,15 +1039,14 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
 Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
-    detail::refuse_distributed_sliding(part);
     // The input's boundary, which the boundary-fixed run leaves where it is.
-    detail::SlidingBoundary sliding(part.mesh(), options_.surface);
+    detail::SlidingBoundary sliding(part, options_.surface);
     GlobalSolverOptions first = options_;
     first.termination = detail::fixed_run_budget(options_.termination);
     Summary fixed = improve_part(first, observer(), part, nullptr);
     // Then a shape phase with the boundary sliding, from the valid mesh the first run left, on
     // what budget is left.
-    const auto budget = detail::sliding_budget(options_.termination, fixed);
+    const auto budget = detail::sliding_budget(options_.termination, fixed, part.reducer());
     if (!budget || !options_.improve_shape) return sliding.join(std::move(fixed), std::nullopt);
     GlobalSolverOptions slide = options_;
     slide.termination = *budget;

@@ -198,16 +198,15 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
-    detail::refuse_distributed_sliding(whole_or_part);
     // The input's boundary, which the boundary-fixed run leaves where it is.
-    detail::SlidingBoundary sliding(whole_or_part.mesh(), options_.surface);
+    detail::SlidingBoundary sliding(whole_or_part, options_.surface);
     LocalSolverOptions fixed_options = options_;
     fixed_options.termination = detail::fixed_run_budget(options_.termination);
     LocalSolver first(fixed_options);
     first.set_observer(observer());
     Summary fixed = first.improve_part(whole_or_part, nullptr);
     // Then the shape sweeps with the boundary sliding, on what budget is left.
-    const auto budget = detail::sliding_budget(options_.termination, fixed);
+    const auto budget = detail::sliding_budget(options_.termination, fixed, whole_or_part.reducer());
     if (!budget) return sliding.join(std::move(fixed), std::nullopt);
     LocalSolverOptions slide = options_;
     slide.termination = *budget;
@@ -259,7 +258,7 @@ Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundar
         scale.plane_normal = part->plane_normal;
     }
     Domain domain{mesh, std::move(counted), whole_or_part.reducer(), whole_or_part.halo(), std::move(coloring), scale};
-    return sweep_colors(run, domain, checkpointer);
+    return sweep_colors(run, domain, checkpointer, sliding);
 }
 
 Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,

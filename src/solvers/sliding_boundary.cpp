@@ -5,17 +5,31 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde::detail {
 
 namespace {
 
-// The mesh's volume (area for planar triangles), at the input's scale.
-double volume_of(const SimplexMesh& mesh) {
+// The whole mesh's volume (area for planar triangles), at the input's scale.
+double volume_of(const MeshPart& part) {
+    const SimplexMesh& mesh = part.mesh();
     const auto xyz = mesh.coordinates();
-    const int exponent = unit_scale_exponent(xyz);
-    const SignedMeasure m = signed_measure(mesh, xyz, exponent, mesh.plane_normal());
-    return std::ldexp(m.total.value(), -exponent * (mesh.kind() == ElementKind::Tetrahedron ? 3 : 2));
+    double largest = 0.0;
+    for (double c : xyz) largest = std::max(largest, std::abs(c));
+    largest = part.reducer().max(largest);  // one scale on every process
+    const int exponent = unit_scale_exponent(std::span<const double>(&largest, 1));
+    const DistributedMesh* d = part.distributed();
+    SignedMeasure m = d ? signed_measure(mesh, xyz, exponent, d->plane_normal, d->counted)
+                        : signed_measure(mesh, xyz, exponent, mesh.plane_normal());
+    const double total = part.reducer().total(m.total);
+    return std::ldexp(total, -exponent * (mesh.kind() == ElementKind::Tetrahedron ? 3 : 2));
+}
+
+// The input's boundary: a part's is the whole mesh's, its vertices named by global id.
+BoundarySurface surface_of(const MeshPart& part, const SurfaceOptions& options) {
+    if (const DistributedMesh* d = part.distributed()) return BoundarySurface(d->gather_boundary(), d->mesh.global_ids(), options);
+    return BoundarySurface(part.mesh(), options);
 }
 
 }  // namespace
@@ -27,12 +41,6 @@ void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& ch
                           "fixed, then sliding); keep the boundary fixed to checkpoint");
 }
 
-void refuse_distributed_sliding(const MeshPart& part) {
-    if (part.distributed())
-        throw OptionError("boundary: slide is not available in distributed runs yet (issue 17: distributed sliding "
-                          "is not built yet); run serially (threads work), or keep the boundary fixed");
-}
-
 TerminationCriterion fixed_run_budget(const TerminationCriterion& termination) {
     TerminationCriterion half = termination;
     half.max_iterations = (termination.max_iterations + 1) / 2;
@@ -40,10 +48,11 @@ TerminationCriterion fixed_run_budget(const TerminationCriterion& termination) {
     return half;
 }
 
-std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed) {
+std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed,
+                                                   const Reducer& reducer) {
     TerminationCriterion left = termination;
     left.max_iterations -= fixed.iterations - fixed.untangle_iterations;
-    if (left.max_seconds > 0.0) left.max_seconds -= fixed.seconds;
+    if (left.max_seconds > 0.0) left.max_seconds -= reducer.max(fixed.seconds);
     const bool budget_left = left.max_iterations > 0 && (termination.max_seconds == 0.0 || left.max_seconds > 0.0);
     const TerminationReason r = fixed.reason;
     // The sliding run improves shapes only: it starts from a valid mesh.
@@ -57,13 +66,14 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
     return std::nullopt;
 }
 
-SlidingBoundary::SlidingBoundary(SimplexMesh& mesh, const SurfaceOptions& options)
-    : mesh_(mesh), surface_(mesh, options), fixed_(mesh.fixed().begin(), mesh.fixed().end()),
-      input_(mesh.coordinates().begin(), mesh.coordinates().end()), volume_before_(volume_of(mesh)) {
-    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options)
+    : part_(part), mesh_(part.mesh()), surface_(surface_of(part, options)), fixed_(mesh_.fixed().begin(), mesh_.fixed().end()),
+      input_(mesh_.coordinates().begin(), mesh_.coordinates().end()), volume_before_(volume_of(part)) {
+    const auto n = static_cast<std::size_t>(mesh_.num_vertices());
     std::vector<std::uint8_t> on_boundary(n);
     for (std::size_t v = 0; v < n; ++v) on_boundary[v] = surface_.role(static_cast<VertexId>(v)) != BoundaryRole::Interior;
-    const bool boundary_fixed = on_boundary == fixed_;
+    // Whether the fixed flags are exactly the boundary, on every part.
+    const bool boundary_fixed = part.reducer().max(on_boundary == fixed_ ? 0.0 : 1.0) == 0.0;
     slides_.assign(n, 0);
     released_ = fixed_;
     for (std::size_t v = 0; v < n; ++v) {
@@ -117,17 +127,22 @@ BoundaryMotion SlidingBoundary::motion() const {
     BoundaryMotion m;
     const auto xyz = mesh_.coordinates();
     double largest = 0.0;
+    double sliding = 0.0, moved = 0.0;
     for (std::size_t v = 0; v < slides_.size(); ++v) {
-        if (!slides_[v]) continue;
-        ++m.sliding;
+        if (!slides_[v] || !part_.owns(static_cast<VertexId>(v))) continue;
+        ++sliding;
         const Vec3 p = {xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
-        if (!std::equal(p.begin(), p.end(), input_.begin() + static_cast<std::ptrdiff_t>(3 * v))) ++m.moved;
+        if (!std::equal(p.begin(), p.end(), input_.begin() + static_cast<std::ptrdiff_t>(3 * v))) ++moved;
         largest = std::max(largest, surface_.distance(p));
     }
+    const Reducer& reducer = part_.reducer();
+    m.sliding = static_cast<decltype(m.sliding)>(reducer.total(sliding));
+    m.moved = static_cast<decltype(m.moved)>(reducer.total(moved));
+    largest = reducer.max(largest);
     const double diagonal = surface_.bounding_box_diagonal();
     m.largest_distance = diagonal > 0.0 ? largest / diagonal : 0.0;
     m.volume_before = volume_before_;
-    m.volume_after = volume_of(mesh_);
+    m.volume_after = volume_of(part_);
     return m;
 }
 

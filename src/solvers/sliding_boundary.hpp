@@ -11,6 +11,10 @@
 // corners stay). When the fixed flags are exactly the boundary (the default, and Mesquite files'
 // `fixed` fields) that is all of them; a `fixed` field that marks anything else is the user's
 // choice, and the boundary vertices it fixes stay where they are.
+//
+// A part of a distributed run slides on the whole mesh's boundary (gathered on every rank; the
+// faces where the part was cut are not boundary), so a vertex slides, and projects, exactly as
+// it would serially. An owner and its ghosts project the same point the same way.
 #include <optional>
 #include <span>
 #include <vector>
@@ -26,8 +30,6 @@ namespace paloverde::detail {
 // The options a solver's boundary: slide comes with (throws OptionError): a good feature angle,
 // and no checkpoints (a sliding run is two runs, which one checkpoint cannot resume).
 void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint);
-// Throws OptionError for a part of a distributed run: sliding is serial only so far.
-void refuse_distributed_sliding(const MeshPart& part);
 // The boundary-fixed run's share of the shape budget `termination`: half its iterations and
 // seconds, so that a run which would use them all (a focused global run creeping up) still
 // leaves the sliding run its turn.
@@ -35,13 +37,16 @@ TerminationCriterion fixed_run_budget(const TerminationCriterion& termination);
 // What the boundary-fixed run `fixed` left of the shape phase's budget `termination` for the
 // sliding run: none when it spent it, or ended where sliding does not go on from (an element
 // inverted or degenerate, interrupted, at its target); a spent budget is then noted in
-// fixed.message.
-std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed);
+// fixed.message. The seconds spent are the slowest process's (`reducer`), so that every process
+// decides alike.
+std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed,
+                                                   const Reducer& reducer);
 
 class SlidingBoundary {
 public:
-    // From the input mesh, at its own scale (before any run moves or rescales it).
-    SlidingBoundary(SimplexMesh& mesh, const SurfaceOptions& options);
+    // From the input mesh or a rank's part of it, at its own scale (before any run moves or
+    // rescales it). Collective.
+    SlidingBoundary(MeshPart part, const SurfaceOptions& options);
     ~SlidingBoundary();  // gives the mesh its fixed flags back
     // Frees the fixed flags of the vertices that slide, until destruction.
     void release();
@@ -55,7 +60,8 @@ public:
     // point of v's patch or curve nearest to p.
     Vec3 tangent(VertexId v, const Vec3& d) const { return surface_.tangent(v, d); }
     Vec3 project(VertexId v, const Vec3& p) const;
-    // What the runs did to the boundary, from the mesh handed back (at the input's scale).
+    // What the runs did to the boundary, from the mesh handed back (at the input's scale), over
+    // the whole mesh. Collective.
     BoundaryMotion motion() const;
     // One Summary of the boundary-fixed run and the sliding one (`slid`; none when the fixed run
     // left nothing to slide or no budget). Worst qualities are over every element: the two runs
@@ -63,6 +69,7 @@ public:
     Summary join(Summary fixed, std::optional<Summary> slid) const;
 
 private:
+    MeshPart part_;
     SimplexMesh& mesh_;
     BoundarySurface surface_;
     std::vector<std::uint8_t> fixed_;   // the flags the mesh had, given back at the end

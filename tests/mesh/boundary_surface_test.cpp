@@ -2,6 +2,7 @@
 // curves and corners found on real meshes, and projections back onto the input's boundary.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <vector>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
@@ -163,6 +164,35 @@ BOOST_AUTO_TEST_CASE(a_round_surface_has_no_creases_and_bad_options_are_refused)
         pv::SurfaceOptions options;
         options.feature_angle = bad;
         BOOST_CHECK_THROW(pv::BoundarySurface(mesh, options), pv::OptionError);
+    }
+}
+
+// What makes a distributed run slide as the serial one: the surface does not depend on how the
+// vertices are numbered nor on which corner each element lists first. The tire (curved, with
+// creases) renumbered backwards, each tet's corners turned (0 1 2 3 -> 0 2 3 1, the same
+// orientation): every role, tangent and projection is the same, bit for bit.
+BOOST_AUTO_TEST_CASE(the_surface_is_the_same_whatever_the_numbering) {
+    const auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
+    const pv::VertexId n = mesh.num_vertices();
+    auto renamed = [n](pv::VertexId v) { return n - 1 - v; };
+    std::vector<double> xyz(mesh.coordinates().size());
+    for (pv::VertexId v = 0; v < n; ++v)
+        for (int c = 0; c < 3; ++c) xyz[3 * renamed(v) + c] = mesh.coordinates()[3 * v + c];
+    std::vector<pv::VertexId> corners;
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto k = mesh.element(e);
+        for (int i : {0, 2, 3, 1}) corners.push_back(renamed(k[i]));
+    }
+    const pv::SimplexMesh other(pv::ElementKind::Tetrahedron, std::move(xyz), std::move(corners));
+    const pv::BoundarySurface surface(mesh), same(other);
+    BOOST_TEST(same.count(pv::BoundaryRole::Curve) == surface.count(pv::BoundaryRole::Curve));
+    const double h = 0.01 * surface.bounding_box_diagonal();
+    for (pv::VertexId v = 0; v < n; ++v) {
+        const pv::VertexId w = renamed(v);
+        BOOST_TEST((same.role(w) == surface.role(v)), "vertex " << v);
+        const pv::Vec3 p = at(mesh, v), moved = {p[0] + h, p[1] - 0.5 * h, p[2] + 0.25 * h};
+        BOOST_TEST((same.project(w, moved) == surface.project(v, moved)), "vertex " << v);
+        BOOST_TEST((same.tangent(w, {1.0, 2.0, 3.0}) == surface.tangent(v, {1.0, 2.0, 3.0})), "vertex " << v);
     }
 }
 

@@ -17,8 +17,13 @@
 //   boundary it is not part of. A corner goes back to its own place.
 // - A tet mesh's boundary edge on more than two boundary faces (a non-manifold boundary) leaves
 //   the surface undefined there, and is refused.
+// - The surface is the same whatever the numbering of its vertices and the order of its facets'
+//   corners: it orders them by their coordinates. So a part of a distributed mesh, built from the
+//   whole mesh's boundary in global ids, projects and slides exactly as the serial mesh does.
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "paloverde/core/types.hpp"
@@ -31,6 +36,22 @@ struct SurfaceOptions {
     void validate() const;        // throws OptionError
 };
 
+// A boundary triangulation, its vertices named by ids of any numbering: what a BoundarySurface is
+// built from. A part of a distributed mesh has the whole mesh's, in global ids
+// (DistributedMesh::gather_boundary).
+struct BoundaryFacets {
+    ElementKind kind = ElementKind::Tetrahedron;
+    std::vector<GlobalId> ids;  // the boundary's vertices, ascending
+    std::vector<double> xyz;    // their coordinates, 3 per id
+    // Each facet's corners by id, in the order that makes it face outward: a tet mesh's boundary
+    // triangles, a planar triangle mesh's boundary edges (the third corner -1).
+    std::vector<std::array<GlobalId, 3>> facets;
+    double diagonal = 0.0;  // of the whole mesh's bounding box
+    // A mesh's own boundary, its vertices named by their index. Throws MeshError for a surface
+    // (non-planar triangle) mesh.
+    static BoundaryFacets of(const SimplexMesh& mesh);
+};
+
 enum class BoundaryRole : std::uint8_t { Interior, Surface, Curve, Corner };
 
 class BoundarySurface {
@@ -38,11 +59,18 @@ public:
     // From the mesh's current coordinates (the input's boundary, before any vertex moves).
     // Tetrahedra, or planar triangles; throws MeshError for a surface (non-planar triangle) mesh.
     explicit BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& options = {});
+    // From a boundary triangulation; `vertex_ids` names each vertex of the caller's mesh in the
+    // boundary's numbering (a vertex not among boundary.ids is interior). Throws MeshError.
+    BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,
+                    const SurfaceOptions& options = {});
     ~BoundarySurface();
     BoundarySurface(BoundarySurface&&) noexcept;
     BoundarySurface& operator=(BoundarySurface&&) noexcept;
 
-    BoundaryRole role(VertexId v) const { return roles_[static_cast<std::size_t>(v)]; }
+    BoundaryRole role(VertexId v) const {
+        const std::int32_t i = index_[static_cast<std::size_t>(v)];
+        return i < 0 ? BoundaryRole::Interior : roles_[static_cast<std::size_t>(i)];
+    }
     // Degrees of freedom of vertex v: 3 (2 in a planar triangle mesh) inside, 2 on the surface
     // (tetrahedra only), 1 on a curve, 0 at a corner.
     int freedom(VertexId v) const;
@@ -57,12 +85,15 @@ public:
 
     std::size_t boundary_faces() const { return face_count_; }  // triangles (edges for triangle meshes)
     std::size_t feature_edges() const { return feature_count_; }
-    std::size_t count(BoundaryRole role) const;
+    std::size_t count(BoundaryRole role) const;  // of the caller's vertices
     double bounding_box_diagonal() const { return diagonal_; }
 
 private:
     struct Trees;  // CGAL's AABB trees, kept out of this header
     ElementKind kind_;
+    // Per vertex of the caller's mesh: its boundary vertex, or -1 inside. Boundary vertices are
+    // numbered by their coordinates (lexicographically), and the arrays below are per boundary vertex.
+    std::vector<std::int32_t> index_;
     std::vector<BoundaryRole> roles_;
     std::vector<Vec3> original_;  // each vertex's place in the input (corners stay there)
     // Surface vertices: the unit normal of their faces at the input; curve vertices: the unit

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 #include "paloverde/parallel/halo.hpp"
@@ -87,6 +88,10 @@ public:
     // whole mesh and, while it builds it, the gathered values of either the vertices (40 bytes
     // each) or the elements (8 bytes per corner, plus 8).
     SimplexMesh gather_whole() const;
+
+    // Collective: the whole mesh's boundary at the current coordinates, in global ids, on every
+    // rank (a part's own boundary also has the faces where it was cut from the others').
+    BoundaryFacets gather_boundary() const;
 
     // Collective: refreshes ghost coordinates from their owners.
     void update_ghost_coordinates();
