@@ -45,7 +45,7 @@ void GlobalSolverOptions::validate() const {
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
     surface.validate();
     if (boundary == Boundary::Slide) {
-        detail::validate_sliding(surface, checkpoint);
+        detail::validate_sliding(checkpoint);
         if (direction == Direction::Newton)
             throw OptionError("direction newton does not go with boundary: slide yet (its Hessian solves know nothing "
                               "of the surface the boundary slides on); use conjugate_gradient or steepest_ascent");
@@ -814,8 +814,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                               progress.did_not_fall(bad_history_) && (progress.rose(stage_history_) || long_stall));
         // A focus that stalls may be held by the elements just outside it: a wider one, as long
         // as the last widening paid (each costs a stall window on more elements).
-        const double tolerance = stop_.min_progress * std::max(std::abs(best_worst_), 1e-3);
-        const bool widen = stalled && focusing_ && band_ < 1.0 && best_worst_ > widened_at_ + tolerance;
+        const bool widen = stalled && focusing_ && band_ < 1.0 && best_worst_ > widened_at_ + progress.tolerance();
         if (widen) {
             band_ = std::min(1.0, 2.0 * band_);
             widened_at_ = best_worst_;
@@ -1039,21 +1038,15 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
 Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
-    // The input's boundary, which the boundary-fixed run leaves where it is.
-    detail::SlidingBoundary sliding(part, options_.surface);
-    GlobalSolverOptions first = options_;
-    first.termination = detail::fixed_run_budget(options_.termination);
-    Summary fixed = improve_part(first, observer(), part, nullptr);
-    // Then a shape phase with the boundary sliding, from the valid mesh the first run left, on
-    // what budget is left.
-    const auto budget = detail::sliding_budget(options_.termination, fixed, part.reducer());
-    if (!budget || !options_.improve_shape) return sliding.join(std::move(fixed), std::nullopt);
-    GlobalSolverOptions slide = options_;
-    slide.termination = *budget;
-    slide.untangle = false;  // the mesh is valid; untangling would not keep the boundary on the surface
-    sliding.release();
-    Summary slid = improve_part(slide, observer(), part, &sliding);
-    return sliding.join(std::move(fixed), std::move(slid));
+    // The sliding run is a shape phase from the valid mesh the first run left: untangling would
+    // not keep the boundary on the surface.
+    return detail::fixed_then_sliding(part, options_.surface, options_.termination, options_.improve_shape,
+                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {
+                                          GlobalSolverOptions run = options_;
+                                          run.termination = budget;
+                                          if (sliding) run.untangle = false;
+                                          return improve_part(run, observer(), part, sliding);
+                                      });
 }
 
 }  // namespace paloverde

@@ -28,7 +28,7 @@ void LocalSolverOptions::validate() const {
         throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
                           "inverse_condition or edge_ratio");
     surface.validate();
-    if (boundary == Boundary::Slide) detail::validate_sliding(surface, checkpoint);
+    if (boundary == Boundary::Slide) detail::validate_sliding(checkpoint);
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
@@ -198,23 +198,14 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
-    // The input's boundary, which the boundary-fixed run leaves where it is.
-    detail::SlidingBoundary sliding(whole_or_part, options_.surface);
-    LocalSolverOptions fixed_options = options_;
-    fixed_options.termination = detail::fixed_run_budget(options_.termination);
-    LocalSolver first(fixed_options);
-    first.set_observer(observer());
-    Summary fixed = first.improve_part(whole_or_part, nullptr);
-    // Then the shape sweeps with the boundary sliding, on what budget is left.
-    const auto budget = detail::sliding_budget(options_.termination, fixed, whole_or_part.reducer());
-    if (!budget) return sliding.join(std::move(fixed), std::nullopt);
-    LocalSolverOptions slide = options_;
-    slide.termination = *budget;
-    sliding.release();
-    LocalSolver second(slide);
-    second.set_observer(observer());
-    Summary slid = second.improve_part(whole_or_part, &sliding);
-    return sliding.join(std::move(fixed), std::move(slid));
+    return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
+                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {
+                                          LocalSolverOptions run = options_;
+                                          run.termination = budget;
+                                          LocalSolver solver(run);
+                                          solver.set_observer(observer());
+                                          return solver.improve_part(whole_or_part, sliding);
+                                      });
 }
 
 Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding) {

@@ -34,8 +34,7 @@ BoundarySurface surface_of(const MeshPart& part, const SurfaceOptions& options) 
 
 }  // namespace
 
-void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint) {
-    surface.validate();
+void validate_sliding(const CheckpointOptions& checkpoint) {
     if (!checkpoint.file.empty() || !checkpoint.resume.empty())
         throw OptionError("checkpoints do not go with boundary: slide yet (a sliding run is two runs: the boundary "
                           "fixed, then sliding); keep the boundary fixed to checkpoint");

@@ -27,9 +27,10 @@
 
 namespace paloverde::detail {
 
-// The options a solver's boundary: slide comes with (throws OptionError): a good feature angle,
-// and no checkpoints (a sliding run is two runs, which one checkpoint cannot resume).
-void validate_sliding(const SurfaceOptions& surface, const CheckpointOptions& checkpoint);
+// The options a solver's boundary: slide comes with (throws OptionError): no checkpoints (a
+// sliding run is two runs, which one checkpoint cannot resume). The feature angle is the
+// solver's own surface.validate().
+void validate_sliding(const CheckpointOptions& checkpoint);
 // The boundary-fixed run's share of the shape budget `termination`: half its iterations and
 // seconds, so that a run which would use them all (a focused global run creeping up) still
 // leaves the sliding run its turn.
@@ -79,5 +80,22 @@ private:
     double volume_before_ = 0.0;
     int exponent_ = 0;
 };
+
+// A solver's boundary: slide run on `part`: `run(termination, nullptr)` with the boundary fixed on
+// half the budget, then, where it leaves budget and a valid mesh (and `slide` is true: a run that
+// improves shapes at all), `run(termination left, &sliding)` with the boundary vertices released;
+// one Summary of the two. Collective.
+template <class Run>
+Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const TerminationCriterion& termination,
+                           bool slide, Run run) {
+    // The input's boundary, which the boundary-fixed run leaves where it is.
+    SlidingBoundary sliding(part, surface);
+    Summary fixed = run(fixed_run_budget(termination), static_cast<SlidingBoundary*>(nullptr));
+    const auto budget = sliding_budget(termination, fixed, part.reducer());
+    if (!budget || !slide) return sliding.join(std::move(fixed), std::nullopt);
+    sliding.release();
+    Summary slid = run(*budget, &sliding);
+    return sliding.join(std::move(fixed), std::move(slid));
+}
 
 }  // namespace paloverde::detail

@@ -65,6 +65,8 @@ public:
           tolerance_(c.min_progress * std::max(std::abs(magnitude), 1e-3)) {}
 
     bool spans(std::span<const double> history) const { return history.size() > window_; }
+    // The least rise that counts as progress.
+    double tolerance() const { return tolerance_; }
     // The history rose by no more than the tolerance over the window.
     bool rose_too_little(std::span<const double> history) const {
         return spans(history) && history.back() - history[history.size() - 1 - window_] <= tolerance_;
