@@ -4,6 +4,7 @@
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
@@ -350,6 +351,10 @@ BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
     expect([](auto& o) { o.threads = -2; }, "threads");
     expect([](auto& o) { o.newton_tolerance = 0.0; }, "newton_tolerance");
     expect([](auto& o) { o.newton_cg_iterations = 0; }, "newton_cg_iterations");
+    expect([](auto& o) { o.gain_tolerance = -0.1; }, "gain_tolerance");
+    expect([](auto& o) { o.gain_tolerance = std::numeric_limits<double>::quiet_NaN(); }, "gain_tolerance");
+    expect([](auto& o) { o.focus_band = 0.0; }, "focus_band");
+    expect([](auto& o) { o.focus_band = 1.5; }, "focus_band");
     expect([](auto& o) {
         o.direction = pv::GlobalSolverOptions::Direction::Newton;
         o.objective = "p_mean";
