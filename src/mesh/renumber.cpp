@@ -144,6 +144,7 @@ SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
     out.set_fixed(std::move(fixed));
     out.set_global_ids(std::move(global));
     out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
+    out.carry_cells_from(mesh, new_id, order.old_element);
     return out;
 }
 
@@ -159,7 +160,12 @@ std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::
     }
     std::vector<ElementId> sorted(static_cast<std::size_t>(m));
     std::iota(sorted.begin(), sorted.end(), ElementId{0});
-    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) { return keys[a] < keys[b]; });
+    // Two corners of different cells may share their vertices: their maps tell them apart.
+    const auto maps = mesh.corner_maps();
+    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) {
+        if (keys[a] != keys[b] || maps.empty()) return keys[a] < keys[b];
+        return maps[a] < maps[b];
+    });
     std::vector<GlobalId> position(static_cast<std::size_t>(m));
     for (ElementId i = 0; i < m; ++i) position[sorted[i]] = i;
     return position;

@@ -44,6 +44,95 @@ SimplexMesh::SimplexMesh(ElementKind kind, std::vector<double> coordinates, std:
     find_plane();
 }
 
+SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<const CellType> types,
+                                    std::vector<VertexId> cells) {
+    if (types.empty()) return SimplexMesh(ElementKind::Tetrahedron, std::move(coordinates), std::move(cells));
+    const CellInfo& first = cell_info(types[0]);
+    std::vector<std::int64_t> offsets(types.size() + 1, 0);
+    bool simplices = true;
+    for (std::size_t c = 0; c < types.size(); ++c) {
+        const CellInfo& info = cell_info(types[c]);
+        if (info.dimension != first.dimension)
+            throw MeshError("cell " + std::to_string(c) + " is a " + std::string(info.name) + " among " +
+                            std::to_string(first.dimension) + "D cells: a mesh holds cells of one dimension");
+        simplices = simplices && types[c] == types[0] && is_simplex(types[c]);
+        offsets[c + 1] = offsets[c] + info.corners;
+    }
+    if (static_cast<std::size_t>(offsets.back()) != cells.size())
+        throw MeshError("cell connectivity holds " + std::to_string(cells.size()) + " ids for cells of " +
+                        std::to_string(offsets.back()) + " corners");
+    if (simplices) return SimplexMesh(first.simplex, std::move(coordinates), std::move(cells));
+    const auto n = static_cast<std::int64_t>(coordinates.size() / 3);
+    std::size_t corners_total = 0;
+    for (std::size_t c = 0; c < types.size(); ++c) {
+        const CellInfo& info = cell_info(types[c]);
+        const VertexId* v = cells.data() + offsets[c];
+        for (int i = 0; i < info.corners; ++i) {
+            if (v[i] < 0 || v[i] >= n)
+                throw MeshError("cell " + std::to_string(c) + " (" + std::string(info.name) + ") refers to vertex " +
+                                std::to_string(v[i]) + ", outside 0.." + std::to_string(n - 1));
+            for (int j = 0; j < i; ++j)
+                if (v[i] == v[j])
+                    throw MeshError("cell " + std::to_string(c) + " (" + std::string(info.name) + ") repeats vertex " +
+                                    std::to_string(v[i]));
+        }
+        corners_total += info.frames.size();
+    }
+    if (corners_total > static_cast<std::size_t>(std::numeric_limits<ElementId>::max()))
+        throw MeshError("mesh too large for one process: partition it across more ranks");
+    const int k = corner_count(first.simplex);
+    std::vector<VertexId> corners;
+    corners.reserve(corners_total * static_cast<std::size_t>(k));
+    std::vector<ElementId> element_cell;
+    std::vector<std::uint8_t> corner_map;
+    element_cell.reserve(corners_total);
+    corner_map.reserve(corners_total);
+    for (std::size_t c = 0; c < types.size(); ++c) {
+        const CellInfo& info = cell_info(types[c]);
+        const VertexId* v = cells.data() + offsets[c];
+        for (std::size_t f = 0; f < info.frames.size(); ++f) {
+            for (int i = 0; i < k; ++i) corners.push_back(v[info.frames[f][i]]);
+            element_cell.push_back(static_cast<ElementId>(c));
+            corner_map.push_back(corner_map_id(types[c], static_cast<int>(f)));
+        }
+    }
+    SimplexMesh mesh(first.simplex, std::move(coordinates), std::move(corners));
+    mesh.cell_types_.assign(types.begin(), types.end());
+    mesh.cell_offsets_ = std::move(offsets);
+    mesh.cell_connectivity_ = std::move(cells);
+    mesh.element_cell_ = std::move(element_cell);
+    mesh.corner_map_ = std::move(corner_map);
+    return mesh;
+}
+
+std::vector<double> SimplexMesh::cell_minimum(std::span<const double> per_element) const {
+    if (!has_cells()) return {per_element.begin(), per_element.end()};
+    std::vector<double> out(cell_types_.size(), INFINITY);
+    for (std::size_t e = 0; e < per_element.size(); ++e) {
+        double& m = out[static_cast<std::size_t>(element_cell_[e])];
+        if (!(per_element[e] >= m)) m = per_element[e];  // NaN wins: it must show
+    }
+    return out;
+}
+
+void SimplexMesh::carry_cells_from(const SimplexMesh& source, std::span<const VertexId> new_id,
+                                   std::span<const ElementId> old_element) {
+    cell_types_ = source.cell_types_;
+    cell_offsets_ = source.cell_offsets_;
+    cell_connectivity_.resize(source.cell_connectivity_.size());
+    for (std::size_t i = 0; i < cell_connectivity_.size(); ++i)
+        cell_connectivity_[i] = new_id[static_cast<std::size_t>(source.cell_connectivity_[i])];
+    element_cell_.clear();
+    corner_map_.clear();
+    if (!source.has_cells()) return;
+    element_cell_.resize(old_element.size());
+    corner_map_.resize(old_element.size());
+    for (std::size_t i = 0; i < old_element.size(); ++i) {
+        element_cell_[i] = source.element_cell_[static_cast<std::size_t>(old_element[i])];
+        corner_map_[i] = source.corner_map_[static_cast<std::size_t>(old_element[i])];
+    }
+}
+
 SimplexMesh SimplexMesh::copy_of(const Mesh& source) {
     const auto n = static_cast<VertexId>(source.vertex_count());
     const auto m = static_cast<ElementId>(source.element_count());
@@ -133,8 +222,26 @@ void SimplexMesh::find_plane() {
 
 void SimplexMesh::flip_elements() {
     const auto k = static_cast<std::size_t>(corners());
-    for (std::size_t first = 0; first < connectivity_.size(); first += k)
-        std::swap(connectivity_[first + k - 2], connectivity_[first + k - 1]);
+    if (has_cells()) {
+        for (std::size_t c = 0; c < cell_types_.size(); ++c) {
+            const CellInfo& info = cell_info(cell_types_[c]);
+            VertexId* v = cell_connectivity_.data() + cell_offsets_[c];
+            std::array<VertexId, kMaxCellCorners> old{};
+            std::copy_n(v, info.corners, old.begin());
+            for (int i = 0; i < info.corners; ++i) v[i] = old[info.mirror[i]];
+        }
+        for (std::size_t e = 0; e < element_cell_.size(); ++e) {
+            const auto c = static_cast<std::size_t>(element_cell_[e]);
+            const CellType type = cell_types_[c];
+            const auto& frame = cell_info(type).frames[corner_map_[e] - corner_map_id(type, 0)];
+            for (std::size_t i = 0; i < k; ++i)
+                connectivity_[e * k + i] = cell_connectivity_[static_cast<std::size_t>(cell_offsets_[c]) + frame[i]];
+        }
+        build_adjacency();
+    } else {
+        for (std::size_t first = 0; first < connectivity_.size(); first += k)
+            std::swap(connectivity_[first + k - 2], connectivity_[first + k - 1]);
+    }
     // Every cross product of find_plane() changes sign, exactly, and so does their sum.
     if (planar_)
         for (double& c : plane_normal_) c = -c;
@@ -147,7 +254,7 @@ void SimplexMesh::set_fixed(std::vector<std::uint8_t> fixed) {
     fixed_ = std::move(fixed);
 }
 
-void SimplexMesh::fix_boundary() { fixed_ = boundary_vertices(kind_, connectivity_, num_vertices()); }
+void SimplexMesh::fix_boundary() { fixed_ = boundary_vertices(*this); }
 
 VertexId SimplexMesh::num_free_vertices() const noexcept {
     VertexId count = 0;
@@ -194,17 +301,17 @@ void scale_coordinates(std::span<double> xyz, int exponent) {
 }
 
 void check_no_duplicate_elements(const SimplexMesh& mesh) {
-    const int k = mesh.corners();
     struct Key {
-        std::array<VertexId, 4> corners;
+        std::array<VertexId, kMaxCellCorners> corners;
         ElementId element;
     };
-    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_elements()));
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_cells()));
+    for (ElementId e = 0; e < mesh.num_cells(); ++e) {
         Key& key = keys[static_cast<std::size_t>(e)];
-        key.corners = {-1, -1, -1, -1};
-        std::copy_n(mesh.element(e).begin(), k, key.corners.begin());
-        std::sort(key.corners.begin(), key.corners.begin() + k);
+        key.corners.fill(-1);
+        const auto cell = mesh.cell(e);
+        std::copy(cell.begin(), cell.end(), key.corners.begin());
+        std::sort(key.corners.begin(), key.corners.begin() + static_cast<std::ptrdiff_t>(cell.size()));
         key.element = e;
     }
     std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
@@ -212,7 +319,7 @@ void check_no_duplicate_elements(const SimplexMesh& mesh) {
     });
     for (std::size_t i = 1; i < keys.size(); ++i)
         if (keys[i].corners == keys[i - 1].corners)
-            throw MeshError("elements " + std::to_string(keys[i - 1].element) + " and " +
+            throw MeshError(std::string(mesh.has_cells() ? "cells " : "elements ") + std::to_string(keys[i - 1].element) + " and " +
                             std::to_string(keys[i].element) + " have the same vertices (duplicate element)");
 }
 
@@ -244,6 +351,34 @@ std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const Ve
         while (j < faces.size() && faces[j] == faces[i]) ++j;
         if (j - i == 1)
             for (int c = 0; c < face_size; ++c) boundary[faces[i][c]] = 1;
+        i = j;
+    }
+    return boundary;
+}
+
+std::vector<std::uint8_t> boundary_vertices(const SimplexMesh& mesh) {
+    if (!mesh.has_cells()) return boundary_vertices(mesh.kind(), mesh.connectivity(), mesh.num_vertices());
+    // Each face as its sorted vertices (-1 after the last); a face seen once is on the boundary.
+    std::vector<std::array<VertexId, 4>> faces;
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+        const auto cell = mesh.cell(c);
+        for (const auto& local : cell_info(mesh.cell_type(c)).faces) {
+            std::array<VertexId, 4> face{-1, -1, -1, -1};
+            int size = 0;
+            while (size < 4 && local[size] >= 0) face[size] = cell[local[size]], ++size;
+            for (int i = 1; i < size; ++i)  // insertion sort of 3 or 4 ids
+                for (int j = i; j > 0 && face[j - 1] > face[j]; --j) std::swap(face[j - 1], face[j]);
+            faces.push_back(face);
+        }
+    }
+    std::sort(faces.begin(), faces.end());
+    std::vector<std::uint8_t> boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    for (std::size_t i = 0; i < faces.size();) {
+        std::size_t j = i + 1;
+        while (j < faces.size() && faces[j] == faces[i]) ++j;
+        if (j - i == 1)
+            for (VertexId v : faces[i])
+                if (v >= 0) boundary[v] = 1;
         i = j;
     }
     return boundary;

@@ -4,6 +4,7 @@
 
 #include "kernels.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 
 namespace paloverde {
@@ -33,6 +34,45 @@ void add_corner(const QualityMetric::GradientTarget& target, std::size_t v, doub
     }
 }
 
+// A cell's corner simplex x (K points) carried to the simplex its map rates in its place
+// (cell_types.hpp): y_0 = x_0, y_i = x_0 + sum_j (x_j - x_0) M[j][i].
+template <int K>
+void map_corner(const CornerMap& m, double* x) {
+    double e[K - 1][3];
+    for (int j = 1; j < K; ++j)
+        for (int d = 0; d < 3; ++d) e[j - 1][d] = x[3 * j + d] - x[d];
+    for (int i = 1; i < K; ++i)
+        for (int d = 0; d < 3; ++d) {
+            double sum = 0.0;
+            for (int j = 1; j < K; ++j) sum += e[j - 1][d] * m[j - 1][i - 1];
+            x[3 * i + d] = x[d] + sum;
+        }
+}
+// The chain rule back through the map: g_xj = sum_i g_yi M[j][i]; the gradients of a
+// translation-invariant metric sum to zero, so g_x0 is what makes both sums equal.
+template <int K>
+void unmap_gradient(const CornerMap& m, double* g) {
+    double gy[K][3], total[3] = {0.0, 0.0, 0.0};
+    for (int i = 0; i < K; ++i)
+        for (int d = 0; d < 3; ++d) gy[i][d] = g[3 * i + d], total[d] += g[3 * i + d];
+    for (int j = 1; j < K; ++j)
+        for (int d = 0; d < 3; ++d) {
+            double sum = 0.0;
+            for (int i = 1; i < K; ++i) sum += gy[i][d] * m[j - 1][i - 1];
+            g[3 * j + d] = sum;
+            total[d] -= sum;
+        }
+    for (int d = 0; d < 3; ++d) g[d] = total[d];
+}
+
+// Gathers element e's K corners into x, mapped when the mesh's cells give it a map.
+template <int K>
+void gather(const VertexId* c, const double* coords, const std::uint8_t* maps, ElementId e, double* x) {
+    for (int i = 0; i < K; ++i)
+        for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+    if (maps && maps[e]) map_corner<K>(corner_map(maps[e]), x);
+}
+
 // The element-by-element passes, for kernels and for a program's own metrics alike: each
 // element's K corners gathered into a small buffer, rated by rate(kind tag, e, corners, gradient
 // or nullptr), and its weighted gradient scattered.
@@ -41,11 +81,10 @@ void rate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId f
                Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
+    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
     double x[3 * K];
     for (ElementId e = first; e < last; ++e) {
-        const VertexId* c = conn + static_cast<std::size_t>(e) * K;
-        for (int i = 0; i < K; ++i)
-            for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+        gather<K>(conn + static_cast<std::size_t>(e) * K, coords, maps, e, x);
         quality[e - first] = rate(std::integral_constant<int, K>{}, e, x, nullptr);
     }
 }
@@ -55,15 +94,16 @@ void accumulate_each(const SimplexMesh& mesh, std::span<const double> xyz, Eleme
                      const QualityMetric::GradientTarget& target, Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
+    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
     double x[3 * K], g[3 * K];
     for (ElementId e = first; e < last; ++e) {
         const double w = target.weight[e - first];
         const double cw = Curvature ? target.curvature_weight[e - first] : 0.0;
         if (w == 0.0 && cw == 0.0) continue;
         const VertexId* c = conn + static_cast<std::size_t>(e) * K;
-        for (int i = 0; i < K; ++i)
-            for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
+        gather<K>(c, coords, maps, e, x);
         rate(std::integral_constant<int, K>{}, e, x, g);
+        if (maps && maps[e]) unmap_gradient<K>(corner_map(maps[e]), g);
         for (int i = 0; i < K; ++i) add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, g + 3 * i);
     }
 }
@@ -153,7 +193,7 @@ private:
     // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
     // time, and a block of one would cost 16. (Both paths give the same bits.)
     static bool blocks_pay(const SimplexMesh& mesh, ElementId first, ElementId last) {
-        return mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock;
+        return mesh.kind() == ElementKind::Tetrahedron && !mesh.has_cells() && last - first >= kTetBlock;
     }
 
     void require_gradient() const {
@@ -256,6 +296,22 @@ MetricScale MetricScale::of(const SimplexMesh& mesh, std::span<const double> coo
 void MetricOptions::validate() const {
     if (!(hybrid_sharpness > 0.0) || !std::isfinite(hybrid_sharpness))
         throw OptionError("hybrid_sharpness must be a positive number (got " + std::to_string(hybrid_sharpness) + ")");
+}
+
+double QualityMetric::element_value(const SimplexMesh& mesh, std::span<const double> xyz, ElementId e,
+                                   double* gradient) const {
+    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const VertexId* c = mesh.connectivity().data() + static_cast<std::size_t>(e) * mesh.corners();
+    double x[12];
+    const auto rate = [&]<int K>(std::integral_constant<int, K>) {
+        metrics::gather<K>(c, xyz.data(), maps, e, x);
+        if (!gradient) return value(mesh.kind(), x);
+        const double q = value_and_gradient(mesh.kind(), x, gradient);
+        if (maps && maps[e]) metrics::unmap_gradient<K>(corner_map(maps[e]), gradient);
+        return q;
+    };
+    return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
+                                                   : rate(std::integral_constant<int, 3>{});
 }
 
 void ElementMetric::evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,

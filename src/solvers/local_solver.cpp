@@ -162,18 +162,16 @@ private:
         for (std::size_t i = 0; i < elements.size(); ++i) {
             const auto element = mesh_.element(elements[i]);
             int slot = 0;
-            for (int j = 0; j < corners; ++j) {
+            for (int j = 0; j < corners; ++j)
                 if (element[j] == v) slot = j;
-                for (int c = 0; c < 3; ++c) corners_[3 * j + c] = xyz[3 * static_cast<std::size_t>(element[j]) + c];
-            }
             double q;
             if (gradient) {
-                q = metric_.value_and_gradient(mesh_.kind(), corners_.data(), all_gradients_.data());
+                q = metric_.element_value(mesh_, xyz, elements[i], all_gradients_.data());
                 gradient_[i] = {all_gradients_[3 * slot], all_gradients_[3 * slot + 1], all_gradients_[3 * slot + 2]};
                 if (slides) gradient_[i] = sliding_->tangent(v, gradient_[i]);
                 q_[i] = q;
             } else {
-                q = metric_.value(mesh_.kind(), corners_.data());
+                q = metric_.element_value(mesh_, xyz, elements[i]);
                 trial_q_[i] = q;
             }
             worst = std::min(worst, q);
@@ -188,7 +186,7 @@ private:
     std::vector<double> q_, trial_q_;
     std::vector<Vec3> gradient_, active_;
     std::vector<std::uint8_t> positive_;
-    std::array<double, 12> corners_{}, all_gradients_{};
+    std::array<double, 12> all_gradients_{};
 };
 
 }  // namespace

@@ -127,7 +127,7 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
     // Each element's scaled volume and its gradient with respect to v (exact: linear in v).
     std::vector<double> c;
     std::vector<std::array<double, 3>> grad;
-    double corners[12], g[12];
+    double g[12];
     double box = 0.0;  // the largest edge at v: how far v may move
     const Vec3 p = {xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]};
     for (ElementId e : elements) {
@@ -136,10 +136,10 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
         for (int i = 0; i < k; ++i) {
             const VertexId w = element[i];
             if (w == v) slot = i;
-            for (int d = 0; d < 3; ++d) corners[3 * i + d] = xyz[3 * static_cast<std::size_t>(w) + d];
-            box = std::max(box, std::hypot(corners[3 * i] - p[0], corners[3 * i + 1] - p[1], corners[3 * i + 2] - p[2]));
+            const double* q = xyz.data() + 3 * static_cast<std::size_t>(w);
+            box = std::max(box, std::hypot(q[0] - p[0], q[1] - p[1], q[2] - p[2]));
         }
-        c.push_back(volume->value_and_gradient(mesh.kind(), corners, g));
+        c.push_back(volume->element_value(mesh, xyz, e, g));
         grad.push_back({g[3 * slot], g[3 * slot + 1], g[3 * slot + 2]});
     }
     result.before = *std::min_element(c.begin(), c.end());
@@ -293,7 +293,7 @@ VertexEnergy::VertexEnergy(const SimplexMesh& mesh, std::span<const double> refe
 }
 
 double VertexEnergy::energy(std::span<const double> xyz, VertexId v, std::array<double, 3>* gradient) {
-    double corners[12], g[12];
+    double g[12];
     double sum = 0.0;
     if (gradient) *gradient = {0.0, 0.0, 0.0};
     MetricScale scale = scale_;
@@ -301,19 +301,17 @@ double VertexEnergy::energy(std::span<const double> xyz, VertexId v, std::array<
     for (ElementId e : mesh_.elements_of(v)) {
         const auto element = mesh_.element(e);
         int slot = 0;
-        for (int i = 0; i < k; ++i) {
+        for (int i = 0; i < k; ++i)
             if (element[i] == v) slot = i;
-            for (int d = 0; d < 3; ++d) corners[3 * i + d] = xyz[3 * static_cast<std::size_t>(element[i]) + d];
-        }
         // Each element against its own size (the one-element calls use the metric's scale).
         scale.reference_volume = reference_[static_cast<std::size_t>(e)];
         metric_->set_scale(scale);
         // The metric is minus the energy.
         if (gradient) {
-            sum -= metric_->value_and_gradient(mesh_.kind(), corners, g);
+            sum -= metric_->element_value(mesh_, xyz, e, g);
             for (int d = 0; d < 3; ++d) (*gradient)[d] -= g[3 * slot + d];
         } else {
-            sum -= metric_->value(mesh_.kind(), corners);
+            sum -= metric_->element_value(mesh_, xyz, e);
         }
     }
     return sum;

@@ -1,11 +1,16 @@
 #pragma once
-// The native mesh: one kind of simplex (triangles or tetrahedra), stored as flat arrays so that
-// solvers stream over coordinates and connectivity without indirection.
+// The native mesh, stored as flat arrays so that solvers stream over coordinates and connectivity
+// without indirection. Its elements are simplices of one kind (triangles or tetrahedra): the
+// mesh's own, or, for a mesh with quadrilaterals, hexahedra, wedges or pyramids (cells), the
+// corner simplices of its cells (cell_types.hpp), each with the map that rates it against the
+// ideal cell's corner. Solvers, metrics and exact predicates see only simplices; readers,
+// writers, the boundary and the reports see the cells.
 #include <cstdint>
 #include <span>
 #include <vector>
 
 #include "paloverde/core/types.hpp"
+#include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
@@ -17,6 +22,13 @@ public:
     // element) and throws MeshError naming the first offending vertex or element. Vertices start
     // free; global ids start as 0..n-1.
     SimplexMesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity);
+
+    // A mesh of cells of one dimension (any mix of the types of that dimension), validated like
+    // the constructor's arrays, naming the offending cell. Triangles or tetrahedra alone give the
+    // plain simplex mesh (no cells); otherwise each cell's corners become elements, cell by cell
+    // in the order of its frames.
+    static SimplexMesh from_cells(std::vector<double> coordinates, std::span<const CellType> types,
+                                  std::vector<VertexId> cell_connectivity);
 
     // Copies any Mesh through its batch interface.
     static SimplexMesh copy_of(const Mesh& mesh);
@@ -41,6 +53,32 @@ public:
                                                                  corners());
     }
 
+    // Cells: empty (has_cells() false) for a mesh of simplices, where each element is its own cell.
+    bool has_cells() const noexcept { return !cell_types_.empty(); }
+    ElementId num_cells() const noexcept {
+        return has_cells() ? static_cast<ElementId>(cell_types_.size()) : num_elements();
+    }
+    CellType cell_type(ElementId c) const noexcept { return has_cells() ? cell_types_[c] : simplex_cell(kind_); }
+    std::span<const VertexId> cell(ElementId c) const noexcept {
+        if (!has_cells()) return element(c);
+        return std::span<const VertexId>(cell_connectivity_)
+            .subspan(static_cast<std::size_t>(cell_offsets_[c]), static_cast<std::size_t>(cell_offsets_[c + 1] - cell_offsets_[c]));
+    }
+    std::span<const CellType> cell_types() const noexcept { return cell_types_; }
+    std::span<const std::int64_t> cell_offsets() const noexcept { return cell_offsets_; }
+    std::span<const VertexId> cell_connectivity() const noexcept { return cell_connectivity_; }
+    // Per element: the cell it is a corner of, and its corner map (corner_map()); empty without cells.
+    std::span<const ElementId> element_cells() const noexcept { return element_cell_; }
+    std::span<const std::uint8_t> corner_maps() const noexcept { return corner_map_; }
+    ElementId cell_of(ElementId e) const noexcept { return has_cells() ? element_cell_[e] : e; }
+    // Reduces per-element values to per-cell ones by the minimum (a cell is as good as its worst
+    // corner); without cells, a copy.
+    std::vector<double> cell_minimum(std::span<const double> per_element) const;
+    // Renumbers or reorders: the cells' vertices by new_id (new_id[old]), the elements' cell and
+    // map by old_element (new element i was old_element[i]). For renumbered().
+    void carry_cells_from(const SimplexMesh& source, std::span<const VertexId> new_id,
+                          std::span<const ElementId> old_element);
+
     // Vertex -> incident elements, compressed rows.
     std::span<const ElementId> elements_of(VertexId v) const noexcept {
         return std::span<const ElementId>(vertex_elements_)
@@ -63,7 +101,7 @@ public:
         return false;
     }
     void set_fixed(std::vector<std::uint8_t> fixed);
-    // Fixes exactly the vertices on the boundary (faces of one tetrahedron, edges of one triangle).
+    // Fixes exactly the vertices on the boundary (faces of one cell in 3D, edges of one in 2D).
     void fix_boundary();
     VertexId num_free_vertices() const noexcept;
 
@@ -75,7 +113,8 @@ public:
     bool is_planar() const noexcept { return planar_; }
     const Vec3& plane_normal() const noexcept { return plane_normal_; }
 
-    // Swaps the last two corners of every element, which reverses each one's orientation. A planar
+    // Swaps the last two corners of every element, which reverses each one's orientation (a mesh
+    // with cells mirrors each cell, CellInfo::mirror, and takes its corners anew in place). A planar
     // triangle mesh's normal turns with its triangles (as if found anew), so their orientation
     // about it is unchanged. Adjacency, fixed flags and ids stay as they are.
     void flip_elements();
@@ -108,6 +147,11 @@ private:
     bool planar_ = false;
     Vec3 plane_normal_{0.0, 0.0, 1.0};
     bool elements_flipped_ = false;
+    std::vector<CellType> cell_types_;
+    std::vector<std::int64_t> cell_offsets_;
+    std::vector<VertexId> cell_connectivity_;
+    std::vector<ElementId> element_cell_;
+    std::vector<std::uint8_t> corner_map_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which
@@ -117,12 +161,15 @@ private:
 int unit_scale_exponent(std::span<const double> xyz);
 void scale_coordinates(std::span<double> xyz, int exponent);
 
-// Throws MeshError naming two elements with the same set of vertices, if there are any.
+// Throws MeshError naming two elements (cells, for a mesh with cells) with the same set of
+// vertices, if there are any.
 void check_no_duplicate_elements(const SimplexMesh& mesh);
 
 // Vertices on the boundary: on a face that belongs to one tetrahedron, or an edge that belongs
 // to one triangle. Returns one flag per vertex.
 std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const VertexId> connectivity,
                                             VertexId num_vertices);
+// The same for a mesh's cells (its elements when it has none).
+std::vector<std::uint8_t> boundary_vertices(const SimplexMesh& mesh);
 
 }  // namespace paloverde

@@ -53,6 +53,12 @@ public:
     // Also writes d(value)/d(corner coordinates), 3 doubles per corner.
     virtual double value_and_gradient(ElementKind kind, const double* corners, double* gradient) const = 0;
 
+    // Element e of `mesh` at the vertex positions `coordinates`, rated as the batch calls rate it
+    // (a cell's corner through its corner map); with `gradient` (3 doubles per corner, in the
+    // element's corner order) its gradient too. For local patches.
+    double element_value(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId e,
+                         double* gradient = nullptr) const;
+
     // Qualities of elements [first, last) of `mesh` at the vertex positions `coordinates` (the
     // mesh's own or trial positions of the same layout): quality[e - first].
     virtual void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
