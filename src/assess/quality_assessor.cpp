@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 
@@ -168,24 +169,55 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (is_owned(v)) ++vertices, free_vertices += mesh.can_move(v);
 
-    // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen.
+    // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen; and
+    // its exact orientation.
     std::vector<std::uint8_t> group(m, 0);
-    long counts[5] = {0, 0, 0, 0, 0};  // elements, frozen, inverted, inverted frozen, degenerate
-#pragma omp parallel for schedule(static) reduction(+ : counts[:5]) if (mesh.num_elements() >= kParallelElements)
+    std::vector<std::int8_t> orientation(m, 1);
+#pragma omp parallel for schedule(static) if (mesh.num_elements() >= kParallelElements)
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
         if (!is_counted(static_cast<std::size_t>(e))) continue;
         group[e] = mesh.element_can_move(e) ? 1 : 2;
-        const int o = element_orientation(mesh, xyz, e);
+        orientation[e] = static_cast<std::int8_t>(element_orientation(mesh, xyz, e));
+    }
+    // A mesh with cells is reported by cell: a cell is movable when any corner is, inverted when
+    // any corner is, degenerate when none is and one is flat, and as good as its worst corner.
+    std::vector<std::uint8_t> cell_group;
+    std::vector<std::int8_t> cell_orientation;
+    if (mesh.has_cells()) {
+        cell_group.assign(static_cast<std::size_t>(mesh.num_cells()), 2);
+        cell_orientation.assign(static_cast<std::size_t>(mesh.num_cells()), 1);
+        for (std::size_t e = 0; e < m; ++e) {
+            const auto c = static_cast<std::size_t>(mesh.cell_of(static_cast<ElementId>(e)));
+            if (group[e] == 1) cell_group[c] = 1;
+            cell_orientation[c] = std::min(cell_orientation[c], orientation[e]);
+        }
+    }
+    const std::vector<std::uint8_t>& unit_group = mesh.has_cells() ? cell_group : group;
+    const std::vector<std::int8_t>& unit_orientation = mesh.has_cells() ? cell_orientation : orientation;
+    long counts[5] = {0, 0, 0, 0, 0};  // elements, frozen, inverted, inverted frozen, degenerate
+    for (std::size_t u = 0; u < unit_group.size(); ++u) {
+        if (!unit_group[u]) continue;
+        const int o = unit_orientation[u];
         counts[0] += 1;
-        counts[1] += group[e] == 2;
+        counts[1] += unit_group[u] == 2;
         counts[2] += o < 0;
-        counts[3] += o < 0 && group[e] == 2;
+        counts[3] += o < 0 && unit_group[u] == 2;
         counts[4] += o == 0;
+    }
+    if (mesh.has_cells()) {
+        for (int t = 0; t < kCellTypeCount; ++t) {
+            QualityReport::TypeReport r{std::string(cell_info(static_cast<CellType>(t)).name), 0, 0, {}};
+            for (std::size_t c = 0; c < cell_group.size(); ++c)
+                if (mesh.cell_types()[c] == static_cast<CellType>(t)) ++r.count, r.inverted += cell_orientation[c] < 0;
+            if (r.count > 0) report.by_type.push_back(std::move(r));
+        }
     }
     std::vector<ExactSum> totals(7);
     for (int i = 0; i < 5; ++i) totals[i].add(static_cast<double>(counts[i]));
     totals[5].add(static_cast<double>(vertices));
     totals[6].add(static_cast<double>(free_vertices));
+    // Metrics rate elements (a cell's corners): their mean volume is the scale.
+    totals.emplace_back().add(static_cast<double>(std::count_if(group.begin(), group.end(), [](std::uint8_t g) { return g != 0; })));
 
     // The metric scale: the mean absolute element volume, summed exactly.
     MetricScale scale;
@@ -217,17 +249,25 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
     report.vertices = static_cast<VertexId>(totals[5].value());
     report.free_vertices = static_cast<VertexId>(totals[6].value());
     // A mesh of only degenerate elements keeps 1: there is no size to measure against.
-    const double volume = totals[7].value();
-    if (volume > 0.0 && std::isfinite(volume) && report.elements > 0) scale.reference_volume = volume / report.elements;
+    const double volume = totals[8].value(), rated = totals[7].value();
+    if (volume > 0.0 && std::isfinite(volume) && rated > 0) scale.reference_volume = volume / rated;
 
     for (const auto& name : names_) {
         auto metric = make_metric(name);
-        if (!metric->supports(mesh.kind())) continue;
+        if (!metric->supports(mesh.kind()) || (mesh.has_cells() && !metric->supports_cells())) continue;
         metric->set_scale(scale);
         evaluate_all(*metric, mesh, xyz, q);
+        const std::vector<double> per_cell = mesh.has_cells() ? mesh.cell_minimum(q) : std::vector<double>{};
+        const std::vector<double>& unit_q = mesh.has_cells() ? per_cell : q;
         MetricReport r;
         r.name = name;
-        statistics(q, group, bins_, reducer, distributed, r);
+        statistics(unit_q, unit_group, bins_, reducer, distributed, r);
+        for (auto& t : report.by_type) {
+            double worst = INFINITY;
+            for (std::size_t c = 0; c < per_cell.size(); ++c)
+                if (cell_info(mesh.cell_types()[c]).name == t.type) worst = std::min(worst, per_cell[c]);
+            t.worst.emplace_back(name, worst);
+        }
         report.metrics.push_back(std::move(r));
     }
     return report;
@@ -255,6 +295,11 @@ std::string QualityReport::to_text() const {
         else out << "-";
         out << "\n";
     }
+    for (const auto& t : by_type) {
+        out << std::left << std::setw(20) << t.type << std::right << t.count << " cells, " << t.inverted << " inverted";
+        for (const auto& [name, worst] : t.worst) out << ", worst " << name << " " << std::setprecision(5) << worst;
+        out << "\n";
+    }
     return out.str();
 }
 
@@ -280,6 +325,15 @@ std::string QualityReport::to_json() const {
         metrics_json[m.name] = std::move(mj);
     }
     j["metrics"] = std::move(metrics_json);
+    if (!by_type.empty()) {
+        json types = json::object();
+        for (const auto& t : by_type) {
+            json tj{{"count", t.count}, {"inverted", t.inverted}};
+            for (const auto& [name, worst] : t.worst) tj["worst"][name] = worst;
+            types[t.type] = std::move(tj);
+        }
+        j["cell_types"] = std::move(types);
+    }
     return j.dump(2);
 }
 

@@ -126,6 +126,8 @@ BoundaryFacets BoundaryFacets::of(const SimplexMesh& mesh) {
     BoundaryFacets out;
     out.kind = mesh.kind();
     const bool tets = out.kind == ElementKind::Tetrahedron;
+    if (mesh.has_cells())
+        throw MeshError("boundary vertices slide on meshes of triangles and tetrahedra only, for now");
     if (!tets && !mesh.is_planar())
         throw MeshError("the triangles do not lie in one plane: a surface mesh has no boundary to slide on");
     std::vector<Facet> all;

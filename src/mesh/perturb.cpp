@@ -17,7 +17,7 @@ void PerturbOptions::validate() const {
 
 VertexId perturb(SimplexMesh& mesh, const PerturbOptions& options) {
     options.validate();
-    const VertexGraph graph = vertex_graph(mesh);
+    const VertexGraph graph = vertex_graph(mesh, true);
     const bool planar = mesh.kind() == ElementKind::Triangle;
     const Vec3 normal = mesh.plane_normal();
     std::mt19937_64 rng(options.seed);

@@ -6,7 +6,10 @@
 
 namespace paloverde {
 
-VertexGraph vertex_graph(const SimplexMesh& mesh) {
+VertexGraph vertex_graph(const SimplexMesh& mesh) { return vertex_graph(mesh, false); }
+
+VertexGraph vertex_graph(const SimplexMesh& mesh, bool cell_edges) {
+    cell_edges = cell_edges && mesh.has_cells();
     VertexGraph graph;
     const VertexId n = mesh.num_vertices();
     graph.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
@@ -20,12 +23,17 @@ VertexGraph vertex_graph(const SimplexMesh& mesh) {
     std::vector<VertexId> seen(static_cast<std::size_t>(n), 0);
     for (VertexId v = 0; v < n; ++v) {
         const auto begin = graph.neighbours.size();
-        for (ElementId e : mesh.elements_of(v))
-            for (VertexId w : mesh.element(e))
+        for (ElementId e : mesh.elements_of(v)) {
+            const auto corner = mesh.element(e);
+            for (VertexId w : corner) {
+                // A cell's edges join a corner's vertex to its frame's others (cell_types.hpp).
+                if (cell_edges && corner[0] != v && w != corner[0]) continue;
                 if (w != v && seen[w] != v + 1) {
                     seen[w] = v + 1;
                     graph.neighbours.push_back(w);
                 }
+            }
+        }
         std::sort(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(begin), graph.neighbours.end());
         graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(graph.neighbours.size());
     }

@@ -141,6 +141,10 @@ public:
         if constexpr (requires { Kernel::only_kind; }) return kind == Kernel::only_kind;
         return true;
     }
+    bool supports_cells() const override {
+        if constexpr (requires { Kernel::only_kind; }) return false;  // the angle metrics, in degrees
+        return true;
+    }
     bool has_gradient() const override { return !assessment_only<Kernel>(); }
     double ideal_value() const override {
         if constexpr (requires { Kernel::ideal; }) return Kernel::ideal;

@@ -96,6 +96,7 @@ struct WholeSplit {
 };
 
 WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
+    require_simplices(whole, "the mesh");
     if (whole.num_vertices() < ranks)
         throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
                           std::to_string(ranks) + " processes: use at most as many processes as vertices");

@@ -99,6 +99,7 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
         throw FileError(file.string(), 0, "a piece needs a `fixed` point field: a piece alone cannot tell the "
                                           "boundary of the whole mesh");
     const SimplexMesh& mesh = piece.mesh;
+    require_simplices(mesh, file.string());
     kind = mesh.kind();
     const VertexId n = mesh.num_vertices();
     for (VertexId v = 0; v < n; ++v) {

@@ -38,6 +38,14 @@ struct QualityReport {
     ElementId inverted_frozen = 0;  // of those, how many no smoother can fix
     ElementId degenerate = 0;       // exactly zero volume
     std::vector<MetricReport> metrics;
+    // A mesh with cells (quadrilaterals, hexahedra, wedges, pyramids) is reported by cell (its
+    // quality the worst corner's, inverted when any corner is), and by cell type here.
+    struct TypeReport {
+        std::string type;
+        ElementId count = 0, inverted = 0;
+        std::vector<std::pair<std::string, double>> worst;  // per metric: the type's smallest value
+    };
+    std::vector<TypeReport> by_type;
 
     const MetricReport* metric(std::string_view name) const;
     std::string to_text() const;

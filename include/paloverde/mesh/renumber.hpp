@@ -27,6 +27,9 @@ struct VertexGraph {
     std::vector<VertexId> neighbours;
 };
 VertexGraph vertex_graph(const SimplexMesh& mesh);
+// With `cell_edges`, a mesh with cells lists only its cells' edges (no face or body diagonal of
+// a hexahedron): the neighbours whose distance is the local edge length.
+VertexGraph vertex_graph(const SimplexMesh& mesh, bool cell_edges);
 
 // The canonical element order, the same however a mesh is numbered or split: each element's
 // position when all are sorted by their sorted vertex keys (`vertex_key` per vertex: canonical or

@@ -41,6 +41,9 @@ public:
 
     virtual std::string_view name() const = 0;
     virtual bool supports(ElementKind) const { return true; }
+    // Whether the metric means something on a cell's corners rated through their maps (a shape
+    // or size against the ideal cell's corner); angles in degrees do not.
+    virtual bool supports_cells() const { return true; }
     virtual bool has_gradient() const { return true; }
     virtual double ideal_value() const { return 1.0; }
 

@@ -1,0 +1,96 @@
+// Both solvers on meshes of cells (quadrilaterals, hexahedra, wedges, pyramids, a mix): tangled
+// grids are untangled with the boundary fixed, valid ones improved, never worse, and the
+// reports count cells.
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+#include <vector>
+
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/perturb.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "support/cell_meshes.hpp"
+#include "support/solver_checks.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+using pv::test::Fill;
+
+namespace {
+
+const std::vector<int> kFills{0, 1, 2, 3, 4};  // quadrilaterals, then each Fill
+const char* const kFillNames[] = {"quadrilaterals", "hexahedra", "wedges", "pyramids", "mixed"};
+
+pv::SimplexMesh grid(int fill) {
+    return fill == 0 ? pv::test::quad_grid(12) : pv::test::cube_grid(5, static_cast<Fill>(fill - 1));
+}
+
+pv::SimplexMesh tangled_grid(int fill, int seed) {
+    auto mesh = grid(fill);
+    pv::PerturbOptions perturb;
+    perturb.fraction = 0.3;
+    perturb.amount = 0.8;
+    perturb.seed = static_cast<std::uint64_t>(seed);
+    pv::perturb(mesh, perturb);
+    BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted > 0);
+    return mesh;
+}
+
+pv::Summary improve(int method, pv::SimplexMesh& mesh) {
+    if (method == 0) return pv::GlobalSolver().improve(mesh);
+    return pv::LocalSolver().improve(mesh);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(cell_solvers)
+
+BOOST_DATA_TEST_CASE(tangled_grids_of_cells_are_untangled, bdata::make(kFills), fill) {
+    for (int method : {0, 1})
+        for (int seed : {1, 2}) {
+            BOOST_TEST_CONTEXT(kFillNames[fill] << ", " << (method == 0 ? "global" : "local") << ", seed " << seed) {
+                auto mesh = tangled_grid(fill, seed);
+                const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
+                const auto summary = improve(method, mesh);
+                BOOST_TEST_MESSAGE(summary.brief_report());
+                BOOST_TEST(summary.before.elements == mesh.num_cells());
+                BOOST_TEST(summary.before.inverted > 0);
+                BOOST_TEST(summary.after.inverted == 0);
+                BOOST_TEST(pv::count_orientations(mesh).inverted == 0);
+                BOOST_TEST(summary.success());
+                pv::test::check_never_worse(summary);
+                pv::test::check_fixed_unchanged(mesh, before);
+            }
+        }
+}
+
+BOOST_DATA_TEST_CASE(valid_grids_of_cells_improve_and_invert_nothing, bdata::make(kFills), fill) {
+    for (int method : {0, 1}) {
+        BOOST_TEST_CONTEXT(kFillNames[fill] << ", " << (method == 0 ? "global" : "local")) {
+            auto mesh = grid(fill);
+            pv::PerturbOptions perturb;
+            perturb.amount = 0.2;
+            pv::perturb(mesh, perturb);
+            BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted == 0);
+            const auto summary = improve(method, mesh);
+            BOOST_TEST_MESSAGE(summary.brief_report());
+            BOOST_TEST(summary.after.inverted == 0);
+            BOOST_TEST(summary.worst_after > summary.worst_before);
+            pv::test::check_never_worse(summary);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(the_global_solver_gives_the_same_cells_on_one_and_two_threads) {
+    std::vector<double> result[2];
+    for (int threads : {1, 2}) {
+        auto mesh = tangled_grid(4, 3);
+        pv::GlobalSolverOptions options;
+        options.threads = threads;
+        pv::GlobalSolver(options).improve(mesh);
+        result[threads - 1].assign(mesh.coordinates().begin(), mesh.coordinates().end());
+    }
+    BOOST_TEST(result[0] == result[1]);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
