@@ -192,6 +192,11 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
     f.mesh = SimplexMesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
                          std::move(connectivity));
     f.mesh.set_fixed(std::move(fixed));
+    if (mesh_.has_cells()) {  // the corners keep their maps
+        std::vector<VertexId> same(static_cast<std::size_t>(n));
+        std::iota(same.begin(), same.end(), VertexId{0});
+        f.mesh.carry_cells_from(mesh_, same, f.elements);
+    }
     const auto size = static_cast<ElementId>(f.elements.size());
     if (part_)
         for (ElementId i = 0; i < size; ++i)

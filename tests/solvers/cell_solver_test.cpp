@@ -64,7 +64,11 @@ BOOST_DATA_TEST_CASE(tangled_grids_of_cells_are_untangled, bdata::make(kFills), 
         }
 }
 
+// The global solver's focus rates its cells' corners through their maps as the whole mesh does:
+// it reaches the local smoother's worst (a focus that lost the maps stalled at 0.53 against
+// 0.93 on the pyramids).
 BOOST_DATA_TEST_CASE(valid_grids_of_cells_improve_and_invert_nothing, bdata::make(kFills), fill) {
+    double worst[2] = {0.0, 0.0};
     for (int method : {0, 1}) {
         BOOST_TEST_CONTEXT(kFillNames[fill] << ", " << (method == 0 ? "global" : "local")) {
             auto mesh = grid(fill);
@@ -77,8 +81,10 @@ BOOST_DATA_TEST_CASE(valid_grids_of_cells_improve_and_invert_nothing, bdata::mak
             BOOST_TEST(summary.after.inverted == 0);
             BOOST_TEST(summary.worst_after > summary.worst_before);
             pv::test::check_never_worse(summary);
+            worst[method] = summary.worst_after;
         }
     }
+    BOOST_TEST(worst[0] >= worst[1] - 1e-3);
 }
 
 BOOST_AUTO_TEST_CASE(the_global_solver_gives_the_same_cells_on_one_and_two_threads) {
