@@ -56,11 +56,13 @@ inline SimplexMesh quad_grid(int n) {
 }
 
 // What each cube of a grid is cut into.
-enum class Fill { Hexahedra, Wedges, Pyramids, Mixed };
+enum class Fill { Hexahedra, Wedges, Pyramids, Mixed, Tetrahedra };
 
 // A unit cube of n^3 cubes: hexahedra, two wedges each, six pyramids each (about the cube's
-// centre), or a conforming mix (wedges in every third column along z, whose triangles then meet
-// triangles; elsewhere hexahedra and pyramids in a checkerboard).
+// centre), a conforming mix (wedges in every third column along z, whose triangles then meet
+// triangles; elsewhere hexahedra and pyramids in a checkerboard), or six tetrahedra each (Kuhn's
+// split: one per path from corner 000 to 111 along the axes), the simplex mesh of the same
+// vertices to compare with.
 inline SimplexMesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
     CellSoup s;
     for (int k = 0; k <= n; ++k)
@@ -76,7 +78,18 @@ inline SimplexMesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
                 Fill here = fill;
                 if (fill == Fill::Mixed)
                     here = (i + j) % 3 == 0 ? Fill::Wedges : (i + j + k) % 2 ? Fill::Pyramids : Fill::Hexahedra;
-                if (here == Fill::Hexahedra) {
+                if (here == Fill::Tetrahedra) {
+                    const int axes[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+                    for (const auto& order : axes) {
+                        int at[3] = {0, 0, 0};
+                        std::vector<VertexId> tet{id(i, j, k)};
+                        for (int axis : order) {
+                            at[axis] = 1;
+                            tet.push_back(id(i + at[0], j + at[1], k + at[2]));
+                        }
+                        s.add(CellType::Tetrahedron, tet);
+                    }
+                } else if (here == Fill::Hexahedra) {
                     s.add(CellType::Hexahedron, {h.begin(), h.end()});
                 } else if (here == Fill::Wedges) {
                     s.add(CellType::Wedge, {h[0], h[1], h[2], h[4], h[5], h[6]});
