@@ -19,42 +19,44 @@ namespace paloverde::io {
 
 namespace {
 
-// Gmsh element types that can be read. Points (15) and lines (1) are lower-dimensional
-// decorations (geometry vertices, feature curves): their nodes are checked, then they are skipped.
+// Gmsh element types that can be read: the cells of cell_types.hpp, and points (15) and lines
+// (1), lower-dimensional decorations (geometry vertices, feature curves) whose nodes are checked
+// before they are skipped.
 //
-// Second-order triangles (9) and tetrahedra (11) are refused rather than cut to their corners:
-// moving the corners would leave the mid-edge nodes where they were, and writing the mesh back
-// would drop the curved geometry without a word.
+// Second-order elements are refused rather than cut to their corners: moving the corners would
+// leave the mid-edge nodes where they were, and writing the mesh back would drop the curved
+// geometry without a word.
 struct ElementType {
-    int nodes = 0;    // 0: a type that cannot be read
-    int corners = 0;  // 3 or 4 for kept simplices, 0 for skipped points and lines
+    int nodes = 0;                   // 0: a type that cannot be read
+    const CellInfo* cell = nullptr;  // nullptr for skipped points and lines
 };
 
 ElementType element_type(std::int64_t type) {
-    switch (type) {
-        case 15: return {1, 0};
-        case 1: return {2, 0};
-        case 2: return {3, 3};
-        case 4: return {4, 4};
-        default: return {};
-    }
+    if (type == 15) return {1, nullptr};
+    if (type == 1) return {2, nullptr};
+    if (const CellInfo* cell = find_cell([&](const CellInfo& c) { return c.gmsh == type; })) return {cell->corners, cell};
+    return {};
 }
 
 std::string unsupported_element(std::int64_t tag, std::int64_t type) {
     std::string name;
     switch (type) {
-        case 3: name = " (4-node quadrangle)"; break;
-        case 5: name = " (8-node hexahedron)"; break;
-        case 6: name = " (6-node prism)"; break;
-        case 7: name = " (5-node pyramid)"; break;
         case 8: name = " (3-node second-order line)"; break;
         case 9: name = " (6-node second-order triangle)"; break;
+        case 10: name = " (9-node second-order quadrangle)"; break;
         case 11: name = " (10-node second-order tetrahedron)"; break;
+        case 12: name = " (27-node second-order hexahedron)"; break;
+        case 13: name = " (18-node second-order prism)"; break;
+        case 14: name = " (14-node second-order pyramid)"; break;
+        case 16: name = " (8-node second-order quadrangle)"; break;
+        case 17: name = " (20-node second-order hexahedron)"; break;
+        case 18: name = " (15-node second-order prism)"; break;
+        case 19: name = " (13-node second-order pyramid)"; break;
         default: break;
     }
-    std::string message = "element " + std::to_string(tag) + " has type " + std::to_string(type) + name +
-                          "; only triangles (2) and tetrahedra (4) can be read, with points (15) and lines (1) skipped";
-    if (type == 8 || type == 9 || type == 11) message += "; save a first-order mesh (gmsh -order 1)";
+    std::string message = "element " + std::to_string(tag) + " has type " + std::to_string(type) + name + "; only " +
+                          handled_cells(&CellInfo::gmsh) + " can be read, with points (15) and lines (1) skipped";
+    if (!name.empty()) message += "; save a first-order mesh (gmsh -order 1)";
     return message;
 }
 
@@ -65,6 +67,7 @@ public:
     void add(std::int64_t tag) { tags_.push_back(tag); }
     std::size_t size() const { return tags_.size(); }
     std::int64_t tag_at(std::size_t position) const { return tags_[position]; }
+    std::vector<std::int64_t> release() { return std::move(tags_); }
 
     // Returns a tag that appears more than once, or 0 if all are distinct.
     std::int64_t build() {
@@ -138,21 +141,23 @@ private:
 
     std::string_view token(std::string_view what) {
         const std::string_view t = s_.token();
-        if (t.empty()) fail("unexpected end of file: expected " + std::string(what));
+        if (t.empty()) fail("unexpected end of file: expected " + std::string(what) + s_.in_entry());
         return t;
     }
     std::int64_t integer(std::string_view what) {
         const std::string_view t = token(what);
         std::int64_t value = 0;
         if (!parse_integer(t, value))
-            fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'");
+            fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'" +
+                 s_.in_entry());
         return value;
     }
     double real(std::string_view what) {
         const std::string_view t = token(what);
         double value = 0.0;
         if (!parse_real(t, value))
-            fail("expected " + std::string(what) + " (a number), found '" + std::string(t.substr(0, 64)) + "'");
+            fail("expected " + std::string(what) + " (a number), found '" + std::string(t.substr(0, 64)) + "'" +
+                 s_.in_entry());
         return value;
     }
     // A count of items that each take at least `min_bytes` of the rest of the file, so that a
@@ -226,6 +231,12 @@ private:
         raw_.coordinates.insert(raw_.coordinates.end(), {x, y, z});
     }
     void add_element(std::int64_t tag, const ElementType& type, const std::int64_t* nodes);
+    // Names the element being read in the messages of a list cut short: by its tag once read.
+    void name_elements(const std::int64_t& tag, const std::int64_t& number) {
+        s_.set_entry([&] {
+            return tag != 0 ? "element " + std::to_string(tag) : "element number " + std::to_string(number + 1) + " of the list";
+        });
+    }
 
     static constexpr std::size_t kNoRecord = static_cast<std::size_t>(-1);
 
@@ -277,6 +288,9 @@ RawMesh GmshReader::read() {
 
     for (View& view : point_views_) raw_.point_fields.push_back(std::move(view.field));
     for (View& view : cell_views_) raw_.cell_fields.push_back(std::move(view.field));
+    raw_.cell_name = [tags = element_tags_.release()](std::size_t position, CellType type) {
+        return "element " + std::to_string(tags[position]) + " (" + std::string(cell_info(type).name) + ")";
+    };
     return std::move(raw_);
 }
 
@@ -437,30 +451,28 @@ void GmshReader::add_element(std::int64_t tag, const ElementType& type, const st
     if (tag < 1) fail("element tag " + std::to_string(tag) + " is not positive");
     const std::size_t position = element_tags_.size();
     element_tags_.add(tag);
-    VertexId corners[4] = {};
+    VertexId vertices[kMaxCellCorners] = {};
     for (int c = 0; c < type.nodes; ++c) {
         const std::int64_t index = node_tags_.find(nodes[c]);
         if (index < 0)
             fail("element " + std::to_string(tag) + " refers to node " + std::to_string(nodes[c]) +
                  ", which is not in $Nodes");
-        if (c < 4) corners[c] = static_cast<VertexId>(index);
+        vertices[c] = static_cast<VertexId>(index);
     }
-    if (type.corners == 4) {
-        raw_.tetrahedra.insert(raw_.tetrahedra.end(), corners, corners + 4);
-        raw_.tetrahedron_cells.push_back(position);
-    } else if (type.corners == 3) {
-        raw_.triangles.insert(raw_.triangles.end(), corners, corners + 3);
-        raw_.triangle_cells.push_back(position);
-    }
+    if (type.cell) raw_.add_file_cell(type.cell->type, vertices, position);
 }
 
 void GmshReader::read_elements_v2() {
-    std::int64_t nodes[4] = {};
+    std::int64_t nodes[kMaxCellCorners] = {};
     if (!binary_) {
         // "tag type ntags node" takes at least 8 bytes.
         const std::int64_t n = count("the number of elements", 8);
-        for (std::int64_t e = 0; e < n; ++e) {
-            const std::int64_t tag = integer("an element tag");
+        std::int64_t tag = 0;
+        std::int64_t e = 0;
+        name_elements(tag, e);
+        for (; e < n; ++e) {
+            tag = 0;  // until read: a list cut before the tag names the element by its number
+            tag = integer("an element tag");
             const std::int64_t type_number = integer("an element type");
             const ElementType type = element_type(type_number);
             if (type.nodes == 0) fail(unsupported_element(tag, type_number));
@@ -469,6 +481,7 @@ void GmshReader::read_elements_v2() {
             for (int c = 0; c < type.nodes; ++c) nodes[c] = integer("a node tag");
             add_element(tag, type, nodes);
         }
+        s_.set_entry({});
     } else {
         // An element takes at least its tag and one node: 8 bytes.
         const std::int64_t n = count("the number of elements", 2 * sizeof(std::int32_t));
@@ -523,7 +536,7 @@ void GmshReader::read_elements_v4() {
         next_size("the smallest element tag");
         next_size("the largest element tag");
     }
-    std::int64_t nodes[4] = {};
+    std::int64_t nodes[kMaxCellCorners] = {};
     std::int64_t read = 0;
     for (std::int64_t b = 0; b < blocks; ++b) {
         std::int64_t type_number = 0;
@@ -549,11 +562,16 @@ void GmshReader::read_elements_v4() {
             fail(unsupported_element(first_tag, type_number));
         }
         if (!binary_) {
-            for (std::int64_t e = 0; e < k; ++e) {
-                const std::int64_t tag = integer("an element tag");
+            std::int64_t tag = 0;
+            std::int64_t e = read;
+            name_elements(tag, e);
+            for (; e < read + k; ++e) {
+                tag = 0;  // until read, as in read_elements_v2
+                tag = integer("an element tag");
                 for (int c = 0; c < type.nodes; ++c) nodes[c] = integer("a node tag");
                 add_element(tag, type, nodes);
             }
+            s_.set_entry({});
         } else {
             const std::size_t record = (1 + static_cast<std::size_t>(type.nodes)) * size_bytes_;
             const std::size_t start = s_.offset();
@@ -747,11 +765,8 @@ void write_gmsh(std::ostream& stream, const MeshToWrite& data, Encoding encoding
     const SimplexMesh& mesh = data.mesh;
     const bool binary = encoding == Encoding::Binary;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
-    const auto m = static_cast<std::size_t>(mesh.num_elements());
-    const int corners = mesh.corners();
-    const std::int32_t type = mesh.kind() == ElementKind::Tetrahedron ? 4 : 2;
+    const std::size_t m = data.cells();
     const std::span<const double> xyz = mesh.coordinates();
-    const std::span<const VertexId> connectivity = data.connectivity;
 
     Output out(stream);
     out.text(binary ? "$MeshFormat\n2.2 1 8\n" : "$MeshFormat\n2.2 0 8\n");
@@ -778,22 +793,29 @@ void write_gmsh(std::ostream& stream, const MeshToWrite& data, Encoding encoding
     out.text(binary ? "\n$EndNodes\n$Elements\n" : "$EndNodes\n$Elements\n");
     out.integer(static_cast<std::int64_t>(m));
     out.text("\n");
-    if (binary) {
-        out.binary(type);
-        out.binary(static_cast<std::int32_t>(m));
-        out.binary(std::int32_t{2});
-    }
+    VertexId element[kMaxCellCorners];
     for (std::size_t e = 0; e < m; ++e) {
-        const VertexId* element = connectivity.data() + e * static_cast<std::size_t>(corners);
+        const CellInfo& info = cell_info(data.type(e));
+        to_file_order(info.type, data.cell(e), element);
         if (binary) {
+            // A block header before each run of one type: its type, length and tag count.
+            if (e == 0 || data.type(e - 1) != info.type) {
+                std::size_t run = e + 1;
+                while (run < m && data.type(run) == info.type) ++run;
+                out.binary(static_cast<std::int32_t>(info.gmsh));
+                out.binary(static_cast<std::int32_t>(run - e));
+                out.binary(std::int32_t{2});
+            }
             out.binary(static_cast<std::int32_t>(e + 1));
             out.binary(std::int32_t{0});
             out.binary(std::int32_t{1});
-            for (int c = 0; c < corners; ++c) out.binary(static_cast<std::int32_t>(element[c] + 1));
+            for (int c = 0; c < info.corners; ++c) out.binary(static_cast<std::int32_t>(element[c] + 1));
         } else {
             out.integer(static_cast<std::int64_t>(e + 1));
-            out.text(type == 4 ? " 4 2 0 1" : " 2 2 0 1");
-            for (int c = 0; c < corners; ++c) {
+            out.text(" ");
+            out.integer(info.gmsh);
+            out.text(" 2 0 1");
+            for (int c = 0; c < info.corners; ++c) {
                 out.text(" ");
                 out.integer(static_cast<std::int64_t>(element[c]) + 1);
             }

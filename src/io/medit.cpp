@@ -1,17 +1,22 @@
 // Medit .mesh files (ASCII), as written by MMG, TetWild, Medit and many others.
 //
 // Orientation: Medit files from TetWild (armadillo, octopus-vol) have det(v1-v0, v2-v0, v3-v0) > 0
-// for every tetrahedron, the convention Paloverde uses, so elements are read as written.
+// for every tetrahedron, the convention Paloverde uses, so elements are read as written. Quadrilaterals,
+// hexahedra and pyramids have VTK's vertex order; a prism's first triangle points towards the
+// second, the mirror of a VTK wedge (CellInfo::gmsh_order, as in Gmsh).
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <ostream>
 #include <span>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "paloverde/core/error.hpp"
@@ -41,7 +46,8 @@ public:
         const std::string_view t = expect_token(what);
         double value = 0.0;
         if (!parse_real(t, value))
-            s_.fail("expected " + std::string(what) + " (a number), found '" + std::string(t.substr(0, 64)) + "'");
+            s_.fail("expected " + std::string(what) + " (a number), found '" + std::string(t.substr(0, 64)) + "'" +
+                    s_.in_entry());
         return value;
     }
     // A count of items that each take at least `min_bytes`: a corrupt count fails here, before
@@ -55,6 +61,7 @@ public:
         return value;
     }
     [[noreturn]] void fail(const std::string& message) const { s_.fail(message); }
+    void set_entry(std::function<std::string()> entry) { s_.set_entry(std::move(entry)); }
 
 private:
     TextScanner s_;
@@ -72,27 +79,32 @@ int skipped_section_width(const std::string& keyword, int d) {
     return 0;
 }
 
-// Element sections that cannot be held by a simplex mesh; dropping them would lose part of the mesh.
-bool is_foreign_element_section(const std::string& keyword) {
-    return keyword == "quadrilaterals" || keyword == "hexahedra" || keyword == "prisms" || keyword == "pyramids";
+// The cell type of an element section ("hexahedra" for Hexahedra), or nullptr.
+const CellInfo* section_cell(const std::string& keyword) {
+    return find_cell([&](const CellInfo& c) { return lower(c.medit) == keyword; });
+}
+
+// How Medit calls one element of a section: "prism" for Prisms, else the cell's name.
+std::string element_noun(const CellInfo& info) {
+    return info.type == CellType::Wedge ? "prism" : std::string(info.name);
 }
 
 class MeditReader {
 public:
-    explicit MeditReader(const std::string& path) : s_(path) {}
+    explicit MeditReader(const std::string& path) : s_(path) { starts_.fill(-1); }
     RawMesh read();
 
 private:
     void read_vertices();
-    void read_elements(int corners, const char* section, const char* element, const char* elements);
+    void read_elements(const CellInfo& info);
 
     MeditScanner s_;
     int dimension_ = 0;
     std::int64_t vertices_ = -1;
-    bool have_triangles_ = false;
-    bool have_tetrahedra_ = false;
+    // Where each type's section starts in the elements of all sections; -1 before it is read.
+    std::array<std::int64_t, kCellTypeCount> starts_;
     std::vector<double> vertex_refs_;
-    std::vector<double> cell_refs_;  // one per triangle and tetrahedron, in file order
+    std::vector<double> cell_refs_;  // one per element of every section, in file order
     RawMesh raw_;
 };
 
@@ -119,19 +131,9 @@ RawMesh MeditReader::read() {
             if (dimension_ == 0) s_.fail("Vertices comes before Dimension");
             if (vertices_ >= 0) s_.fail("a second Vertices section");
             read_vertices();
-        } else if (keyword == "triangles") {
-            if (have_triangles_) s_.fail("a second Triangles section");
-            read_elements(3, "Triangles", "triangle", "triangles");
-            have_triangles_ = true;
-        } else if (keyword == "tetrahedra") {
-            if (have_tetrahedra_) s_.fail("a second Tetrahedra section");
-            read_elements(4, "Tetrahedra", "tetrahedron", "tetrahedra");
-            have_tetrahedra_ = true;
-        } else if (is_foreign_element_section(keyword)) {
-            const std::int64_t n = s_.count("the number of " + std::string(t), 2);
-            if (n > 0)
-                s_.fail("the file holds " + std::to_string(n) + " " + std::string(t) +
-                        "; Paloverde reads triangles and tetrahedra only, and skipping them would lose part of the mesh");
+        } else if (const CellInfo* cell = section_cell(keyword)) {
+            if (starts_[static_cast<std::size_t>(cell->type)] >= 0) s_.fail("a second " + std::string(cell->medit) + " section");
+            read_elements(*cell);
         } else if (const int width = skipped_section_width(keyword, dimension_ == 0 ? 3 : dimension_); width > 0) {
             const std::int64_t n = s_.count("the number of " + std::string(t), 2 * static_cast<std::size_t>(width));
             const std::string what = "an entry of " + std::string(t);
@@ -144,6 +146,11 @@ RawMesh MeditReader::read() {
 
     raw_.point_fields.push_back(Field{"ref", 1, std::move(vertex_refs_)});
     raw_.cell_fields.push_back(Field{"ref", 1, std::move(cell_refs_)});
+    // Messages name an element by its section and number there, as Medit does: "hexahedron 3".
+    raw_.cell_name = [starts = starts_](std::size_t position, CellType type) {
+        const auto number = static_cast<std::int64_t>(position) - starts[static_cast<std::size_t>(type)] + 1;
+        return element_noun(cell_info(type)) + " " + std::to_string(number);
+    };
     return std::move(raw_);
 }
 
@@ -165,24 +172,28 @@ void MeditReader::read_vertices() {
     vertices_ = n;
 }
 
-void MeditReader::read_elements(int corners, const char* section, const char* element, const char* elements) {
-    if (vertices_ < 0) s_.fail(std::string(section) + " comes before Vertices");
-    const std::int64_t n = s_.count("the number of " + std::string(elements), 2 * (static_cast<std::size_t>(corners) + 1));
-    std::vector<VertexId>& connectivity = corners == 4 ? raw_.tetrahedra : raw_.triangles;
-    std::vector<std::size_t>& cells = corners == 4 ? raw_.tetrahedron_cells : raw_.triangle_cells;
-    connectivity.reserve(static_cast<std::size_t>(n) * static_cast<std::size_t>(corners));
-    cells.reserve(static_cast<std::size_t>(n));
-    for (std::int64_t e = 1; e <= n; ++e) {
-        for (int c = 0; c < corners; ++c) {
+void MeditReader::read_elements(const CellInfo& info) {
+    const std::string section(info.medit);
+    if (vertices_ < 0) s_.fail(section + " comes before Vertices");
+    const auto corners = static_cast<std::size_t>(info.corners);
+    const std::int64_t n = s_.count("the number of " + lower(section), 2 * (corners + 1));
+    starts_[static_cast<std::size_t>(info.type)] = static_cast<std::int64_t>(cell_refs_.size());
+    raw_.cell_connectivity.reserve(raw_.cell_connectivity.size() + static_cast<std::size_t>(n) * corners);
+    VertexId vertices[kMaxCellCorners];
+    std::int64_t e = 1;
+    s_.set_entry([&] { return element_noun(info) + " " + std::to_string(e); });
+    for (; e <= n; ++e) {
+        for (std::size_t c = 0; c < corners; ++c) {
             const std::int64_t v = s_.integer("a vertex number");
             if (v < 1 || v > vertices_)
-                s_.fail(std::string(element) + " " + std::to_string(e) + " refers to vertex " + std::to_string(v) +
+                s_.fail(element_noun(info) + " " + std::to_string(e) + " refers to vertex " + std::to_string(v) +
                         "; vertices are numbered 1 to " + std::to_string(vertices_));
-            connectivity.push_back(static_cast<VertexId>(v - 1));
+            vertices[c] = static_cast<VertexId>(v - 1);
         }
-        cells.push_back(cell_refs_.size());
+        raw_.add_file_cell(info.type, vertices, cell_refs_.size());
         cell_refs_.push_back(static_cast<double>(s_.integer("an element reference")));
     }
+    s_.set_entry({});
 }
 
 // Formats into one string and hands it to the stream in large pieces.
@@ -237,16 +248,15 @@ std::vector<std::int64_t> references(std::span<const Field> fields, std::size_t 
 RawMesh read_medit(const std::string& path) { return MeditReader(path).read(); }
 
 // Always 3D, so that a triangle mesh off the xy plane keeps its z. Medit has no place for other
-// fields; the fixed flags come back by boundary detection.
+// fields; the fixed flags come back by boundary detection. Each cell type has a section of its
+// own, in the order of cell_types.hpp: a mixed mesh's cells come back grouped by type.
 void write_medit(std::ostream& stream, const MeshToWrite& data) {
     const SimplexMesh& mesh = data.mesh;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
-    const auto m = static_cast<std::size_t>(mesh.num_elements());
-    const int corners = mesh.corners();
+    const std::size_t m = data.cells();
     const std::vector<std::int64_t> vertex_refs = references(data.point_fields, n, "point");
-    const std::vector<std::int64_t> element_refs = references(data.cell_fields, m, "cell");
+    const std::vector<std::int64_t> cell_refs = references(data.cell_fields, m, "cell");
     const std::span<const double> xyz = mesh.coordinates();
-    const std::span<const VertexId> connectivity = data.connectivity;
 
     Output out(stream);
     out.text("MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n");
@@ -260,17 +270,27 @@ void write_medit(std::ostream& stream, const MeshToWrite& data) {
         out.integer(vertex_refs[v]);
         out.text("\n");
     }
-    out.text(corners == 4 ? "\nTetrahedra\n" : "\nTriangles\n");
-    out.integer(static_cast<std::int64_t>(m));
-    out.text("\n");
-    for (std::size_t e = 0; e < m; ++e) {
-        const VertexId* element = connectivity.data() + e * static_cast<std::size_t>(corners);
-        for (int c = 0; c < corners; ++c) {
-            out.integer(static_cast<std::int64_t>(element[c]) + 1);
-            out.text(" ");
-        }
-        out.integer(element_refs[e]);
+    std::array<std::size_t, kCellTypeCount> counts{};
+    for (std::size_t c = 0; c < m; ++c) ++counts[static_cast<std::size_t>(data.type(c))];
+    VertexId element[kMaxCellCorners];
+    for (const CellInfo& info : all_cell_infos()) {
+        const std::size_t count = counts[static_cast<std::size_t>(info.type)];
+        if (count == 0) continue;
         out.text("\n");
+        out.text(info.medit);
+        out.text("\n");
+        out.integer(static_cast<std::int64_t>(count));
+        out.text("\n");
+        for (std::size_t c = 0; c < m; ++c) {
+            if (data.type(c) != info.type) continue;
+            to_file_order(info.type, data.cell(c), element);
+            for (int i = 0; i < info.corners; ++i) {
+                out.integer(static_cast<std::int64_t>(element[i]) + 1);
+                out.text(" ");
+            }
+            out.integer(cell_refs[c]);
+            out.text("\n");
+        }
     }
     out.text("\nEnd\n");
     out.flush();

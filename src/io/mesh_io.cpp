@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "paloverde/core/error.hpp"
@@ -37,6 +38,24 @@ Field narrow_cell_field(const Field& field, std::span<const std::size_t> kept_ce
     }
     return out;
 }
+// "a, b and c", naming at most six.
+template <class Id>
+std::string listed(const std::vector<Id>& ids) {
+    std::string out;
+    for (std::size_t c = 0; c < ids.size() && c < 6; ++c)
+        out += (c == 0 ? "" : c + 1 == ids.size() ? " and " : ", ") + std::to_string(ids[c]);
+    if (ids.size() > 6) out += ", ...";
+    return out;
+}
+
+[[noreturn]] void refuse_shared_face(const std::string& path, const std::vector<VertexId>& face, bool faces,
+                                     const std::vector<ElementId>& sharing, std::string_view kind) {
+    throw FileError(path, 0, std::string(faces ? "the face of vertices " : "the edge of vertices ") + listed(face) +
+                                 " belongs to " + std::to_string(sharing.size()) + " " + std::string(kind) + " (" +
+                                 (kind == "cells" ? "" : "elements ") + listed(sharing) +
+                                 "), but at most two can share it (a non-manifold mesh; numbers count from 0)");
+}
+
 // The boundary vertices (on a face, or a triangle's edge, of one element only), as
 // boundary_vertices() finds them, and the check that no face is in more than two elements: such a
 // mesh no vertex placement can make valid (untangling could not succeed, and the face would pass
@@ -84,22 +103,100 @@ std::vector<std::uint8_t> manifold_boundary(const SimplexMesh& mesh, const std::
                         }))
                         sharing.push_back(e);
                 }
-                std::string vertices, elements;
-                for (std::size_t c = 0; c < size; ++c)
-                    vertices += (c == 0 ? "" : c + 1 == size ? " and " : ", ") + std::to_string(face[c]);
-                for (std::size_t c = 0; c < sharing.size() && c < 6; ++c)
-                    elements += (c == 0 ? "" : c + 1 == sharing.size() ? " and " : ", ") + std::to_string(sharing[c]);
-                if (sharing.size() > 6) elements += ", ...";
                 const bool tets = k == 4;
-                throw FileError(path, 0, std::string(tets ? "the face of vertices " : "the edge of vertices ") + vertices +
-                                             " belongs to " + std::to_string(sharing.size()) +
-                                             (tets ? " tetrahedra (elements " : " triangles (elements ") + elements +
-                                             "), but at most two can share it (a non-manifold mesh; numbers count from 0)");
+                refuse_shared_face(path, std::vector<VertexId>(face.begin(), face.begin() + static_cast<std::ptrdiff_t>(size)),
+                                   tets, sharing, tets ? "tetrahedra" : "triangles");
             }
             i = j;
         }
     }
     return boundary;
+}
+
+// The same for a mesh with cells: every face (an edge in 2D) of every cell, as its sorted
+// vertices, sorted together. A face of one cell is on the boundary; one of three or more is
+// refused. (A triangle of a tetrahedron and of a pyramid or wedge are the same face.)
+std::vector<std::uint8_t> manifold_cell_boundary(const SimplexMesh& mesh, const std::string& path) {
+    struct Face {
+        std::array<VertexId, 4> vertices;  // sorted, then -1
+        ElementId cell;
+        bool operator<(const Face& o) const { return vertices != o.vertices ? vertices < o.vertices : cell < o.cell; }
+    };
+    std::vector<Face> faces;
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+        const auto cell = mesh.cell(c);
+        for (const auto& local : cell_info(mesh.cell_type(c)).faces) {
+            Face face{{-1, -1, -1, -1}, c};
+            int size = 0;
+            while (size < 4 && local[size] >= 0) face.vertices[size] = cell[local[size]], ++size;
+            auto& v = face.vertices;
+            for (int i = 1; i < size; ++i)  // insertion sort of 2 to 4 ids
+                for (int j = i; j > 0 && v[j - 1] > v[j]; --j) std::swap(v[j - 1], v[j]);
+            faces.push_back(face);
+        }
+    }
+    std::sort(faces.begin(), faces.end());
+    std::vector<std::uint8_t> boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
+    for (std::size_t i = 0; i < faces.size();) {
+        std::size_t j = i + 1;
+        while (j < faces.size() && faces[j].vertices == faces[i].vertices) ++j;
+        std::vector<VertexId> face;
+        for (VertexId v : faces[i].vertices)
+            if (v >= 0) face.push_back(v);
+        if (j - i == 1)
+            for (VertexId v : face) boundary[static_cast<std::size_t>(v)] = 1;
+        if (j - i > 2) {
+            std::vector<ElementId> sharing;
+            for (std::size_t f = i; f < j; ++f) sharing.push_back(faces[f].cell);
+            refuse_shared_face(path, face, mesh.kind() == ElementKind::Tetrahedron, sharing, "cells");
+        }
+        i = j;
+    }
+    return boundary;
+}
+
+// Drops the cells below `dimension` (the boundary triangles and quadrilaterals beside 3D cells).
+void keep_dimension(io::RawMesh& raw, int dimension) {
+    if (std::all_of(raw.cell_types.begin(), raw.cell_types.end(),
+                    [&](CellType type) { return cell_info(type).dimension == dimension; }))
+        return;
+    std::size_t kept = 0, to = 0, from = 0;
+    for (std::size_t c = 0; c < raw.cell_types.size(); ++c) {
+        const CellInfo& info = cell_info(raw.cell_types[c]);
+        const auto k = static_cast<std::size_t>(info.corners);
+        if (info.dimension == dimension) {
+            for (std::size_t i = 0; i < k; ++i) raw.cell_connectivity[to + i] = raw.cell_connectivity[from + i];
+            raw.cell_types[kept] = raw.cell_types[c];
+            raw.cell_positions[kept] = raw.cell_positions[c];
+            ++kept;
+            to += k;
+        }
+        from += k;
+    }
+    raw.cell_types.resize(kept);
+    raw.cell_positions.resize(kept);
+    raw.cell_connectivity.resize(to);
+}
+
+// A cell with a repeated vertex has no corner that can be made valid. Checked here, on the kept
+// cells only, to name the cell as the file does.
+void check_distinct_vertices(const io::RawMesh& raw, const std::string& path) {
+    std::size_t at = 0;
+    for (std::size_t c = 0; c < raw.cell_types.size(); ++c) {
+        const CellInfo& info = cell_info(raw.cell_types[c]);
+        const VertexId* v = raw.cell_connectivity.data() + at;
+        for (int i = 0; i < info.corners; ++i)
+            for (int j = 0; j < i; ++j)
+                if (v[i] == v[j]) {
+                    const std::size_t position = raw.cell_positions[c];
+                    const std::string name = raw.cell_name ? raw.cell_name(position, info.type)
+                                                           : "cell " + std::to_string(position) + " (" +
+                                                                 std::string(info.name) + ")";
+                    throw FileError(path, 0, name + " repeats vertex " + std::to_string(v[i]) +
+                                                 " (points numbered from 0 in file order)");
+                }
+        at += static_cast<std::size_t>(info.corners);
+    }
 }
 
 }  // namespace
@@ -148,30 +245,59 @@ const Field* MeshFile::cell_field(std::string_view name) const {
 
 namespace io {
 
+void RawMesh::add_cell(CellType type, const VertexId* vertices, std::size_t position) {
+    cell_types.push_back(type);
+    cell_connectivity.insert(cell_connectivity.end(), vertices, vertices + cell_info(type).corners);
+    cell_positions.push_back(position);
+}
+
+void RawMesh::add_file_cell(CellType type, const VertexId* file_vertices, std::size_t position) {
+    const CellInfo& info = cell_info(type);
+    cell_types.push_back(type);
+    for (int i = 0; i < info.corners; ++i) cell_connectivity.push_back(file_vertices[info.gmsh_order[i]]);
+    cell_positions.push_back(position);
+}
+
+std::string handled_cells(int CellInfo::*code) {
+    std::string out;
+    const auto infos = all_cell_infos();
+    for (std::size_t i = 0; i < infos.size(); ++i)
+        out += (i == 0 ? "" : i + 1 == infos.size() ? " and " : ", ") + std::string(infos[i].name) + " (" +
+               std::to_string(infos[i].*code) + ")";
+    return out;
+}
+
+void to_file_order(CellType type, std::span<const VertexId> cell, VertexId* out) {
+    const CellInfo& info = cell_info(type);
+    for (int i = 0; i < info.corners; ++i) out[info.gmsh_order[i]] = cell[static_cast<std::size_t>(i)];
+}
+
 MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& options) {
-    const bool tets = !raw.tetrahedra.empty();
-    if (!tets && raw.triangles.empty())
-        throw FileError(path, 0, "the file holds no triangles or tetrahedra (empty mesh)");
-    const ElementKind kind = tets ? ElementKind::Tetrahedron : ElementKind::Triangle;
-    std::vector<VertexId>& connectivity = tets ? raw.tetrahedra : raw.triangles;
-    const std::vector<std::size_t>& kept = tets ? raw.tetrahedron_cells : raw.triangle_cells;
+    int dimension = 0;
+    for (CellType type : raw.cell_types) dimension = std::max(dimension, cell_info(type).dimension);
+    if (dimension == 0)
+        throw FileError(path, 0,
+                        "the file holds no triangles, quadrilaterals, tetrahedra, hexahedra, wedges or pyramids (empty mesh)");
+    keep_dimension(raw, dimension);
+    check_distinct_vertices(raw, path);
 
     MeshFile out;
     try {
-        out.mesh = SimplexMesh(kind, std::move(raw.coordinates), std::move(connectivity));
+        out.mesh = SimplexMesh::from_cells(std::move(raw.coordinates), raw.cell_types, std::move(raw.cell_connectivity));
         check_no_duplicate_elements(out.mesh);
     } catch (const MeshError& e) {
         throw FileError(path, 0, e.what());
     }
     out.orientation = orient(out.mesh, options.orientation);
-    std::vector<std::uint8_t> boundary = manifold_boundary(out.mesh, path);
+    std::vector<std::uint8_t> boundary =
+        out.mesh.has_cells() ? manifold_cell_boundary(out.mesh, path) : manifold_boundary(out.mesh, path);
     const auto n = static_cast<std::size_t>(out.mesh.num_vertices());
     for (Field& f : raw.point_fields) {
         if (f.components < 1 || f.values.size() != n * static_cast<std::size_t>(f.components))
             throw FileError(path, 0, "point field '" + f.name + "' has " + std::to_string(f.values.size()) +
                                          " values for " + std::to_string(n) + " points");
     }
-    for (const Field& f : raw.cell_fields) out.cell_fields.push_back(narrow_cell_field(f, kept, path));
+    for (const Field& f : raw.cell_fields) out.cell_fields.push_back(narrow_cell_field(f, raw.cell_positions, path));
     out.point_fields = std::move(raw.point_fields);
 
     if (const Field* fixed = out.point_field("fixed"); fixed && fixed->components == 1) {
@@ -232,8 +358,8 @@ void write_mesh(const std::filesystem::path& path,
         if (f.components < 1 || f.values.size() != static_cast<std::size_t>(mesh.num_vertices()) * f.components)
             throw Error("point field '" + f.name + "' does not have one tuple per vertex");
     for (const Field& f : cell_fields)
-        if (f.components < 1 || f.values.size() != static_cast<std::size_t>(mesh.num_elements()) * f.components)
-            throw Error("cell field '" + f.name + "' does not have one tuple per element");
+        if (f.components < 1 || f.values.size() != static_cast<std::size_t>(mesh.num_cells()) * f.components)
+            throw Error("cell field '" + f.name + "' does not have one tuple per cell");
 
     std::vector<Field> points(point_fields.begin(), point_fields.end());
     const bool has_fixed = std::any_of(points.begin(), points.end(), [](const Field& f) { return f.name == "fixed"; });
@@ -241,14 +367,18 @@ void write_mesh(const std::filesystem::path& path,
         Field fixed{"fixed", 1, std::vector<double>(mesh.fixed().begin(), mesh.fixed().end())};
         points.push_back(std::move(fixed));
     }
-    // The file's order: a mesh flipped on reading is flipped back (a copy of the corners only).
+    // The file's order: a mesh flipped on reading is mirrored back (a copy of the cells only).
     std::vector<VertexId> file_order;
-    std::span<const VertexId> connectivity = mesh.connectivity();
+    std::span<const VertexId> connectivity = mesh.has_cells() ? mesh.cell_connectivity() : mesh.connectivity();
     if (mesh.elements_flipped()) {
         file_order.assign(connectivity.begin(), connectivity.end());
-        const auto k = static_cast<std::size_t>(mesh.corners());
-        for (std::size_t first = 0; first < file_order.size(); first += k)
-            std::swap(file_order[first + k - 2], file_order[first + k - 1]);
+        const io::MeshToWrite cells{mesh, connectivity, {}, {}};
+        for (std::size_t c = 0, at = 0; c < cells.cells(); ++c) {
+            const CellInfo& info = cell_info(cells.type(c));
+            const auto cell = cells.cell(c);
+            for (int i = 0; i < info.corners; ++i) file_order[at + static_cast<std::size_t>(i)] = cell[info.mirror[i]];
+            at += static_cast<std::size_t>(info.corners);
+        }
         connectivity = file_order;
     }
     const io::MeshToWrite data{mesh, connectivity, points, cell_fields};

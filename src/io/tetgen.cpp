@@ -145,29 +145,36 @@ void read_ele_file(const std::string& path, const Nodes& nodes, RawMesh& raw) {
     const auto count = static_cast<std::size_t>(m);
     const auto width = static_cast<std::size_t>(attributes);
     const auto k = static_cast<std::size_t>(corners);
-    std::vector<VertexId>& connectivity = corners == 4 ? raw.tetrahedra : raw.triangles;
-    std::vector<std::size_t>& cells = corners == 4 ? raw.tetrahedron_cells : raw.triangle_cells;
-    connectivity.reserve(count * k);
-    cells.reserve(count);
+    const CellType type = corners == 4 ? CellType::Tetrahedron : CellType::Triangle;
+    raw.cell_types.reserve(count);
+    raw.cell_connectivity.reserve(count * k);
+    raw.cell_positions.reserve(count);
     // TetGen's -A writes one attribute per tetrahedron: the region it belongs to.
     const std::size_t first_field = raw.cell_fields.size();
     for (std::size_t a = 0; a < width; ++a)
         raw.cell_fields.push_back(Field{width == 1 ? "region" : "region_" + std::to_string(a + 1), 1, std::vector<double>(count)});
     const char* element = corners == 4 ? "tetrahedron" : "triangle";
+    raw.cell_name = [element, base = nodes.base](std::size_t position, CellType) {
+        std::string name = element;  // built with += (GCC 12 warns, wrongly, on const char* + string)
+        name += ' ';
+        name += std::to_string(base + static_cast<std::int64_t>(position));
+        return name;
+    };
     const std::int64_t last = nodes.base + nodes.count - 1;
     for (std::int64_t i = 0; i < m; ++i) {
         const std::int64_t index = e.integer("an element index");
         if (index != nodes.base + i)
             e.fail("element index " + std::to_string(index) + " is out of sequence (expected " + std::to_string(nodes.base + i) +
                    ", numbering from " + std::to_string(nodes.base) + " like the .node file)");
+        VertexId vertices[4];
         for (std::size_t c = 0; c < k; ++c) {
             const std::int64_t v = e.integer("a point index");
             if (v < nodes.base || v > last)
                 e.fail(std::string(element) + " " + std::to_string(index) + " refers to point " + std::to_string(v) +
                        ", outside " + std::to_string(nodes.base) + ".." + std::to_string(last));
-            connectivity.push_back(static_cast<VertexId>(v - nodes.base));
+            vertices[c] = static_cast<VertexId>(v - nodes.base);
         }
-        cells.push_back(static_cast<std::size_t>(i));
+        raw.add_cell(type, vertices, static_cast<std::size_t>(i));
         for (std::size_t a = 0; a < width; ++a)
             raw.cell_fields[first_field + a].values[static_cast<std::size_t>(i)] = e.real("an element attribute");
     }

@@ -50,7 +50,7 @@ std::string_view TextScanner::token() {
 
 std::string_view TextScanner::expect_token(std::string_view what) {
     const std::string_view t = token();
-    if (t.empty()) fail("unexpected end of file: expected " + std::string(what));
+    if (t.empty()) fail("unexpected end of file: expected " + std::string(what) + in_entry());
     return t;
 }
 
@@ -62,7 +62,8 @@ void TextScanner::expect_keyword(std::string_view keyword) {
 double TextScanner::real(std::string_view what) {
     const std::string_view t = expect_token(what);
     double value = 0.0;
-    if (!parse_real(t, value)) fail("expected " + std::string(what) + ", found '" + std::string(t.substr(0, 64)) + "'");
+    if (!parse_real(t, value))
+        fail("expected " + std::string(what) + ", found '" + std::string(t.substr(0, 64)) + "'" + in_entry());
     return value;
 }
 
@@ -76,7 +77,8 @@ std::int64_t TextScanner::integer(std::string_view what) {
     const std::string_view t = expect_token(what);
     std::int64_t value = 0;
     if (!parse_integer(t, value))
-        fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'");
+        fail("expected " + std::string(what) + " (an integer), found '" + std::string(t.substr(0, 64)) + "'" +
+             in_entry());
     return value;
 }
 

@@ -4,6 +4,7 @@
 // file and the line (text) or byte offset (binary).
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,6 +45,13 @@ public:
     // Moves past exactly one newline (after a text header that precedes binary data).
     void skip_one_newline();
 
+    // The entry being read ("cell 7"), which the messages of a file that ends too soon or holds a
+    // word where a number should be then name: a list cut short names the entry it was cut in.
+    // Set around such a list (and cleared after it); it costs nothing until a message needs it.
+    void set_entry(std::function<std::string()> entry) { entry_ = std::move(entry); }
+    // " (in cell 7)", or empty without an entry.
+    std::string in_entry() const { return entry_ ? " (in " + entry_() + ")" : std::string(); }
+
     [[noreturn]] void fail(const std::string& message) const;          // at the current line
     [[noreturn]] void fail_at_byte(const std::string& message) const;  // at the current offset
     // For files that mix text headers with binary blocks, where line numbers stop meaning
@@ -58,6 +66,7 @@ private:
     std::size_t line_ = 1;
     bool byte_offsets_ = false;
     char comment_ = '\0';
+    std::function<std::string()> entry_;
 };
 
 // Parses a whole token as a number; false if it is not one.

@@ -63,32 +63,36 @@ std::string_view cell_type_name(std::int64_t type) {
     }
 }
 
+namespace {
+const CellInfo* vtk_cell(std::int64_t type) {
+    return find_cell([&](const CellInfo& c) { return c.vtk == type; });
+}
+}  // namespace
+
 std::string cell_problem(std::size_t cell, std::int64_t type, std::int64_t corners) {
-    const std::int64_t expected = type == kTriangle ? 3 : 4;
-    if ((type >= 0 && type <= 4) || ((type == kTriangle || type == kTetrahedron) && corners == expected)) return {};
+    const CellInfo* info = vtk_cell(type);
+    if ((type >= 0 && type <= 4) || (info && corners == info->corners)) return {};
     const std::string which = "cell " + std::to_string(cell) + " has VTK type " + std::to_string(type) + " (" +
                               std::string(cell_type_name(type)) + ")";
-    if (type == kTriangle || type == kTetrahedron) {
-        return which + " but " + std::to_string(corners) + " points; a " + std::string(cell_type_name(type)) + " has " +
-               std::to_string(expected);
-    }
-    return which + "; Paloverde handles triangles (5) and tetrahedra (10)";
+    if (info)
+        return which + " but " + std::to_string(corners) + " points; a " + std::string(info->name) + " has " +
+               std::to_string(info->corners);
+    return which + "; Paloverde handles " + handled_cells(&CellInfo::vtk);
 }
 
 void add_cell(RawMesh& raw, std::size_t cell, std::int64_t type, const std::int64_t* ids) {
-    if (type == kTetrahedron) {
-        for (int i = 0; i < 4; ++i) raw.tetrahedra.push_back(static_cast<VertexId>(ids[i]));
-        raw.tetrahedron_cells.push_back(cell);
-    } else if (type == kTriangle) {
-        for (int i = 0; i < 3; ++i) raw.triangles.push_back(static_cast<VertexId>(ids[i]));
-        raw.triangle_cells.push_back(cell);
-    }
+    const CellInfo* info = vtk_cell(type);
+    if (!info) return;
+    VertexId vertices[kMaxCellCorners];
+    for (int i = 0; i < info->corners; ++i) vertices[i] = static_cast<VertexId>(ids[i]);
+    raw.add_cell(info->type, vertices, cell);
 }
 
 std::size_t size_of(ValueType type) {
     switch (type) {
         case ValueType::Int8:
-        case ValueType::UInt8: return 1;
+        case ValueType::UInt8:
+        case ValueType::Bit: return 1;
         case ValueType::Int16:
         case ValueType::UInt16: return 2;
         case ValueType::Int32:

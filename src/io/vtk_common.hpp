@@ -15,9 +15,6 @@
 
 namespace paloverde::io::vtk {
 
-inline constexpr std::int64_t kTriangle = 5;
-inline constexpr std::int64_t kTetrahedron = 10;
-
 // "hexahedron" for 12 and so on; "unknown" for codes VTK does not define.
 std::string_view cell_type_name(std::int64_t type);
 
@@ -25,14 +22,14 @@ std::string_view cell_type_name(std::int64_t type);
 // Vertices, lines and poly-lines are accepted (and later skipped), like empty cells.
 std::string cell_problem(std::size_t cell, std::int64_t type, std::int64_t corners);
 
-// Appends a cell that passed cell_problem() to the triangles or tetrahedra of `raw`, recording
-// its position in the file's cell list; lower-dimensional cells are dropped. The ids must be
-// valid point indices.
+// Appends a cell that passed cell_problem() to the cells of `raw`, recording its position in the
+// file's cell list; lower-dimensional cells are dropped. The ids must be valid point indices.
 void add_cell(RawMesh& raw, std::size_t cell, std::int64_t type, const std::int64_t* ids);
 
-enum class ValueType : std::uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64 };
+// Bit: VTK legacy files only, 8 values to a byte (the first in the high bit) in binary files.
+enum class ValueType : std::uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Int64, UInt64, Float32, Float64, Bit };
 
-std::size_t size_of(ValueType type);
+std::size_t size_of(ValueType type);  // Bit: 1, the byte that holds it
 bool is_integer(ValueType type);
 
 namespace detail {
@@ -84,6 +81,7 @@ T load(const char* p, ValueType type, bool swap) {
         case ValueType::Float64:
             if constexpr (std::is_floating_point_v<T>) return static_cast<T>(detail::load_as<double>(p, swap));
             break;
+        case ValueType::Bit: break;  // unpacked by the legacy reader
     }
     return T{};
 }

@@ -68,7 +68,7 @@ private:
     void read_field(bool per_entity);
     // The number of values of a field with `components` per entry of the current section,
     // failing (at `line`) if they cannot fit in the rest of the file.
-    std::size_t field_size(const std::string& name, std::int64_t components, std::size_t line) const;
+    std::size_t field_size(const std::string& name, std::int64_t components, ValueType type, std::size_t line) const;
     Field read_field_values(std::string name, std::int64_t components, ValueType type, std::size_t values);
     void keep(Field&& field) {
         (section_ == Section::Points ? raw_.point_fields : raw_.cell_fields).push_back(std::move(field));
@@ -122,6 +122,15 @@ void LegacyReader::fail_value(const std::string& message) const {
 
 template <class T, class Consume>
 void LegacyReader::read_values(std::size_t n, ValueType type, std::string_view what, Consume&& consume) {
+    if (binary_ && type == ValueType::Bit) {
+        const std::size_t begin = s_.offset();
+        const char* data = s_.bytes((n + 7) / 8, what).data();
+        for (std::size_t i = 0; i < n; ++i) {
+            value_byte_ = begin + i / 8;
+            consume(i, static_cast<T>((static_cast<unsigned char>(data[i / 8]) >> (7 - i % 8)) & 1));
+        }
+        return;
+    }
     if (binary_) {
         const std::size_t size = vtk::size_of(type);
         const std::size_t begin = s_.offset();
@@ -147,7 +156,9 @@ ValueType LegacyReader::value_type(std::string_view name) {
         ValueType type;
     };
     // "long" is 8 bytes as VTK writes it on LP64 systems; vtkIdType is written as a 4-byte int.
+    // Mesquite writes its `fixed` flags as "bit" (0 and 1 in ASCII files).
     static constexpr Known known[] = {
+        {"bit", ValueType::Bit},
         {"unsigned_char", ValueType::UInt8},
         {"char", ValueType::Int8},
         {"signed_char", ValueType::Int8},
@@ -167,7 +178,7 @@ ValueType LegacyReader::value_type(std::string_view name) {
         if (iequals(name, k.name)) return k.type;
     s_.fail("unsupported data type '" + printable(name) +
             "' (expected float, double, int, unsigned_int, short, unsigned_short, char, unsigned_char, long, "
-            "unsigned_long, vtkIdType, vtktypeint64 or vtktypeuint64)");
+            "unsigned_long, vtkIdType, vtktypeint64, vtktypeuint64 or bit)");
 }
 
 ValueType LegacyReader::integer_type(std::string_view name, std::string_view what) {
@@ -206,7 +217,7 @@ void LegacyReader::read_header() {
     const std::string_view kind = s_.expect_token("the dataset type");
     if (!iequals(kind, "UNSTRUCTURED_GRID"))
         s_.fail("the file holds a DATASET " + printable(kind) +
-                "; Paloverde reads only DATASET UNSTRUCTURED_GRID (tetrahedra and triangles)");
+                "; Paloverde reads only DATASET UNSTRUCTURED_GRID");
 }
 
 void LegacyReader::read_points() {
@@ -249,6 +260,7 @@ void LegacyReader::read_classic_cells(std::int64_t cells, std::int64_t size) {
     connectivity_.reserve(static_cast<std::size_t>(size - cells));
     std::int64_t left = 0;  // ids still to come in the current cell
     std::size_t started = 0;
+    s_.set_entry([&] { return "cell " + std::to_string(left == 0 ? started : started - 1); });
     read_values<std::int64_t>(
         static_cast<std::size_t>(size), ValueType::Int32, "a cell's point count or point id",
         [&](std::size_t i, std::int64_t v) {
@@ -272,6 +284,7 @@ void LegacyReader::read_classic_cells(std::int64_t cells, std::int64_t size) {
                 fail_value("cell count/size mismatch: the " + std::to_string(cells) + " cells end after " +
                            std::to_string(i + 1) + " values, but CELLS declares size " + std::to_string(size));
         });
+    s_.set_entry({});
     if (started != static_cast<std::size_t>(cells))
         fail_value("cell count/size mismatch: CELLS declares " + std::to_string(cells) + " cells in " +
                    std::to_string(size) + " values, but they hold only " + std::to_string(started) + " cells");
@@ -306,16 +319,18 @@ void LegacyReader::read_offset_cells(std::int64_t offsets, std::int64_t connecti
     const ValueType id_type = integer_type(s_.expect_token("the CONNECTIVITY data type"), "CONNECTIVITY");
     end_header_line();
     connectivity_.reserve(static_cast<std::size_t>(connectivity));
+    auto cell_of = [&](std::size_t i) {
+        return std::upper_bound(offsets_.begin(), offsets_.end(), static_cast<std::int64_t>(i)) - offsets_.begin() - 1;
+    };
+    s_.set_entry([&] { return "cell " + std::to_string(cell_of(connectivity_.size())); });
     read_values<std::int64_t>(
         static_cast<std::size_t>(connectivity), id_type, "a point id", [&](std::size_t i, std::int64_t v) {
-            if (v < 0 || v >= points_) {
-                const auto cell = std::upper_bound(offsets_.begin(), offsets_.end(), static_cast<std::int64_t>(i)) -
-                                  offsets_.begin() - 1;
-                fail_value("cell " + std::to_string(cell) + " refers to point " + std::to_string(v) + ", outside 0.." +
-                           std::to_string(points_ - 1));
-            }
+            if (v < 0 || v >= points_)
+                fail_value("cell " + std::to_string(cell_of(i)) + " refers to point " + std::to_string(v) +
+                           ", outside 0.." + std::to_string(points_ - 1));
             connectivity_.push_back(v);
         });
+    s_.set_entry({});
 }
 
 void LegacyReader::read_cell_types() {
@@ -326,13 +341,17 @@ void LegacyReader::read_cell_types() {
         s_.fail("CELL_TYPES lists " + std::to_string(n) + " cells but CELLS declares " + std::to_string(cells_));
     end_header_line();
     have_types_ = true;
+    std::size_t typed = 0;
+    s_.set_entry([&] { return "the type of cell " + std::to_string(typed); });
     read_values<std::int64_t>(static_cast<std::size_t>(n), ValueType::Int32, "a cell type",
                               [&](std::size_t i, std::int64_t type) {
                                   const std::int64_t first = offsets_[i];
                                   const std::string problem = vtk::cell_problem(i, type, offsets_[i + 1] - first);
                                   if (!problem.empty()) fail_value(problem);
                                   vtk::add_cell(raw_, i, type, connectivity_.data() + first);
+                                  typed = i + 1;
                               });
+    s_.set_entry({});
 }
 
 void LegacyReader::start_section(Section section) {
@@ -376,7 +395,7 @@ void LegacyReader::read_attribute(std::string_view keyword) {
             fail_at_line(line, "invalid SCALARS component count '" + printable(words[2]) + "'");
         const std::string name = vtk::decode_legacy_name(words[0]);
         const ValueType type = value_type(words[1]);
-        const std::size_t values = field_size(name, count, line);
+        const std::size_t values = field_size(name, count, type, line);
         const std::string_view lookup = s_.expect_token("LOOKUP_TABLE");
         if (!iequals(lookup, "LOOKUP_TABLE"))
             s_.fail("expected 'LOOKUP_TABLE name' after SCALARS " + printable(name) + ", found '" + printable(lookup) +
@@ -397,7 +416,7 @@ void LegacyReader::read_attribute(std::string_view keyword) {
             return;
         }
         if (n < 1) s_.fail("COLOR_SCALARS needs at least one component");
-        Field color = read_field_values(name, n, type, field_size(name, n, s_.line()));
+        Field color = read_field_values(name, n, type, field_size(name, n, type, s_.line()));
         if (binary_)
             for (double& v : color.values) v /= 255.0;
         return keep(std::move(color));
@@ -408,7 +427,7 @@ void LegacyReader::read_attribute(std::string_view keyword) {
         if (components < 1) s_.fail("the texture dimension must be 1, 2 or 3");
     }
     const ValueType type = value_type(s_.expect_token("a data type"));
-    const std::size_t values = field_size(name, components, s_.line());
+    const std::size_t values = field_size(name, components, type, s_.line());
     end_header_line();
     keep(read_field_values(name, components, type, values));
 }
@@ -433,7 +452,7 @@ void LegacyReader::read_field(bool per_entity) {
                     std::to_string(section_size_) + " entries");
         const ValueType type = value_type(s_.expect_token("a data type"));
         if (per_entity) {
-            const std::size_t values = field_size(array, components, s_.line());
+            const std::size_t values = field_size(array, components, type, s_.line());
             end_header_line();
             keep(read_field_values(array, components, type, values));
         } else {
@@ -444,10 +463,12 @@ void LegacyReader::read_field(bool per_entity) {
     }
 }
 
-std::size_t LegacyReader::field_size(const std::string& name, std::int64_t components, std::size_t line) const {
+std::size_t LegacyReader::field_size(const std::string& name, std::int64_t components, ValueType type,
+                                     std::size_t line) const {
     const std::size_t n = static_cast<std::size_t>(section_size_) * static_cast<std::size_t>(components);
+    const std::int64_t fits = binary_ && type == ValueType::Bit ? 8 * max_values() : max_values();
     if (static_cast<std::int64_t>(n / static_cast<std::size_t>(components)) != section_size_ ||
-        static_cast<std::int64_t>(n) > max_values() || components > std::numeric_limits<int>::max())
+        static_cast<std::int64_t>(n) > fits || components > std::numeric_limits<int>::max())
         fail_at_line(line, "array " + name + " (" + std::to_string(section_size_) + " tuples of " +
                                std::to_string(components) + " components) cannot fit in the rest of the file");
     return n;
@@ -568,22 +589,20 @@ void write_vtk_legacy(std::ostream& stream, const MeshToWrite& data, Encoding en
     out.text("# vtk DataFile Version 3.0\nWritten by Paloverde\n").text(binary ? "BINARY\n" : "ASCII\n");
     out.text("DATASET UNSTRUCTURED_GRID\n");
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
-    const auto m = static_cast<std::size_t>(mesh.num_elements());
-    const int k = mesh.corners();
+    const std::size_t m = data.cells();
     out.text("POINTS ").integer(static_cast<std::int64_t>(n)).text(" double\n");
     w.values(mesh.coordinates(), 3);
     out.text("CELLS ").integer(static_cast<std::int64_t>(m)).text(' ');
-    out.integer(static_cast<std::int64_t>(m * (k + 1))).text('\n');
-    for (std::size_t e = 0; e < m; ++e) {
+    out.integer(static_cast<std::int64_t>(m + data.connectivity.size())).text('\n');
+    for (std::size_t c = 0; c < m; ++c) {
+        const auto cell = data.cell(c);
+        const auto k = static_cast<std::int32_t>(cell.size());
         w.integer(k, ' ');
-        const VertexId* corners = data.connectivity.data() + e * static_cast<std::size_t>(k);
-        for (int c = 0; c < k; ++c) w.integer(corners[c], c + 1 == k ? '\n' : ' ');
+        for (std::int32_t i = 0; i < k; ++i) w.integer(cell[static_cast<std::size_t>(i)], i + 1 == k ? '\n' : ' ');
     }
     if (binary) out.text('\n');
     out.text("CELL_TYPES ").integer(static_cast<std::int64_t>(m)).text('\n');
-    const auto type =
-        static_cast<std::int32_t>(mesh.kind() == ElementKind::Tetrahedron ? vtk::kTetrahedron : vtk::kTriangle);
-    for (std::size_t e = 0; e < m; ++e) w.integer(type, '\n');
+    for (std::size_t c = 0; c < m; ++c) w.integer(cell_info(data.type(c)).vtk, '\n');
     if (binary) out.text('\n');
     w.fields(data.point_fields, "POINT_DATA", n);
     w.fields(data.cell_fields, "CELL_DATA", m);

@@ -504,7 +504,7 @@ private:
         return "Float64";
     }
     std::uint64_t values(const ArrayToWrite& a) const {
-        const auto m = static_cast<std::uint64_t>(mesh_.num_elements());
+        const auto m = static_cast<std::uint64_t>(data_.cells());
         switch (a.content) {
             case Content::Field: return a.field->values.size();
             case Content::Points: return mesh_.coordinates().size();
@@ -542,22 +542,28 @@ void VtuWriter::element(const ArrayToWrite& a, std::string_view name, int compon
 }
 
 void VtuWriter::ascii_values(const ArrayToWrite& a) {
-    // One tuple per line, or rows of 6 single values as ParaView writes them.
+    // One tuple (or cell) per line, or rows of 6 single values as ParaView writes them.
+    if (a.content == Content::Connectivity) {
+        for (std::size_t c = 0; c < data_.cells(); ++c) {
+            out_.text("          ");
+            const auto cell = data_.cell(c);
+            for (std::size_t i = 0; i < cell.size(); ++i) out_.integer(cell[i]).text(i + 1 == cell.size() ? '\n' : ' ');
+        }
+        return;
+    }
     const std::uint64_t n = values(a);
     std::uint64_t per_line = 6;
     if (a.content == Content::Points) per_line = 3;
-    if (a.content == Content::Connectivity) per_line = static_cast<std::uint64_t>(mesh_.corners());
     if (a.content == Content::Field && a.field->components > 1)
         per_line = static_cast<std::uint64_t>(a.field->components);
-    const std::int64_t type = mesh_.kind() == ElementKind::Tetrahedron ? vtk::kTetrahedron : vtk::kTriangle;
     for (std::uint64_t i = 0; i < n; ++i) {
         if (i % per_line == 0) out_.text("          ");
         switch (a.content) {
             case Content::Field: out_.real(a.field->values[i]); break;
             case Content::Points: out_.real(mesh_.coordinates()[i]); break;
-            case Content::Connectivity: out_.integer(data_.connectivity[i]); break;
-            case Content::Offsets: out_.integer(static_cast<std::int64_t>(i + 1) * mesh_.corners()); break;
-            case Content::Types: out_.integer(type); break;
+            case Content::Connectivity: break;
+            case Content::Offsets: out_.integer(data_.end_of(i)); break;
+            case Content::Types: out_.integer(cell_info(data_.type(i)).vtk); break;
         }
         out_.text((i + 1) % per_line == 0 || i + 1 == n ? '\n' : ' ');
     }
@@ -565,8 +571,7 @@ void VtuWriter::ascii_values(const ArrayToWrite& a) {
 
 void VtuWriter::binary_values(const ArrayToWrite& a) {
     const bool big = !host_is_little_endian();
-    const int k = mesh_.corners();
-    const auto m = static_cast<std::int64_t>(mesh_.num_elements());
+    const std::size_t m = data_.cells();
     out_.binary(bytes(a), big);
     switch (a.content) {
         case Content::Field:
@@ -579,14 +584,11 @@ void VtuWriter::binary_values(const ArrayToWrite& a) {
             for (VertexId v : data_.connectivity) out_.binary(static_cast<std::int64_t>(v), big);
             break;
         case Content::Offsets:
-            for (std::int64_t e = 0; e < m; ++e) out_.binary((e + 1) * k, big);
+            for (std::size_t c = 0; c < m; ++c) out_.binary(data_.end_of(c), big);
             break;
-        case Content::Types: {
-            const auto type = static_cast<std::uint8_t>(mesh_.kind() == ElementKind::Tetrahedron ? vtk::kTetrahedron
-                                                                                                 : vtk::kTriangle);
-            for (std::int64_t e = 0; e < m; ++e) out_.binary(type, big);
+        case Content::Types:
+            for (std::size_t c = 0; c < m; ++c) out_.binary(static_cast<std::uint8_t>(cell_info(data_.type(c)).vtk), big);
             break;
-        }
     }
 }
 
@@ -594,7 +596,7 @@ void VtuWriter::write() {
     out_.text("<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"");
     out_.text(host_is_little_endian() ? "LittleEndian" : "BigEndian").text("\" header_type=\"UInt64\">\n");
     out_.text("  <UnstructuredGrid>\n    <Piece NumberOfPoints=\"").integer(mesh_.num_vertices());
-    out_.text("\" NumberOfCells=\"").integer(mesh_.num_elements()).text("\">\n");
+    out_.text("\" NumberOfCells=\"").integer(static_cast<std::int64_t>(data_.cells())).text("\">\n");
     std::uint64_t offset = 0;
     if (!data_.point_fields.empty()) {
         out_.text("      <PointData>\n");

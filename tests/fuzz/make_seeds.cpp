@@ -98,7 +98,7 @@ int main(int argc, char** argv) {
             write_seed(out / (path.extension() == ".vtk" ? "vtk" : "medit"), path.filename().string(), read_bytes(path));
         }
         // Every format and encoding the writers have, with the file's fields. (A file Paloverde
-        // refuses, such as a quad mesh, is a seed as it is, but has nothing to re-write.)
+        // refuses is a seed as it is, but has nothing to re-write.)
         MeshFile file;
         try {
             file = read_mesh(path);
@@ -136,6 +136,7 @@ int main(int argc, char** argv) {
                 ++written;
             }
         }
+        if (file.mesh.has_cells()) continue;  // TetGen holds triangles or tetrahedra only
         const std::string tetgen = tetgen_text(file.mesh);
         if (tetgen.size() <= kMaxSeedBytes) write_seed(out / "tetgen", name + ".written.tetgen", tetgen);
     }

@@ -88,9 +88,4 @@ BOOST_AUTO_TEST_CASE(a_mirrored_file_is_flipped_on_reading_and_written_back_as_i
     }
 }
 
-BOOST_AUTO_TEST_CASE(quadrilaterals_are_refused_by_name) {
-    BOOST_CHECK_EXCEPTION(pv::read_mesh(pv::test::shared_data("mesquite/tris/horseshoe.vtk")), pv::FileError,
-                          [](const pv::FileError& e) { return std::string(e.what()).find("quad") != std::string::npos; });
-}
-
 BOOST_AUTO_TEST_SUITE_END()

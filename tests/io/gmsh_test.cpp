@@ -332,6 +332,81 @@ BOOST_AUTO_TEST_CASE(msh41_binary) {
     BOOST_TEST(quality->values == q, boost::test_tools::per_element());
 }
 
+// A hexahedron, a prism and a pyramid apart, with a boundary quadrangle (dropped), as Gmsh 4.1
+// writes them: nodes in Gmsh's order. Gmsh's prism turns its first triangle towards the second,
+// the mirror of a VTK wedge: read, it is the wedge (9, 11, 10, 12, 14, 13), valid, not flipped.
+const double kCellNodes[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1,  // hexahedron
+                             2, 0, 0, 3, 0, 0, 2, 1, 0, 2, 0, 1, 3, 0, 1, 2, 1, 1,                // prism
+                             4, 0, 0, 5, 0, 0, 5, 1, 0, 4, 1, 0, 4.5, 0.5, 1};                    // pyramid
+struct GmshBlock {
+    int dimension, type;
+    std::vector<std::int64_t> nodes;  // of its one element
+};
+const GmshBlock kCellBlocks[] = {{2, 3, {1, 4, 3, 2}},
+                                 {3, 5, {1, 2, 3, 4, 5, 6, 7, 8}},
+                                 {3, 6, {9, 10, 11, 12, 13, 14}},
+                                 {3, 7, {15, 16, 17, 18, 19}}};
+
+void check_gmsh_cells(const MeshFile& file) {
+    BOOST_REQUIRE(file.mesh.has_cells());
+    BOOST_REQUIRE_EQUAL(file.mesh.num_cells(), 3);
+    BOOST_TEST((file.mesh.cell_type(0) == CellType::Hexahedron));
+    BOOST_TEST((file.mesh.cell_type(1) == CellType::Wedge));
+    BOOST_TEST((file.mesh.cell_type(2) == CellType::Pyramid));
+    const std::vector<VertexId> wedge = {8, 10, 9, 11, 13, 12};
+    BOOST_TEST(std::ranges::equal(file.mesh.cell(1), wedge));
+    BOOST_TEST(file.mesh.cell(2)[4] == 18);
+    BOOST_TEST(!file.orientation.flipped);
+    BOOST_TEST(count_orientations(file.mesh).inverted == 0);
+    const std::vector<double> quality = {0.5, 0.25, 0.125};  // the quadrangle's 1 is dropped
+    BOOST_TEST(file.cell_field("quality")->values == quality, boost::test_tools::per_element());
+}
+
+BOOST_AUTO_TEST_CASE(msh41_hexahedra_prisms_and_pyramids) {
+    const ScratchDir dir("gmsh_41_cells");
+    std::string text = "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 19 1 19\n3 1 0 19\n";
+    for (int tag = 1; tag <= 19; ++tag) text += std::to_string(tag) + "\n";
+    for (int i = 0; i < 19; ++i)
+        text += std::to_string(kCellNodes[3 * i]) + " " + std::to_string(kCellNodes[3 * i + 1]) + " " +
+                std::to_string(kCellNodes[3 * i + 2]) + "\n";
+    text += "$EndNodes\n$Elements\n4 4 1 4\n";
+    int tag = 1;
+    for (const GmshBlock& block : kCellBlocks) {
+        text += std::to_string(block.dimension) + " 1 " + std::to_string(block.type) + " 1\n" + std::to_string(tag++);
+        for (std::int64_t node : block.nodes) text += " " + std::to_string(node);
+        text += "\n";
+    }
+    text += "$EndElements\n$ElementData\n1\n\"quality\"\n1\n0\n3\n0\n1\n4\n1 1\n2 0.5\n3 0.25\n4 0.125\n$EndElementData\n";
+    write_file(dir / "cells41.msh", text);
+    check_gmsh_cells(read_mesh(dir / "cells41.msh"));
+
+    Bytes b;
+    b.text("$MeshFormat\n4.1 1 8\n").i32(1).text("\n$EndMeshFormat\n");
+    b.text("$Nodes\n").u64(1).u64(19).u64(1).u64(19).i32(3).i32(1).i32(0).u64(19);
+    for (int t = 1; t <= 19; ++t) b.u64(static_cast<std::uint64_t>(t));
+    for (double x : kCellNodes) b.f64(x);
+    b.text("\n$EndNodes\n$Elements\n").u64(4).u64(4).u64(1).u64(4);
+    tag = 1;
+    for (const GmshBlock& block : kCellBlocks) {
+        b.i32(block.dimension).i32(1).i32(block.type).u64(1).u64(static_cast<std::uint64_t>(tag++));
+        for (std::int64_t node : block.nodes) b.u64(static_cast<std::uint64_t>(node));
+    }
+    b.text("\n$EndElements\n$ElementData\n1\n\"quality\"\n1\n0\n3\n0\n1\n4\n");
+    b.i32(1).f64(1).i32(2).f64(0.5).i32(3).f64(0.25).i32(4).f64(0.125).text("\n$EndElementData\n");
+    write_file(dir / "cells41_binary.msh", b.data);
+    check_gmsh_cells(read_mesh(dir / "cells41_binary.msh"));
+
+    // Written back (2.2), the prism has Gmsh's order again; a binary file holds a block per type.
+    const MeshFile file = read_mesh(dir / "cells41.msh");
+    WriteOptions ascii;
+    ascii.encoding = Encoding::Ascii;
+    write_mesh(dir / "cells22.msh", file.mesh, ascii, {}, file.cell_fields);
+    BOOST_TEST(read_text(dir / "cells22.msh").find("\n2 6 2 0 1 9 10 11 12 13 14\n") != std::string::npos);
+    check_gmsh_cells(read_mesh(dir / "cells22.msh"));
+    write_mesh(dir / "cells22_binary.msh", file.mesh, {}, {}, file.cell_fields);
+    check_gmsh_cells(read_mesh(dir / "cells22_binary.msh"));
+}
+
 BOOST_AUTO_TEST_CASE(msh22_binary_in_both_byte_orders) {
     const ScratchDir dir("gmsh_22_binary");
     for (bool swap : {false, true}) {
@@ -517,12 +592,19 @@ BOOST_AUTO_TEST_CASE(malformed_ascii_files_name_file_line_and_problem) {
                      {line_of(unknown_node, "2 3 4 99"), "element 2", "node 99", "not in $Nodes"});
     const std::string duplicate = replaced(kSmall22, "2 1 0 0", "1 1 0 0");
     check_error_text(dir, "duplicate.msh", duplicate, {"node tag 1 appears more than once"});
-    const std::string hexahedron = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 5 2 0 1 1 2 3 4 5 1 2 3");
-    check_error_text(dir, "hex.msh", hexahedron, {line_of(hexahedron, "2 5 2"), "element 2", "type 5", "hexahedron"});
-    const std::string prism = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 6 2 0 1 1 2 3 4 5 1");
-    check_error_text(dir, "prism.msh", prism, {line_of(prism, "2 6 2"), "element 2", "type 6", "prism"});
-    const std::string quad = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 3 2 0 1 1 2 3 4");
-    check_error_text(dir, "quad.msh", quad, {"element 2", "type 3", "quadrangle"});
+    const std::string hexahedron = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 17 2 0 1 1 2 3 4 5 1 2 3");
+    check_error_text(dir, "hex20.msh", hexahedron,
+                     {line_of(hexahedron, "2 17 2"), "element 2", "type 17", "20-node second-order hexahedron",
+                      "triangle (2), quadrilateral (3), tetrahedron (4), hexahedron (5), wedge (6) and pyramid (7)"});
+    const std::string prism = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 13 2 0 1 1 2 3 4 5 1");
+    check_error_text(dir, "prism18.msh", prism, {line_of(prism, "2 13 2"), "element 2", "type 13", "prism", "gmsh -order 1"});
+    const std::string quad = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 16 2 0 1 1 2 3 4");
+    check_error_text(dir, "quad8.msh", quad, {"element 2", "type 16", "quadrangle"});
+    const std::string unknown_type = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 99 2 0 1 1 2 3 4");
+    check_error_text(dir, "type99.msh", unknown_type, {"element 2 has type 99; only triangle (2)"});
+    // A hexahedron with a node twice is named by its tag.
+    const std::string repeated_hex = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "7 5 2 0 1 1 2 3 4 5 1 2 3");
+    check_error_text(dir, "repeated_hex.msh", repeated_hex, {"element 7 (hexahedron) repeats vertex 0"});
     const std::string tet10 = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 11 2 0 1 1 2 3 4 5 1 2 3 4 5");
     check_error_text(dir, "tet10.msh", tet10, {line_of(tet10, "2 11 2"), "element 2", "10-node", "gmsh -order 1"});
     const std::string tri6 = replaced(kSmall22, "2 4 2 0 1 2 3 4 5", "2 9 2 0 1 1 2 3 4 5 1");
@@ -540,7 +622,7 @@ BOOST_AUTO_TEST_CASE(malformed_ascii_files_name_file_line_and_problem) {
     check_error_text(dir, "components.msh", components, {line_of(components, "100000000"), "components"});
     const std::string no_elements = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n1\n1 0 0 0\n$EndNodes\n"
                                     "$Elements\n1\n1 15 2 0 1 1\n$EndElements\n";
-    check_error_text(dir, "only_points.msh", no_elements, {"no triangles or tetrahedra"});
+    check_error_text(dir, "only_points.msh", no_elements, {"no triangles, quadrilaterals, tetrahedra", "(empty mesh)"});
 }
 
 BOOST_AUTO_TEST_CASE(malformed_msh41_files) {
@@ -555,8 +637,8 @@ BOOST_AUTO_TEST_CASE(malformed_msh41_files) {
     check_error_text(dir, "long_block.msh", long_block, {line_of(long_block, "3 1 0 5"), "holds 5 nodes", "declares"});
     const std::string few_blocks = replaced(good, "1 4 1 4\n", "1 5 1 5\n");
     check_error_text(dir, "few_blocks.msh", few_blocks, {"hold 4 nodes", "declares 5"});
-    const std::string pyramid = replaced(good, "3 1 4 1\n1 1 2 3 4\n", "3 1 7 1\n1 1 2 3 4 1\n");
-    check_error_text(dir, "pyramid.msh", pyramid, {line_of(pyramid, "1 1 2 3 4 1"), "element 1", "type 7", "pyramid"});
+    const std::string pyramid = replaced(good, "3 1 4 1\n1 1 2 3 4\n", "3 1 19 1\n1 1 2 3 4 1\n");
+    check_error_text(dir, "pyramid.msh", pyramid, {line_of(pyramid, "1 1 2 3 4 1"), "element 1", "type 19", "pyramid"});
     const std::string unknown = replaced(good, "1 1 2 3 4\n", "1 1 2 3 8\n");
     check_error_text(dir, "unknown.msh", unknown, {line_of(unknown, "1 1 2 3 8"), "element 1", "node 8"});
 }
@@ -594,10 +676,10 @@ BOOST_AUTO_TEST_CASE(malformed_binary_files_name_the_byte_offset) {
     Bytes hex;
     hex.text("$MeshFormat\n4.1 1 8\n").i32(1).text("\n$EndMeshFormat\n$Nodes\n").u64(1).u64(1).u64(1).u64(1);
     hex.i32(0).i32(1).i32(0).u64(1).u64(1).f64(0).f64(0).f64(0).text("\n$EndNodes\n");
-    hex.text("$Elements\n").u64(1).u64(1).u64(12).u64(12).i32(3).i32(1).i32(5).u64(1).u64(12);
-    for (int i = 0; i < 8; ++i) hex.u64(1);
+    hex.text("$Elements\n").u64(1).u64(1).u64(12).u64(12).i32(3).i32(1).i32(17).u64(1).u64(12);
+    for (int i = 0; i < 20; ++i) hex.u64(1);
     hex.text("\n$EndElements\n");
-    check_error_text(dir, "hex41.msh", hex.data, {"(byte ", "element 12", "type 5", "hexahedron"});
+    check_error_text(dir, "hex41.msh", hex.data, {"(byte ", "element 12", "type 17", "hexahedron"});
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -437,8 +437,8 @@ BOOST_AUTO_TEST_CASE(zero_volume_elements_are_read_as_they_are) {
     }
 }
 
-// Tetrahedra, triangles and edges in one file: the tetrahedra are kept. A type no simplex mesh
-// can hold is refused by name in every format.
+// Tetrahedra, triangles and edges in one file: the tetrahedra are kept. A type no mesh can hold
+// (a polyhedron, a second-order cell) is refused by name in every format.
 BOOST_AUTO_TEST_CASE(mixed_element_types) {
     const ScratchDir dir("hostile_mixed");
     const std::vector<Element> mixed = {{0, 1, 2}, {0, 1, 2, 3}, {3, 4}, {1, 2, 3, 4}, {2, 3, 4}};
@@ -455,11 +455,13 @@ BOOST_AUTO_TEST_CASE(mixed_element_types) {
     check_text_fails_fast(dir, "wedge.vtk", replaced(tets, "10\n10\n", "10\n13\n"), {"cell 1 has VTK type 13 (wedge)"});
     check_text_fails_fast(dir, "wedge.vtu", replaced(vtu_text(kFivePoints, kTwoTets), " 10 10<", " 10 13<"),
                           {"cell 1 has VTK type 13 (wedge)"});
-    check_text_fails_fast(dir, "prism.msh", replaced(gmsh_text(kFivePoints, kTwoTets), "2 4 2 0 1", "2 6 2 0 1"),
-                          {"element 2 has type 6 (6-node prism)"});
+    check_text_fails_fast(dir, "polyhedron.vtk", replaced(tets, "10\n10\n", "10\n42\n"),
+                          {"cell 1 has VTK type 42 (polyhedron); Paloverde handles triangle (5)"});
+    check_text_fails_fast(dir, "prism.msh", replaced(gmsh_text(kFivePoints, kTwoTets), "2 4 2 0 1", "2 13 2 0 1"),
+                          {"element 2 has type 13 (18-node second-order prism)"});
     check_text_fails_fast(dir, "hexahedra.mesh",
-                          replaced(medit_text(kFivePoints, kTwoTets), "End\n", "Hexahedra\n1\n1 2 3 4 5 1 2 3 0\nEnd\n"),
-                          {"holds 1 Hexahedra", "triangles and tetrahedra only"});
+                          replaced(medit_text(kFivePoints, kTwoTets), "End\n", "HexahedraQ2\n1\n1 2 3 4 5 1 2 3 0\nEnd\n"),
+                          {"unknown Medit keyword 'HexahedraQ2'"});
     check_tetgen_fails_fast(dir, "second_order", kNode, "1 10 0\n1 1 2 3 4 1 2 3 4 1 2\n", "ele",
                             {"10-node (second-order) elements cannot be read"});
 }

@@ -151,6 +151,50 @@ anything after End is ignored
     BOOST_TEST(file.point_field("ref")->values == vertex_refs, boost::test_tools::per_element());
 }
 
+// Every element section, in any order, with boundary quadrilaterals and triangles (dropped). A
+// Medit prism turns its first triangle towards the second, the mirror of a VTK wedge: read, it is
+// the wedge (9, 11, 10, 12, 14, 13), valid, not flipped.
+BOOST_AUTO_TEST_CASE(reads_every_element_section) {
+    const ScratchDir dir("medit_cells");
+    const std::string text =
+        "MeshVersionFormatted 2\nDimension 3\nVertices\n23\n"
+        "0 0 0 0\n1 0 0 0\n1 1 0 0\n0 1 0 0\n0 0 1 0\n1 0 1 0\n1 1 1 0\n0 1 1 0\n"  // hexahedron
+        "2 0 0 0\n3 0 0 0\n2 1 0 0\n2 0 1 0\n3 0 1 0\n2 1 1 0\n"                      // prism
+        "4 0 0 0\n5 0 0 0\n5 1 0 0\n4 1 0 0\n4.5 0.5 1 0\n"                              // pyramid
+        "6 0 0 0\n7 0 0 0\n6 1 0 0\n6 0 1 0\n"                                          // tetrahedron
+        "Tetrahedra 1\n20 21 22 23 4\nHexahedra 1\n1 2 3 4 5 6 7 8 5\nPrisms 1\n9 10 11 12 13 14 6\n"
+        "Pyramids 1\n15 16 17 18 19 7\nQuadrilaterals 1\n1 4 3 2 8\nTriangles 1\n9 11 10 9\nEnd\n";
+    write_file(dir / "cells.mesh", text);
+    const MeshFile file = read_mesh(dir / "cells.mesh");
+    BOOST_REQUIRE_EQUAL(file.mesh.num_cells(), 4);
+    const std::vector<CellType> types = {CellType::Tetrahedron, CellType::Hexahedron, CellType::Wedge, CellType::Pyramid};
+    BOOST_TEST(std::ranges::equal(file.mesh.cell_types(), types));
+    const std::vector<VertexId> wedge = {8, 10, 9, 11, 13, 12};
+    BOOST_TEST(std::ranges::equal(file.mesh.cell(2), wedge));
+    BOOST_TEST(!file.orientation.flipped);
+    BOOST_TEST(count_orientations(file.mesh).inverted == 0);
+    const std::vector<double> refs = {4, 5, 6, 7};
+    BOOST_TEST(file.cell_field("ref")->values == refs, boost::test_tools::per_element());
+
+    // Written back: a section per type, the prism in Medit's order.
+    write_mesh(dir / "copy.mesh", file.mesh, {}, file.point_fields, file.cell_fields);
+    const std::string copy = read_text(dir / "copy.mesh");
+    BOOST_TEST(copy.find("\nPrisms\n1\n9 10 11 12 13 14 6\n") != std::string::npos);
+    BOOST_TEST(copy.find("\nTetrahedra\n1\n20 21 22 23 4\n") < copy.find("\nHexahedra\n"));
+
+    // A 2D file of quadrilaterals and triangles.
+    write_file(dir / "flat.mesh",
+               "MeshVersionFormatted 2\nDimension 2\nVertices 7\n0 0 0\n1 0 0\n2 0 0\n0 1 0\n1 1 0\n2 1 0\n1 2 0\n"
+               "Quadrilaterals 2\n1 2 5 4 1\n2 3 6 5 2\nTriangles 2\n4 5 7 3\n5 6 7 4\nEdges 1\n1 2 0\nEnd\n");
+    const MeshFile flat = read_mesh(dir / "flat.mesh");
+    BOOST_TEST((flat.mesh.kind() == ElementKind::Triangle));
+    BOOST_REQUIRE_EQUAL(flat.mesh.num_cells(), 4);
+    BOOST_TEST((flat.mesh.cell_type(0) == CellType::Quadrilateral));
+    BOOST_TEST((flat.mesh.cell_type(3) == CellType::Triangle));
+    BOOST_TEST(flat.mesh.cell(1)[2] == 5);
+    BOOST_TEST(count_orientations(flat.mesh).inverted == 0);
+}
+
 BOOST_AUTO_TEST_CASE(shared_meshes_round_trip_exactly) {
     const ScratchDir dir("medit_round_trip");
     for (const char* name : {"stellar/house2.node", "tetwild/armadillo.mesh", "tetwild/octopus-vol.mesh"}) {
@@ -266,12 +310,19 @@ BOOST_AUTO_TEST_CASE(malformed_files_name_file_line_and_problem) {
     const std::string cut_vertices = kSmall.substr(0, kSmall.find("0 0 1 2"));
     check_error_text(dir, "cut_vertices.mesh", cut_vertices, {":4:", "number of vertices of 5", "cannot fit"});
 
+    // Cells with a repeated vertex are named by section and number, as Medit counts them.
     const std::string hexahedra = replaced(kSmall, "End\n", "Hexahedra\n1\n1 2 3 4 5 1 2 3 0\nEnd\n");
-    check_error_text(dir, "hexahedra.mesh", hexahedra, {line_of(hexahedra, "1\n1 2 3 4 5 1"), "1 Hexahedra", "lose part of the mesh"});
-    const std::string quads = replaced(kSmall, "End\n", "Quadrilaterals 1\n1 2 3 4 0\nEnd\n");
-    check_error_text(dir, "quads.mesh", quads, {line_of(quads, "Quadrilaterals"), "Quadrilaterals"});
+    check_error_text(dir, "hexahedra.mesh", hexahedra, {"hexahedron 1 repeats vertex 0"});
     const std::string prisms = replaced(kSmall, "End\n", "Prisms 1\n1 2 3 4 5 1 0\nEnd\n");
-    check_error_text(dir, "prisms.mesh", prisms, {line_of(prisms, "Prisms"), "Prisms"});
+    check_error_text(dir, "prisms.mesh", prisms, {"prism 1 repeats vertex"});
+    const std::string hexahedron_vertex = replaced(kSmall, "End\n", "Hexahedra 1\n1 2 3 4 5 6 7 9 0\nEnd\n");
+    check_error_text(dir, "hexahedron_vertex.mesh", hexahedron_vertex,
+                     {line_of(hexahedron_vertex, "1 2 3 4 5 6 7 9"), "hexahedron 1 refers to vertex 6", "1 to 5"});
+    const std::string second_hexahedra = replaced(kSmall, "End\n", "Hexahedra 0\nHexahedra 0\nEnd\n");
+    check_error_text(dir, "second_hexahedra.mesh", second_hexahedra, {"a second Hexahedra section"});
+    // Second-order sections are not read.
+    const std::string p2 = replaced(kSmall, "End\n", "TetrahedraP2\n0\nEnd\n");
+    check_error_text(dir, "p2.mesh", p2, {line_of(p2, "TetrahedraP2"), "unknown Medit keyword 'TetrahedraP2'"});
     const std::string unknown = replaced(kSmall, "End\n", "Identifier\n\"x\"\nEnd\n");
     check_error_text(dir, "unknown.mesh", unknown, {line_of(unknown, "Identifier"), "unknown Medit keyword 'Identifier'"});
     const std::string extra = replaced(kSmall, "1 1 1 3\n", "1 1 1 3\n0.5 0.5 0.5 1\n");
@@ -279,7 +330,7 @@ BOOST_AUTO_TEST_CASE(malformed_files_name_file_line_and_problem) {
     const std::string twice = replaced(kSmall, "End\n", "Vertices 0\nEnd\n");
     check_error_text(dir, "twice.mesh", twice, {line_of(twice, "Vertices 0"), "second Vertices"});
     const std::string no_elements = "MeshVersionFormatted 2\nDimension 3\nVertices\n1\n0 0 0 0\nEnd\n";
-    check_error_text(dir, "no_elements.mesh", no_elements, {"no triangles or tetrahedra"});
+    check_error_text(dir, "no_elements.mesh", no_elements, {"no triangles, quadrilaterals, tetrahedra", "(empty mesh)"});
     const std::string duplicate = replaced(kSmall, "2 3 4 5 8", "4 3 2 1 8");
     check_error_text(dir, "duplicate.mesh", duplicate, {"same"});
 }

@@ -146,10 +146,12 @@ BOOST_AUTO_TEST_CASE(reads_every_shared_triangle_mesh) {
     }
 }
 
-BOOST_AUTO_TEST_CASE(shared_quad_mesh_is_rejected_naming_the_cell) {
-    // horseshoe.vtk holds quads (VTK type 9); the first one's type is on line 21.
-    check_error(shared_data("mesquite/tris/horseshoe.vtk"),
-                {":21:", "cell 0 has VTK type 9 (quad)", "triangles (5) and tetrahedra (10)"});
+BOOST_AUTO_TEST_CASE(shared_quad_mesh_is_read_as_quadrilaterals) {
+    // horseshoe.vtk (in tris/) holds quadrilaterals (VTK type 9).
+    const MeshFile file = read_mesh(shared_data("mesquite/tris/horseshoe.vtk"));
+    BOOST_TEST(file.mesh.has_cells());
+    BOOST_TEST(file.mesh.num_cells() == 4);
+    for (ElementId c = 0; c < file.mesh.num_cells(); ++c) BOOST_TEST((file.mesh.cell_type(c) == CellType::Quadrilateral));
 }
 
 BOOST_AUTO_TEST_CASE(values_and_fields_of_a_shared_mesh) {
@@ -500,9 +502,13 @@ BOOST_AUTO_TEST_CASE(malformed_values) {
     check_error_text(dir, replaced(kTwoTets, "CELLS 2 10", "CELLS 3 10"),
                      {":13:", "cell count/size mismatch", "only 2 cells"});
     check_error_text(dir, replaced(kTwoTets, "CELLS 2 10", "CELLS 2 1"), {":11:", "size must count"});
-    check_error_text(
-        dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n12\nPOINT"),
-        {":16:", "cell 1 has VTK type 12 (hexahedron); Paloverde handles triangles (5) and tetrahedra (10)"});
+    check_error_text(dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n12\nPOINT"),
+                     {":16:", "cell 1 has VTK type 12 (hexahedron) but 4 points; a hexahedron has 8"});
+    check_error_text(dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n42\nPOINT"),
+                     {":16:", "cell 1 has VTK type 42 (polyhedron); Paloverde handles triangle (5), quadrilateral (9), "
+                              "tetrahedron (10), hexahedron (12), wedge (13) and pyramid (14)"});
+    check_error_text(dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n24\nPOINT"),
+                     {":16:", "cell 1 has VTK type 24 (quadratic tetrahedron); Paloverde handles"});
     check_error_text(dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n5\nPOINT"),
                      {":16:", "cell 1 has VTK type 5 (triangle) but 4 points"});
     check_error_text(dir, replaced(kTwoTets, "10\n10\nPOINT", "10\n-1\nPOINT"), {":16:", "type -1 (unknown)"});

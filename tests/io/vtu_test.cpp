@@ -235,6 +235,39 @@ void check_mixed_mesh(const MeshFile& file) {
                 std::vector<std::uint8_t>{1, 1, 0, 1, 1}));
 }
 
+// A hexahedron (a unit cube), a pyramid on its top and a tetrahedron on the pyramid's side, with
+// a quadrilateral on the cube's bottom and a line (both dropped), in a choice of value types.
+std::vector<Array> cell_mesh(std::size_t variant) {
+    const char* ids[] = {"Int64", "Int32", "UInt64", "UInt16", "Int8", "UInt32"};
+    const char* small[] = {"UInt8", "Int32", "Int8", "UInt64", "Int16"};
+    return {
+        {"CellData", "id", small[variant % 5], 1, {10, 11, 12, 13, 14}},
+        {"Points",
+         "Points",
+         variant % 2 ? "Float32" : "Float64",
+         3,
+         {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1, 0.5, 0.5, 1.5, 0.5, -0.5, 1.25}},
+        {"Cells",
+         "connectivity",
+         ids[variant % 6],
+         1,
+         {0, 3, 2, 1, 0, 1, 2, 3, 4, 5, 6, 7, 4, 5, 6, 7, 8, 0, 1, 4, 5, 8, 9}},
+        {"Cells", "offsets", ids[(variant + 1) % 6], 1, {4, 12, 17, 19, 23}},
+        {"Cells", "types", small[(variant + 1) % 5], 1, {9, 12, 14, 3, 10}},
+    };
+}
+
+void check_cell_mesh(const MeshFile& file) {
+    BOOST_REQUIRE(file.mesh.has_cells());
+    const std::vector<CellType> types = {CellType::Hexahedron, CellType::Pyramid, CellType::Tetrahedron};
+    BOOST_TEST(std::ranges::equal(file.mesh.cell_types(), types));
+    const std::vector<VertexId> cells = {0, 1, 2, 3, 4, 5, 6, 7, 4, 5, 6, 7, 8, 4, 5, 8, 9};
+    BOOST_TEST(std::ranges::equal(file.mesh.cell_connectivity(), cells));
+    BOOST_TEST(!file.orientation.flipped);
+    BOOST_TEST(file.mesh.point(9)[2] == 1.25);
+    BOOST_TEST((file.cell_field("id")->values == std::vector<double>{11, 12, 14}));
+}
+
 // A hand-written ascii file; the bad-input tests break one thing in it at a known line.
 const std::string kAscii =
     "<?xml version=\"1.0\"?>\n"                                                                                 // 1
@@ -305,6 +338,22 @@ BOOST_AUTO_TEST_CASE(reads_every_layout_header_type_byte_order_and_compression) 
                     }
                     ++variant;
                 }
+}
+
+BOOST_AUTO_TEST_CASE(reads_cells_in_every_layout) {
+    ScratchDir dir("vtu_cell_layouts");
+    std::size_t variant = 0;
+    for (Form form : {Form::Ascii, Form::InlineBase64, Form::AppendedRaw, Form::AppendedBase64})
+        for (bool big : {false, true})
+            for (std::size_t zlib : {std::size_t{0}, std::size_t{16}}) {
+                if (form == Form::Ascii && (big || zlib)) continue;
+                BOOST_TEST_CONTEXT("form " << static_cast<int>(form) << " big-endian " << big << " zlib block " << zlib) {
+                    const fs::path path = dir / ("cells" + std::to_string(variant) + ".vtu");
+                    write_file(path, build_vtu(cell_mesh(variant), 10, 5, {form, variant % 2 == 0, big, zlib}));
+                    check_cell_mesh(read_mesh(path));
+                }
+                ++variant;
+            }
 }
 
 BOOST_AUTO_TEST_CASE(reads_data_that_zlib_really_compressed) {
@@ -457,9 +506,10 @@ BOOST_AUTO_TEST_CASE(malformed_ascii_values) {
     check_error_text(dir, replaced(kAscii, ">4 8 10<", ">4 8<"), {":27:", "NumberOfCells=3"});
     check_error_text(dir, replaced(kAscii, "type=\"Int64\" Name=\"offsets\"", "type=\"Float32\" Name=\"offsets\""),
                      {":27:", "integer type"});
-    check_error_text(
-        dir, replaced(kAscii, ">10 10 3<", ">10 12 3<"),
-        {":28:", "cell 1 has VTK type 12 (hexahedron); Paloverde handles triangles (5) and tetrahedra (10)"});
+    check_error_text(dir, replaced(kAscii, ">10 10 3<", ">10 12 3<"),
+                     {":28:", "cell 1 has VTK type 12 (hexahedron) but 4 points; a hexahedron has 8"});
+    check_error_text(dir, replaced(kAscii, ">10 10 3<", ">10 42 3<"),
+                     {":28:", "cell 1 has VTK type 42 (polyhedron); Paloverde handles triangle (5)"});
     check_error_text(dir, replaced(kAscii, ">10 10 3<", ">10 10 5<"),
                      {":28:", "cell 2 has VTK type 5 (triangle) but 2 points"});
     check_error_text(dir, replaced(kAscii, "0.5 0.25 -1", "0.5 0.25"), {":10:", "3 tuples of 1 were expected"});

@@ -2,8 +2,10 @@
 // Reading and writing meshes. Formats are chosen from the file extension unless named:
 //   .vtk (legacy, ASCII or binary)   .vtu (XML; ASCII, inline base64 or appended raw/base64)
 //   .msh (Gmsh 2.2 / 4.1 read, 2.2 write)   .mesh (Medit, ASCII)   .node/.ele (TetGen, read)
-// Files may hold elements of lower dimension (boundary triangles, edges, points); the mesh keeps
-// its highest-dimensional simplices. Any other cell type is an error.
+// Cells: triangles and quadrilaterals, or tetrahedra, hexahedra, wedges and pyramids, alone or
+// mixed (cell_types.hpp; TetGen: triangles or tetrahedra). Files may hold cells of lower dimension
+// (boundary triangles and quadrilaterals, edges, points); the mesh keeps its highest-dimensional
+// cells. Any other cell type (polyhedra, second-order cells) is an error.
 #include <filesystem>
 #include <span>
 #include <string>
@@ -50,7 +52,7 @@ struct WriteOptions {
 struct MeshFile {
     SimplexMesh mesh;
     std::vector<Field> point_fields;  // as read, including `fixed` if present
-    std::vector<Field> cell_fields;   // one tuple per element of `mesh`
+    std::vector<Field> cell_fields;   // one tuple per cell of `mesh` (mesh.num_cells())
     bool fixed_from_file = false;     // whether a `fixed` point field set the fixed flags
     OrientationDecision orientation;  // whether every element was flipped, and why
 
@@ -64,7 +66,8 @@ MeshFile read_mesh(const std::filesystem::path& path, const ReadOptions& options
 
 // Writes to a temporary file beside `path` and renames it over `path` only once complete, so a
 // failure never leaves a partial file or destroys an existing one. A mesh whose elements were
-// flipped on reading (SimplexMesh::elements_flipped()) is written in its file's order.
+// flipped on reading (SimplexMesh::elements_flipped()) is written in its file's order. The cells
+// are written (a simplex mesh's elements are its cells); cell fields have one tuple per cell.
 void write_mesh(const std::filesystem::path& path,
                 const SimplexMesh& mesh,
                 const WriteOptions& options = {},
