@@ -84,8 +84,9 @@ public:
             return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
         const double planar = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() ? 0.0 : 1.0;
         if (part_.reducer().min(planar) == 0.0)
-            throw MeshError("the triangles do not lie in one plane: Paloverde smooths planar triangle meshes and "
-                            "tetrahedral meshes, not surfaces");
+            throw MeshError(std::string(mesh_.has_cells() ? "the 2D cells" : "the triangles") +
+                            " do not lie in one plane: Paloverde smooths planar 2D meshes and volume meshes, not "
+                            "surfaces");
         if (summary.before.frozen_elements == summary.before.elements)
             return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
         return std::nullopt;
