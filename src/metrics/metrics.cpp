@@ -197,7 +197,7 @@ private:
     // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
     // time, and a block of one would cost 16. (Both paths give the same bits.)
     static bool blocks_pay(const SimplexMesh& mesh, ElementId first, ElementId last) {
-        return mesh.kind() == ElementKind::Tetrahedron && !mesh.has_cells() && last - first >= kTetBlock;
+        return mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock;
     }
 
     void require_gradient() const {
@@ -225,9 +225,18 @@ private:
     // Block passes over tetrahedra: gather the corners of kTetBlock elements (and their reference
     // volumes), rate them in one vectorized call, and scatter. Padding lanes of a last, partial
     // block hold a degenerate element at the origin, which rates 0 without trouble.
-    void gather_block(const VertexId* conn, const double* coords, ElementId first, int count, TetBlock& x,
-                      double* reference_volume) const {
+    // A cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits).
+    void gather_block(const VertexId* conn, const double* coords, const std::uint8_t* maps, ElementId first, int count,
+                      TetBlock& x, double* reference_volume) const {
         gather_tets(conn + 4 * static_cast<std::size_t>(first), coords, count, x);
+        if (maps)
+            for (int j = 0; j < count; ++j)
+                if (const std::uint8_t m = maps[first + j]) {
+                    double corner[12];
+                    for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
+                    map_corner<4>(corner_map(m), corner);
+                    for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
+                }
         for (int j = 0; j < count; ++j) reference_volume[j] = reference_volume_of(first + j);
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
@@ -235,11 +244,12 @@ private:
     void evaluate_blocks(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                          double* quality) const {
         const VertexId* conn = mesh.connectivity().data();
+        const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
         TetBlock x;
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
             kernel_.tet_block(path_, x, reference_volume, q, nullptr);
             std::copy(q, q + count, quality + (b - first));
         }
@@ -250,11 +260,12 @@ private:
     void accumulate_blocks(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                            const GradientTarget& target) const {
         const VertexId* conn = mesh.connectivity().data();
+        const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
         TetBlock x, g;
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
             kernel_.tet_block(path_, x, reference_volume, q, &g);
             for (int j = 0; j < count; ++j) {
                 const ElementId e = b + j;
@@ -262,10 +273,11 @@ private:
                 const double cw = Curvature ? target.curvature_weight[e - first] : 0.0;
                 if (w == 0.0 && cw == 0.0) continue;
                 const VertexId* c = conn + 4 * static_cast<std::size_t>(e);
-                for (int i = 0; i < 4; ++i) {
-                    const double gi[3] = {g.at[3 * i][j], g.at[3 * i + 1][j], g.at[3 * i + 2][j]};
-                    add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, gi);
-                }
+                double gradient[12];
+                for (int i = 0; i < 12; ++i) gradient[i] = g.at[i][j];
+                if (maps && maps[e]) unmap_gradient<4>(corner_map(maps[e]), gradient);
+                for (int i = 0; i < 4; ++i)
+                    add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, gradient + 3 * i);
             }
         }
     }
