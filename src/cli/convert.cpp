@@ -34,7 +34,7 @@ void add_convert_command(CLI::App& app, int& exit_code) {
                                         {"output", options->output},
                                         {"format", std::string(to_string(format_from_extension(options->output)))},
                                         {"vertices", file.mesh.num_vertices()},
-                                        {"elements", file.mesh.num_elements()},
+                                        {"elements", file.mesh.num_cells()},
                                         {"fields", fields}}
                              .dump(2)
                       << "\n";

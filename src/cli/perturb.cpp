@@ -47,12 +47,12 @@ void add_perturb_command(CLI::App& app, int& exit_code) {
         write_mesh(o->output, file.mesh, write, file.point_fields, file.cell_fields);
         const auto counts = count_orientations(file.mesh);
         if (o->json) {
-            std::cout << nlohmann::json{{"output", o->output}, {"moved", moved}, {"elements", file.mesh.num_elements()},
+            std::cout << nlohmann::json{{"output", o->output}, {"moved", moved}, {"elements", file.mesh.num_cells()},
                                         {"inverted", counts.inverted}, {"degenerate", counts.degenerate}}
                              .dump(2)
                       << "\n";
         } else if (!o->quiet) {
-            std::cout << "moved " << moved << " vertices; " << counts.inverted << " of " << file.mesh.num_elements()
+            std::cout << "moved " << moved << " vertices; " << counts.inverted << " of " << file.mesh.num_cells()
                       << " elements inverted, " << counts.degenerate << " degenerate\n";
         }
         exit_code = kDone;

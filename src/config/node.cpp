@@ -77,9 +77,16 @@ Location location_of(const YAML::Mark& mark, const std::string& source) {
     return {source, mark.line + 1, mark.column + 1};
 }
 
-Node convert(const YAML::Node& y, const std::string& source) {
+// No configuration nests more than a few levels; a deeper document is refused before the
+// recursion below could run out of stack.
+constexpr int max_nesting = 64;
+
+Node convert(const YAML::Node& y, const std::string& source, int depth = 0) {
     Node n;
     n.where = location_of(y.Mark(), source);
+    if (depth > max_nesting)
+        fail(n.where, "", "lists and maps are nested more than " + std::to_string(max_nesting) +
+                              " levels deep; a configuration needs only a few");
     switch (y.Type()) {
         case YAML::NodeType::Undefined:
         case YAML::NodeType::Null: n.kind = Node::Kind::Null; break;
@@ -89,7 +96,7 @@ Node convert(const YAML::Node& y, const std::string& source) {
             break;
         case YAML::NodeType::Sequence:
             n.kind = Node::Kind::Sequence;
-            for (const auto& item : y) n.items.push_back(convert(item, source));
+            for (const auto& item : y) n.items.push_back(convert(item, source, depth + 1));
             break;
         case YAML::NodeType::Map:
             n.kind = Node::Kind::Map;
@@ -103,7 +110,7 @@ Node convert(const YAML::Node& y, const std::string& source) {
                     if (e.key == key)
                         fail(key_where, key, "the key appears twice in this map (first at line " +
                                                  std::to_string(e.key_where.line) + "); keep one");
-                n.entries.push_back({key, key_where, convert(it->second, source)});
+                n.entries.push_back({key, key_where, convert(it->second, source, depth + 1)});
             }
             break;
     }

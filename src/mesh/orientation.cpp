@@ -1,6 +1,7 @@
 #include "paloverde/mesh/orientation.hpp"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
@@ -42,9 +43,14 @@ int element_orientation(const SimplexMesh& mesh, std::span<const double> xyz, El
 }
 
 OrientationCounts count_orientations(const SimplexMesh& mesh, std::span<const double> xyz) {
-    OrientationCounts counts;
+    // A cell is as oriented as its worst corner.
+    std::vector<std::int8_t> cell(static_cast<std::size_t>(mesh.num_cells()), 1);
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        const int o = element_orientation(mesh, xyz, e);
+        std::int8_t& o = cell[static_cast<std::size_t>(mesh.cell_of(e))];
+        o = std::min(o, static_cast<std::int8_t>(element_orientation(mesh, xyz, e)));
+    }
+    OrientationCounts counts;
+    for (std::int8_t o : cell) {
         counts.inverted += o < 0;
         counts.degenerate += o == 0;
     }

@@ -204,6 +204,10 @@ BOOST_AUTO_TEST_CASE(yaml_syntax_errors_and_duplicate_keys_name_the_line) {
     const auto duplicate = error_of("threads: 1\ninput: {mesh: a.vtk}\nthreads: 2\n");
     BOOST_TEST(duplicate.where() == "run.yaml:3:1");
     BOOST_TEST(has(duplicate.what(), "first at line 1"));
+    // Nesting deep enough to exhaust the stack of a recursive reader is refused with its place.
+    const auto deep = error_of("input: " + std::string(300, '[') + std::string(300, ']') + "\n");
+    BOOST_TEST(has(deep.what(), "nested more than"));
+    BOOST_TEST(deep.where().rfind("run.yaml:1:", 0) == 0);
     const pv::test::ScratchDir dir("config_missing");
     try {
         cfg::read_config(dir / "nope.yaml");

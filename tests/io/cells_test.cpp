@@ -250,7 +250,7 @@ BOOST_AUTO_TEST_CASE(the_test_meshes_are_valid) {
             BOOST_TEST(count_orientations(mesh).inverted == 0);
             BOOST_TEST(count_orientations(mesh).degenerate == 0);
             // A planar mesh's normal follows its cells: mirrored, it is as valid.
-            const ElementId inverted = mesh.kind() == ElementKind::Tetrahedron ? mesh.num_elements() : 0;
+            const ElementId inverted = mesh.kind() == ElementKind::Tetrahedron ? mesh.num_cells() : 0;
             BOOST_TEST(count_orientations(build(mirrored(c.make()))).inverted == inverted);
         }
     }
@@ -323,7 +323,7 @@ BOOST_DATA_TEST_CASE(a_mirrored_file_is_flipped_on_reading_and_written_back_as_i
             const std::vector<ElementId> order = target.medit ? medit_order(original) : std::vector<ElementId>{};
             check_same_cells(fuzz::cells_of(read.mesh), fuzz::cells_of(original, order));
             BOOST_TEST(count_orientations(read.mesh).inverted == 0);
-            BOOST_TEST(count_orientations(read_mesh(dir / target.name, as_is).mesh).inverted == original.num_elements());
+            BOOST_TEST(count_orientations(read_mesh(dir / target.name, as_is).mesh).inverted == original.num_cells());
             const std::string again = std::string("again_") + target.name;
             write_mesh(dir / again, read.mesh, options);
             check_same_cells(fuzz::cells_of(read_mesh(dir / again, as_is).mesh), fuzz::cells_of(mirror, order));

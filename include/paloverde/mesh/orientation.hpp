@@ -16,6 +16,7 @@ namespace paloverde {
 // plane normal; in a non-planar surface mesh they are +1 unless degenerate.
 int element_orientation(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId element);
 
+// Cells, for a mesh with cells: inverted when any corner is, degenerate when none is and one is flat.
 struct OrientationCounts {
     ElementId inverted = 0;
     ElementId degenerate = 0;
