@@ -317,6 +317,21 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
     agree(comm, out.rank == 0 ? failure : "");
     MPI_Bcast(&out.global_vertices, 1, MPI_INT64_T, 0, comm);
     out.assemble(&mine, kind, options.exchange);
+    // Ghosts must sit where their owners put them.
+    std::vector<double> xyz(out.mesh.coordinates().begin(), out.mesh.coordinates().end());
+    out.halo().update(xyz, 3);
+    failure.clear();
+    for (VertexId v = 0; v < out.mesh.num_vertices() && failure.empty(); ++v)
+        for (int c = 0; c < 3; ++c)
+            if (xyz[3 * static_cast<std::size_t>(v) + c] != out.mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]) {
+                failure = path.string() + ": vertex " + std::to_string(out.mesh.global_ids()[v]) + " has coordinates in piece " +
+                          std::to_string(out.rank) + " that differ from those in its owner's piece " +
+                          std::to_string(out.vertex_owner[v]);
+                break;
+            }
+    agree(comm, failure);
+    // Oriented before the corners' keys are taken: a mirrored cell has other corners.
+    out.orientation = orient_pieces(out, options.orientation);
     // Canonical positions of the elements (corners) and cells, from their keys.
     {
         const int width = cells ? 5 : 4;  // a corner's map tells corners of two cells apart
@@ -340,20 +355,6 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
     agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements)
                     ? path.string() + ": the pieces do not hold every element around the vertices they own"
                     : "");
-    // Ghosts must sit where their owners put them.
-    std::vector<double> xyz(out.mesh.coordinates().begin(), out.mesh.coordinates().end());
-    out.halo().update(xyz, 3);
-    failure.clear();
-    for (VertexId v = 0; v < out.mesh.num_vertices() && failure.empty(); ++v)
-        for (int c = 0; c < 3; ++c)
-            if (xyz[3 * static_cast<std::size_t>(v) + c] != out.mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]) {
-                failure = path.string() + ": vertex " + std::to_string(out.mesh.global_ids()[v]) + " has coordinates in piece " +
-                          std::to_string(out.rank) + " that differ from those in its owner's piece " +
-                          std::to_string(out.vertex_owner[v]);
-                break;
-            }
-    agree(comm, failure);
-    out.orientation = orient_pieces(out, options.orientation);
     out.timings.distribute = seconds_since(start);
     return out;
 }

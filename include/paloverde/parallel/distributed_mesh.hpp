@@ -69,15 +69,15 @@ public:
 
     // Collective: reads pre-partitioned pieces, one per rank: a .pvtu and the .vtu files it lists,
     // or Mesquite-style per-rank files OUT_<rank>.vtk for a path OUT.vtk. Each piece holds the
-    // elements around the vertices it owns, with the point fields GlobalNodeIds (or GLOBAL_ID),
-    // OwnerRank (or PROCESSOR_ID) and `fixed`. Pieces that disagree (an id owned twice or by no
-    // piece, a ghost placed elsewhere than by its owner, missing elements, the wrong number of
-    // pieces) are an error on every rank.
+    // elements (whole cells) around the vertices it owns, with the point fields GlobalNodeIds (or
+    // GLOBAL_ID), OwnerRank (or PROCESSOR_ID) and `fixed`. Pieces that disagree (an id owned twice
+    // or by no piece, a ghost placed elsewhere than by its owner, missing elements, the wrong
+    // number of pieces) are an error on every rank.
     static DistributedMesh read_pieces(MPI_Comm comm, const std::filesystem::path& path,
                                        const DistributeOptions& options = {});
     // Collective: writes this distributed mesh as pieces (see read_pieces); rank 0 writes the
-    // .pvtu. Each piece has a PartitionId cell field, and vtkGhostType marks the elements another
-    // piece counts, so ParaView shows each element once, colored by rank.
+    // .pvtu. Each piece has a PartitionId cell field, and vtkGhostType marks the elements (cells)
+    // another piece counts, so ParaView shows each element once, colored by rank.
     void write_pieces(const std::filesystem::path& path) const;
     // Serial: cuts `whole` into `parts` pieces as scatter() would, and writes them.
     static void write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path);
