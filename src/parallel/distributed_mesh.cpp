@@ -47,7 +47,7 @@ CanonicalOrders canonical_orders(const SimplexMesh& whole, std::vector<GlobalId>
         for (ElementId e = 0; e < whole.num_elements(); ++e) {
             const ElementId c = whole.cell_of(e);
             const CellType type = whole.cell_type(c);
-            const int frame = is_simplex(type) ? 0 : whole.corner_maps()[e] - corner_map_id(type, 0);
+            const int frame = whole.corner_maps()[e] - corner_map_id(type, 0);
             by_corner[static_cast<std::size_t>(orders.first_corner[c] + frame)] = orders.element[e];
         }
         orders.element = std::move(by_corner);
