@@ -560,9 +560,8 @@ BOOST_AUTO_TEST_CASE(mpirun_flips_a_mirrored_input_and_writes_it_back_mirrored) 
 }
 
 // A tangled mesh of hexahedra under the launcher: the serial mesh, bit for bit, written with its
-// cells; and from pieces to one file. (Needs src/io to write and read cells: skipped until then.)
-BOOST_AUTO_TEST_CASE(mpirun_improves_a_mesh_of_hexahedra,
-                     *utf::precondition([](utf::test_unit_id) { return pv::test::files_keep_cells(); })) {
+// cells; and from pieces to one file.
+BOOST_AUTO_TEST_CASE(mpirun_improves_a_mesh_of_hexahedra) {
     const int ranks = launch().ranks;
     const pv::test::ScratchDir dir("mpirun_hexahedra_np" + std::to_string(ranks));
     const auto hexahedra = pv::test::tangled(pv::test::cube_grid(4, pv::test::Fill::Hexahedra), 1);

@@ -1,7 +1,7 @@
 // Distributed meshes of cells (quadrilaterals, hexahedra, wedges, pyramids, mixes): a part holds
 // whole cells, each cell and its corners counted once; the global solver ends on the serial mesh
-// bit for bit, the local smoother on the one-rank mesh; reports and gathers are the serial ones.
-// Run by CTest on 1, 2 and 4 ranks with distributed_test.cpp.
+// bit for bit, the local smoother on the one-rank mesh; reports and gathers are the serial ones;
+// pieces hold whole cells. Run by CTest on 1, 2 and 4 ranks with distributed_test.cpp.
 #include <mpi.h>
 
 #include <boost/test/data/test_case.hpp>
@@ -13,6 +13,7 @@
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
@@ -23,7 +24,6 @@
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
-namespace utf = boost::unit_test;
 using pv::test::Fill;
 using pv::test::rank;
 using pv::test::ranks;
@@ -235,10 +235,7 @@ BOOST_AUTO_TEST_CASE(the_boundary_of_cells_is_refused_on_every_rank) {
 
 BOOST_AUTO_TEST_SUITE_END()
 
-// Piece files of cells: these need src/io to write and read cells (a .vtu of cells read back
-// with its cells); until it does, they are skipped.
-BOOST_AUTO_TEST_SUITE(pieces_of_cells,
-                      *utf::precondition([](utf::test_unit_id) { return pv::test::files_keep_cells(); }))
+BOOST_AUTO_TEST_SUITE(pieces_of_cells)
 
 // Written by write_partitioned, read one per rank: the serial report and the serial solve; the
 // ghost flag of a piece is per cell; written back and read again, the same part.
@@ -276,6 +273,17 @@ BOOST_DATA_TEST_CASE(pieces_of_cells_give_the_serial_answer, bdata::make(kGrids)
                                      serial.coordinates()[3 * static_cast<std::size_t>(order.old_vertex[v]) + c];
                 BOOST_TEST(different == 0);
             }
+            // This rank's piece flags the cells another piece counts, cell by cell.
+            const std::string stem = path.stem().string() + "_" + std::to_string(rank());
+            const auto piece = pv::read_mesh(path.extension() == ".pvtu" ? path.parent_path() / path.stem() / (stem + ".vtu")
+                                                                         : path.parent_path() / (stem + ".vtk"));
+            const pv::Field* ghost = piece.cell_field("vtkGhostType");
+            BOOST_REQUIRE(ghost);
+            BOOST_REQUIRE(ghost->values.size() == static_cast<std::size_t>(part.mesh.num_cells()));
+            long flags_wrong = 0;
+            for (pv::ElementId e = 0; e < part.mesh.num_elements(); ++e)
+                flags_wrong += (ghost->values[static_cast<std::size_t>(part.mesh.cell_of(e))] == 0.0) != (part.counted[e] != 0);
+            BOOST_TEST(flags_wrong == 0);
             const auto again_path = pv::test::scratch(std::to_string(g) + "again_" + name);
             part.write_pieces(again_path);
             auto again = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, again_path);

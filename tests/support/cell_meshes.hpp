@@ -1,16 +1,10 @@
 #pragma once
 // Structured meshes of cells for tests and benchmarks: quadrilaterals, hexahedra, and the
 // hexahedra cut into wedges, pyramids or a mix, each cell turned to positive orientation.
-#include <unistd.h>
-
 #include <array>
 #include <cstdint>
-#include <exception>
-#include <filesystem>
-#include <string>
 #include <vector>
 
-#include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/perturb.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
@@ -119,22 +113,6 @@ inline SimplexMesh tangled(SimplexMesh mesh, int seed) {
     perturb.seed = static_cast<std::uint64_t>(seed);
     paloverde::perturb(mesh, perturb);
     return mesh;
-}
-
-// Whether a mesh of cells written to a .vtu file reads back with its cells: what the tests of
-// files of cells (pieces, the command line) need of src/io.
-inline bool files_keep_cells() {
-    const auto path = std::filesystem::temp_directory_path() / ("paloverde_cells_" + std::to_string(::getpid()) + ".vtu");
-    bool kept = false;
-    try {
-        write_mesh(path, quad_grid(2));
-        const SimplexMesh back = read_mesh(path).mesh;
-        kept = back.has_cells() && back.num_cells() == 4;
-    } catch (const std::exception&) {
-    }
-    std::error_code ignored;
-    std::filesystem::remove(path, ignored);
-    return kept;
 }
 
 }  // namespace paloverde::test
