@@ -32,8 +32,9 @@ using pv::test::scatter;
 
 namespace {
 
-const std::vector<int> kGrids{0, 1, 2, 3, 4, 5};
-const char* const kGridNames[] = {"quadrilaterals", "hexahedra", "wedges", "pyramids", "mixed", "tetrahedra and a hexahedron"};
+const std::vector<int> kGrids{0, 1, 2, 3, 4, 5, 6};
+const char* const kGridNames[] = {"quadrilaterals", "hexahedra", "wedges", "pyramids", "mixed",
+                                  "tetrahedra and a hexahedron", "Mesquite's hexahedra, pyramids and tetrahedra"};
 
 // Kuhn's tetrahedra in every cube but the corner one, a hexahedron: on 4 ranks some parts hold
 // tetrahedra only, and must still hold them as cells to be rated as the whole mesh is. (The
@@ -54,7 +55,8 @@ pv::SimplexMesh tetrahedra_and_a_hexahedron(int n) {
 pv::SimplexMesh grid(int g) {
     if (g == 0) return pv::test::quad_grid(16);
     if (g < 5) return pv::test::cube_grid(6, static_cast<Fill>(g - 1));
-    return tetrahedra_and_a_hexahedron(6);
+    if (g == 5) return tetrahedra_and_a_hexahedron(6);
+    return pv::test::shared_mesh("mesquite/mixed/mixed-hex-pyr-tet.vtk");
 }
 
 pv::SimplexMesh tangled_grid(int g, int seed) {
