@@ -180,15 +180,16 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         orientation[e] = static_cast<std::int8_t>(element_orientation(mesh, xyz, e));
     }
     // A mesh with cells is reported by cell: a cell is movable when any corner is, inverted when
-    // any corner is, degenerate when none is and one is flat, and as good as its worst corner.
+    // any corner is, degenerate when none is and one is flat, and as good as its worst corner. A
+    // cell's corners are counted together (by the process that counts the cell).
     std::vector<std::uint8_t> cell_group;
     std::vector<std::int8_t> cell_orientation;
     if (mesh.has_cells()) {
-        cell_group.assign(static_cast<std::size_t>(mesh.num_cells()), 2);
+        cell_group.assign(static_cast<std::size_t>(mesh.num_cells()), 0);
         cell_orientation.assign(static_cast<std::size_t>(mesh.num_cells()), 1);
         for (std::size_t e = 0; e < m; ++e) {
             const auto c = static_cast<std::size_t>(mesh.cell_of(static_cast<ElementId>(e)));
-            if (group[e] == 1) cell_group[c] = 1;
+            if (group[e] != 0 && cell_group[c] != 1) cell_group[c] = group[e];
             cell_orientation[c] = std::min(cell_orientation[c], orientation[e]);
         }
     }
@@ -204,13 +205,22 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         counts[3] += o < 0 && unit_group[u] == 2;
         counts[4] += o == 0;
     }
-    if (mesh.has_cells()) {
-        for (int t = 0; t < kCellTypeCount; ++t) {
-            QualityReport::TypeReport r{std::string(cell_info(static_cast<CellType>(t)).name), 0, 0, {}};
-            for (std::size_t c = 0; c < cell_group.size(); ++c)
-                if (mesh.cell_types()[c] == static_cast<CellType>(t)) ++r.count, r.inverted += cell_orientation[c] < 0;
-            if (r.count > 0) report.by_type.push_back(std::move(r));
-        }
+    // Whether the mesh has cells, asked of every process (a part's can hold none).
+    const bool cells = reducer.max(mesh.has_cells() ? 1.0 : 0.0) > 0.0;
+    if (cells) {
+        std::vector<ExactSum> by_type(2 * kCellTypeCount);  // count and inverted of each type
+        for (std::size_t c = 0; c < cell_group.size(); ++c)
+            if (cell_group[c]) {
+                const auto t = static_cast<std::size_t>(mesh.cell_types()[c]);
+                by_type[2 * t].add(1.0);
+                if (cell_orientation[c] < 0) by_type[2 * t + 1].add(1.0);
+            }
+        reducer.sum(by_type);
+        for (int t = 0; t < kCellTypeCount; ++t)
+            if (by_type[2 * static_cast<std::size_t>(t)].value() > 0.0)
+                report.by_type.push_back({std::string(cell_info(static_cast<CellType>(t)).name),
+                                          static_cast<ElementId>(by_type[2 * static_cast<std::size_t>(t)].value()),
+                                          static_cast<ElementId>(by_type[2 * static_cast<std::size_t>(t) + 1].value()), {}});
     }
     std::vector<ExactSum> totals(7);
     for (int i = 0; i < 5; ++i) totals[i].add(static_cast<double>(counts[i]));
@@ -254,7 +264,7 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
 
     for (const auto& name : names_) {
         auto metric = make_metric(name);
-        if (!metric->supports(mesh.kind()) || (mesh.has_cells() && !metric->supports_cells())) continue;
+        if (!metric->supports(mesh.kind()) || (cells && !metric->supports_cells())) continue;
         metric->set_scale(scale);
         evaluate_all(*metric, mesh, xyz, q);
         const std::vector<double> per_cell = mesh.has_cells() ? mesh.cell_minimum(q) : std::vector<double>{};
@@ -265,8 +275,8 @@ QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const d
         for (auto& t : report.by_type) {
             double worst = INFINITY;
             for (std::size_t c = 0; c < per_cell.size(); ++c)
-                if (cell_info(mesh.cell_types()[c]).name == t.type) worst = std::min(worst, per_cell[c]);
-            t.worst.emplace_back(name, worst);
+                if (unit_group[c] && cell_info(mesh.cell_types()[c]).name == t.type) worst = std::min(worst, per_cell[c]);
+            t.worst.emplace_back(name, reducer.min(worst));
         }
         report.metrics.push_back(std::move(r));
     }

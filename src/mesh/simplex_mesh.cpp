@@ -45,7 +45,7 @@ SimplexMesh::SimplexMesh(ElementKind kind, std::vector<double> coordinates, std:
 }
 
 SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<const CellType> types,
-                                    std::vector<VertexId> cells) {
+                                    std::vector<VertexId> cells, bool keep_cells) {
     if (types.empty()) return SimplexMesh(ElementKind::Tetrahedron, std::move(coordinates), std::move(cells));
     const CellInfo& first = cell_info(types[0]);
     std::vector<std::int64_t> offsets(types.size() + 1, 0);
@@ -61,7 +61,7 @@ SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<c
     if (static_cast<std::size_t>(offsets.back()) != cells.size())
         throw MeshError("cell connectivity holds " + std::to_string(cells.size()) + " ids for cells of " +
                         std::to_string(offsets.back()) + " corners");
-    if (simplices) return SimplexMesh(first.simplex, std::move(coordinates), std::move(cells));
+    if (simplices && !keep_cells) return SimplexMesh(first.simplex, std::move(coordinates), std::move(cells));
     const auto n = static_cast<std::int64_t>(coordinates.size() / 3);
     std::size_t corners_total = 0;
     for (std::size_t c = 0; c < types.size(); ++c) {

@@ -25,39 +25,76 @@ using namespace parallel;
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+// The whole mesh's canonical orders, for split().
+struct CanonicalOrders {
+    std::vector<GlobalId> vertex;   // per vertex: its canonical id
+    // Per element its canonical position; for a mesh with cells, per corner in from_cells order
+    // (cell by cell, frame by frame), whatever order the mesh holds its elements in.
+    std::vector<GlobalId> element;
+    std::vector<GlobalId> cell;               // a mesh with cells: per cell, its canonical position
+    std::vector<std::int64_t> first_corner;   // a mesh with cells: per cell, its first corner in `element`
+};
 
+CanonicalOrders canonical_orders(const SimplexMesh& whole, std::vector<GlobalId> canonical) {
+    CanonicalOrders orders;
+    orders.element = canonical_element_positions(whole, canonical);
+    if (whole.has_cells()) {
+        const ElementId cells = whole.num_cells();
+        orders.first_corner.assign(static_cast<std::size_t>(cells) + 1, 0);
+        for (ElementId c = 0; c < cells; ++c)
+            orders.first_corner[c + 1] = orders.first_corner[c] + static_cast<std::int64_t>(cell_info(whole.cell_type(c)).frames.size());
+        std::vector<GlobalId> by_corner(orders.element.size());
+        for (ElementId e = 0; e < whole.num_elements(); ++e) {
+            const ElementId c = whole.cell_of(e);
+            const CellType type = whole.cell_type(c);
+            const int frame = whole.corner_maps()[e] - corner_map_id(type, 0);
+            by_corner[static_cast<std::size_t>(orders.first_corner[c] + frame)] = orders.element[e];
+        }
+        orders.element = std::move(by_corner);
+        std::vector<std::int64_t> keys;
+        keys.reserve(static_cast<std::size_t>(cells) * kCellKeyWidth);
+        for (ElementId c = 0; c < cells; ++c) append_cell_key(whole.cell_type(c), whole.cell(c), canonical, keys);
+        std::int64_t distinct = 0;
+        orders.cell = key_positions(keys, kCellKeyWidth, distinct);
+    }
+    orders.vertex = std::move(canonical);
+    return orders;
+}
 
-
-
-
-
-
-
-// Rank 0: splits the whole mesh (canonical numbering given by `canonical`) into the ranks' parts.
-std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId> canonical,
-                              std::span<const GlobalId> element_order, std::span<const int> part, int ranks) {
-    // Each part's elements, counted first so that each list is allocated once.
+// Rank 0: splits the whole mesh into the ranks' parts. Each part holds the cells (the elements,
+// without cells) that touch a vertex it owns.
+std::vector<PartArrays> split(const SimplexMesh& whole, const CanonicalOrders& orders, std::span<const int> part, int ranks) {
+    const bool with_cells = whole.has_cells();
+    const std::span<const GlobalId> canonical = orders.vertex;
+    // Each part's cells, counted first so that each list is allocated once.
     std::vector<int> touching;
-    auto parts_touching = [&](ElementId e) {
+    auto parts_touching = [&](ElementId c) {
         touching.clear();
-        for (VertexId v : whole.element(e)) touching.push_back(part[v]);
+        for (VertexId v : whole.cell(c)) touching.push_back(part[v]);
         std::sort(touching.begin(), touching.end());
         touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
         return std::span<const int>(touching);
     };
-    std::vector<std::size_t> counts(static_cast<std::size_t>(ranks), 0);
-    for (ElementId e = 0; e < whole.num_elements(); ++e)
-        for (int p : parts_touching(e)) ++counts[p];
-    std::vector<std::vector<ElementId>> elements(static_cast<std::size_t>(ranks));
-    for (int p = 0; p < ranks; ++p) elements[p].reserve(counts[p]);
-    for (ElementId e = 0; e < whole.num_elements(); ++e)
-        for (int p : parts_touching(e)) elements[p].push_back(e);
+    struct Sizes {
+        std::size_t cells = 0, ids = 0, corners = 0;
+    };
+    std::vector<Sizes> sizes(static_cast<std::size_t>(ranks));
+    for (ElementId c = 0; c < whole.num_cells(); ++c)
+        for (int p : parts_touching(c)) {
+            ++sizes[p].cells;
+            sizes[p].ids += whole.cell(c).size();
+            sizes[p].corners += with_cells ? cell_info(whole.cell_type(c)).frames.size() : 1;
+        }
+    std::vector<std::vector<ElementId>> cells(static_cast<std::size_t>(ranks));
+    for (int p = 0; p < ranks; ++p) cells[p].reserve(sizes[p].cells);
+    for (ElementId c = 0; c < whole.num_cells(); ++c)
+        for (int p : parts_touching(c)) cells[p].push_back(c);
     std::vector<PartArrays> parts(static_cast<std::size_t>(ranks));
     std::vector<VertexId> local(static_cast<std::size_t>(whole.num_vertices()), -1);
     for (int p = 0; p < ranks; ++p) {
         std::vector<VertexId> vertices;  // each once (marked in `local`), then in canonical order
-        for (ElementId e : elements[p])
-            for (VertexId v : whole.element(e))
+        for (ElementId c : cells[p])
+            for (VertexId v : whole.cell(c))
                 if (local[v] < 0) local[v] = 0, vertices.push_back(v);
         for (VertexId v = 0; v < whole.num_vertices(); ++v)
             if (part[v] == p && whole.elements_of(v).empty()) vertices.push_back(v);  // isolated vertices
@@ -69,8 +106,9 @@ std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId
         out.fixed.reserve(vertices.size());
         out.canonical.reserve(vertices.size());
         out.owner.reserve(vertices.size());
-        out.connectivity.reserve(elements[p].size() * static_cast<std::size_t>(whole.corners()));
-        out.element_order.reserve(elements[p].size());
+        (with_cells ? out.cell_connectivity : out.connectivity).reserve(sizes[p].ids);
+        out.element_order.reserve(sizes[p].corners);
+        if (with_cells) out.cell_types.reserve(sizes[p].cells), out.cell_order.reserve(sizes[p].cells);
         for (std::size_t i = 0; i < vertices.size(); ++i) {
             const VertexId v = vertices[i];
             local[v] = static_cast<VertexId>(i);
@@ -79,12 +117,19 @@ std::vector<PartArrays> split(const SimplexMesh& whole, std::span<const GlobalId
             out.canonical.push_back(canonical[v]);
             out.owner.push_back(part[v]);
         }
-        for (ElementId e : elements[p]) {
-            for (VertexId v : whole.element(e)) out.connectivity.push_back(local[v]);
-            out.element_order.push_back(element_order[e]);
+        for (ElementId c : cells[p]) {
+            for (VertexId v : whole.cell(c)) (with_cells ? out.cell_connectivity : out.connectivity).push_back(local[v]);
+            if (!with_cells) {
+                out.element_order.push_back(orders.element[c]);
+                continue;
+            }
+            out.cell_types.push_back(static_cast<std::uint8_t>(whole.cell_type(c)));
+            out.cell_order.push_back(orders.cell[c]);
+            out.element_order.insert(out.element_order.end(), orders.element.begin() + orders.first_corner[c],
+                                     orders.element.begin() + orders.first_corner[c + 1]);
         }
         for (VertexId v : vertices) local[v] = -1;
-        std::vector<ElementId>().swap(elements[p]);
+        std::vector<ElementId>().swap(cells[p]);
     }
     return parts;
 }
@@ -96,7 +141,6 @@ struct WholeSplit {
 };
 
 WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
-    require_simplices(whole, "the mesh");
     if (whole.num_vertices() < ranks)
         throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
                           std::to_string(ranks) + " processes: use at most as many processes as vertices");
@@ -104,11 +148,30 @@ WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
     std::vector<ElementId>().swap(order.old_element);  // elements get the canonical order instead
     std::vector<GlobalId> canonical(static_cast<std::size_t>(whole.num_vertices()));
     for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
-    const auto element_order = canonical_element_positions(whole, canonical);
+    const CanonicalOrders orders = canonical_orders(whole, std::move(canonical));
     const auto part = partition_vertices(whole, ranks);
-    return {split(whole, canonical, element_order, part, ranks), std::move(order.old_vertex)};
+    return {split(whole, orders, part, ranks), std::move(order.old_vertex)};
 }
 
+
+// Collective: each of this rank's keys' canonical position among the keys of all ranks (copies
+// merged), and the number of distinct keys, on every rank.
+std::vector<GlobalId> canonical_positions(MPI_Comm comm, const std::vector<std::int64_t>& keys, int width, GlobalId& distinct) {
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    std::vector<std::int64_t> positions;
+    std::vector<int> counts;
+    distinct = 0;
+    {
+        const auto all = gather_to_root(comm, keys);
+        if (rank == 0) {
+            positions = key_positions(all.values, width, distinct);
+            for (int c : all.counts) counts.push_back(c / width);
+        }
+    }
+    MPI_Bcast(&distinct, 1, MPI_INT64_T, 0, comm);
+    return scatter_from_root(comm, positions, counts, keys.size() / static_cast<std::size_t>(width));
+}
 
 // The orientation decision over all pieces: each rank measures the elements it counts, at one
 // scale for all, and the exact sums are added across ranks, so every rank decides the same.
@@ -151,7 +214,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
 
     auto start = Clock::now();
     WholeSplit split;
-    std::int64_t header[4] = {0, 0, 0, 0};  // kind, global vertices, global elements, elements flipped
+    std::int64_t header[5] = {0, 0, 0, 0, 0};  // kind, global vertices, elements, elements flipped, cells
     double normal[3] = {0.0, 0.0, 1.0};
     parallel::together(comm, out.rank == 0, [&] {
         if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
@@ -161,14 +224,16 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
         header[1] = whole->num_vertices();
         header[2] = whole->num_elements();
         header[3] = whole->elements_flipped() ? 1 : 0;
+        header[4] = whole->num_cells();
         normal[0] = whole->plane_normal()[0], normal[1] = whole->plane_normal()[1], normal[2] = whole->plane_normal()[2];
     });
     out.timings.partition = seconds_since(start);
     start = Clock::now();
-    MPI_Bcast(header, 4, MPI_INT64_T, 0, comm);
+    MPI_Bcast(header, 5, MPI_INT64_T, 0, comm);
     MPI_Bcast(normal, 3, MPI_DOUBLE, 0, comm);
     out.global_vertices = header[1];
     out.global_elements = header[2];
+    out.global_cells = header[4];
     out.plane_normal = {normal[0], normal[1], normal[2]};
 
     PartArrays mine;
@@ -181,6 +246,9 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
             send_vector(part.owner, p, 4, comm);
             send_vector(part.connectivity, p, 5, comm);
             send_vector(part.element_order, p, 6, comm);
+            send_vector(part.cell_types, p, 7, comm);
+            send_vector(part.cell_connectivity, p, 8, comm);
+            send_vector(part.cell_order, p, 9, comm);
             part = {};
         }
         mine = std::move(split.parts[0]);
@@ -191,6 +259,9 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole
         mine.owner = receive_vector<std::int32_t>(0, 4, comm);
         mine.connectivity = receive_vector<std::int32_t>(0, 5, comm);
         mine.element_order = receive_vector<std::int64_t>(0, 6, comm);
+        mine.cell_types = receive_vector<std::uint8_t>(0, 7, comm);
+        mine.cell_connectivity = receive_vector<std::int32_t>(0, 8, comm);
+        mine.cell_order = receive_vector<std::int64_t>(0, 9, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
     out.mesh.set_elements_flipped(header[3] != 0);
@@ -215,61 +286,37 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
                               "processes (got " + std::to_string(out.ranks) + ")");
         mine = read_piece(files[static_cast<std::size_t>(out.rank)], out.ranks, kind);
     });
-    int kinds[2] = {static_cast<int>(kind), -static_cast<int>(kind)};
-    MPI_Allreduce(MPI_IN_PLACE, kinds, 2, MPI_INT, MPI_MAX, comm);
+    int kinds[3] = {static_cast<int>(kind), -static_cast<int>(kind), mine.cell_types.empty() ? 0 : 1};
+    MPI_Allreduce(MPI_IN_PLACE, kinds, 3, MPI_INT, MPI_MAX, comm);
     agree(comm, kinds[0] != -kinds[1] ? "the pieces of " + path.string() + " mix triangles and tetrahedra" : "");
+    const bool cells = kinds[2] != 0;
+    // A piece of a mesh with cells that holds only triangles or tetrahedra reads as a simplex
+    // mesh: its elements become cells, as the other pieces' are.
+    if (cells && mine.cell_types.empty()) {
+        mine.cell_types.assign(mine.connectivity.size() / static_cast<std::size_t>(corner_count(kind)),
+                               static_cast<std::uint8_t>(simplex_cell(kind)));
+        mine.cell_connectivity = std::move(mine.connectivity);
+        mine.connectivity.clear();
+    }
 
     // Every global id must be owned exactly once, by the rank whose piece says so.
     std::vector<std::int64_t> owned;
     for (std::size_t v = 0; v < mine.owner.size(); ++v)
         if (mine.owner[v] == out.rank) owned.push_back(mine.canonical[v]);
-    const auto all_owned = gather_to_root(comm, owned);
-    std::int64_t counts[2] = {0, 0};  // vertices, elements
-    std::vector<std::int64_t> element_keys;  // sorted global ids per element, padded to 4
-    const int k = corner_count(kind);
-    for (std::size_t e = 0; e < mine.connectivity.size() / k; ++e) {
-        std::array<std::int64_t, 4> key{-1, -1, -1, -1};
-        for (int i = 0; i < k; ++i) key[i] = mine.canonical[mine.connectivity[e * k + i]];
-        std::sort(key.begin(), key.begin() + k);
-        element_keys.insert(element_keys.end(), key.begin(), key.end());
-    }
-    const auto all_keys = gather_to_root(comm, element_keys);
-    std::vector<std::int64_t> positions_flat;
-    std::vector<int> key_counts;
     std::string failure;
-    if (out.rank == 0) {
+    {
+        const auto all_owned = gather_to_root(comm, owned);
         std::vector<std::int64_t> ids = all_owned.values;
         std::sort(ids.begin(), ids.end());
         for (std::size_t i = 0; i < ids.size() && failure.empty(); ++i)
             if (ids[i] != static_cast<std::int64_t>(i))
                 failure = path.string() + ": global vertex id " + std::to_string(i < ids.size() && ids[i] < static_cast<std::int64_t>(i) ? ids[i] : static_cast<std::int64_t>(i)) +
                           (ids[i] < static_cast<std::int64_t>(i) ? " is owned by more than one piece" : " is owned by no piece");
-        counts[0] = static_cast<std::int64_t>(ids.size());
-        // Canonical element positions: the elements' keys sorted, duplicates (copies) merged.
-        std::vector<std::array<std::int64_t, 4>> keys(all_keys.values.size() / 4);
-        for (std::size_t i = 0; i < keys.size(); ++i)
-            std::copy_n(all_keys.values.begin() + 4 * i, 4, keys[i].begin());
-        std::vector<std::array<std::int64_t, 4>> unique = keys;
-        std::sort(unique.begin(), unique.end());
-        unique.erase(std::unique(unique.begin(), unique.end()), unique.end());
-        counts[1] = static_cast<std::int64_t>(unique.size());
-        for (const auto& key : keys)
-            positions_flat.push_back(std::lower_bound(unique.begin(), unique.end(), key) - unique.begin());
-        for (int c : all_keys.counts) key_counts.push_back(c / 4);
+        out.global_vertices = static_cast<GlobalId>(ids.size());
     }
     agree(comm, out.rank == 0 ? failure : "");
-    MPI_Bcast(counts, 2, MPI_INT64_T, 0, comm);
-    out.global_vertices = counts[0];
-    out.global_elements = counts[1];
-    mine.element_order = scatter_from_root(comm, positions_flat, key_counts, element_keys.size() / 4);
+    MPI_Bcast(&out.global_vertices, 1, MPI_INT64_T, 0, comm);
     out.assemble(&mine, kind, options.exchange);
-    // Each element must be counted exactly once: every piece must hold all the elements around
-    // the vertices it owns.
-    double counted = 0.0;
-    for (auto c : out.counted) counted += c;
-    agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements)
-                    ? path.string() + ": the pieces do not hold every element around the vertices they own"
-                    : "");
     // Ghosts must sit where their owners put them.
     std::vector<double> xyz(out.mesh.coordinates().begin(), out.mesh.coordinates().end());
     out.halo().update(xyz, 3);
@@ -283,26 +330,44 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
                 break;
             }
     agree(comm, failure);
+    // Oriented before the corners' keys are taken: a mirrored cell has other corners.
     out.orientation = orient_pieces(out, options.orientation);
+    // Canonical positions of the elements (corners) and cells, from their keys.
+    {
+        const int width = cells ? 5 : 4;  // a corner's map tells corners of two cells apart
+        std::vector<std::int64_t> keys;
+        keys.reserve(static_cast<std::size_t>(out.mesh.num_elements()) * static_cast<std::size_t>(width));
+        for (ElementId e = 0; e < out.mesh.num_elements(); ++e) append_element_key(out.mesh, e, width, keys);
+        out.element_order = canonical_positions(comm, keys, width, out.global_elements);
+    }
+    out.global_cells = out.global_elements;
+    if (cells) {
+        std::vector<std::int64_t> keys;
+        keys.reserve(static_cast<std::size_t>(out.mesh.num_cells()) * kCellKeyWidth);
+        for (ElementId c = 0; c < out.mesh.num_cells(); ++c)
+            append_cell_key(out.mesh.cell_type(c), out.mesh.cell(c), out.mesh.global_ids(), keys);
+        out.cell_order = canonical_positions(comm, keys, kCellKeyWidth, out.global_cells);
+    }
+    // Each element must be counted exactly once: every piece must hold all the elements around
+    // the vertices it owns.
+    double counted = 0.0;
+    for (auto c : out.counted) counted += c;
+    agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements)
+                    ? path.string() + ": the pieces do not hold every element around the vertices they own"
+                    : "");
     out.timings.distribute = seconds_since(start);
     return out;
 }
 
 void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode) {
     PartArrays& mine = *static_cast<PartArrays*>(arrays);
-    static_assert(std::is_same_v<std::int32_t, VertexId> && std::is_same_v<std::int64_t, GlobalId> &&
-                  std::is_same_v<std::int32_t, int>, "the part's arrays are moved into the mesh, not copied");
-    mesh = SimplexMesh(kind, std::move(mine.coordinates), std::move(mine.connectivity));
-    mesh.set_fixed(std::move(mine.fixed));
-    mesh.set_global_ids(std::move(mine.canonical));
+    static_assert(std::is_same_v<std::int32_t, int>, "the owners are moved, not copied");
+    mesh = part_mesh(mine, kind);
     vertex_owner = std::move(mine.owner);
     element_order = std::move(mine.element_order);
-    // The smallest canonical id is the first corner in local order (vertices are sorted by it).
-    counted.resize(static_cast<std::size_t>(mesh.num_elements()));
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        const auto corners = mesh.element(e);
-        counted[e] = vertex_owner[*std::min_element(corners.begin(), corners.end())] == rank;
-    }
+    cell_order = std::move(mine.cell_order);
+    // A cell's corners are counted where the cell is.
+    counted = per_element(mesh, counted_cells(mesh, vertex_owner, rank));
     const auto start = Clock::now();
     build_schedule(mode);
     reducer_ = parallel::make_mpi_reducer(comm);
@@ -313,7 +378,8 @@ void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode
 void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
     parallel::together(comm, true, [&] {
         if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, rank).parent_path());
-        write_piece(piece_path(path, rank), mesh, vertex_owner, counted, rank, path.extension() != ".pvtu");
+        write_piece(piece_path(path, rank), mesh, vertex_owner, counted_cells(mesh, vertex_owner, rank), rank,
+                    path.extension() != ".pvtu");
         if (rank == 0 && path.extension() == ".pvtu") write_pvtu(path, ranks);
     });
 }
@@ -327,18 +393,11 @@ void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, con
     const ElementKind kind = whole.kind();
     for (int p = 0; p < parts; ++p) {
         PartArrays& arrays = split.parts[p];
-        SimplexMesh piece(kind, std::move(arrays.coordinates),
-                          std::vector<VertexId>(arrays.connectivity.begin(), arrays.connectivity.end()));
-        piece.set_fixed(std::move(arrays.fixed));
-        piece.set_global_ids(std::vector<GlobalId>(arrays.canonical.begin(), arrays.canonical.end()));
+        SimplexMesh piece = part_mesh(arrays, kind);
         piece.set_elements_flipped(whole.elements_flipped());
-        std::vector<std::uint8_t> counted(static_cast<std::size_t>(piece.num_elements()));
-        for (ElementId e = 0; e < piece.num_elements(); ++e) {
-            const auto corners = piece.element(e);
-            counted[e] = arrays.owner[*std::min_element(corners.begin(), corners.end())] == p;
-        }
-        const std::vector<int> owner(arrays.owner.begin(), arrays.owner.end());
-        write_piece(piece_path(path, p), piece, owner, counted, p, path.extension() != ".pvtu");
+        write_piece(piece_path(path, p), piece, arrays.owner, counted_cells(piece, arrays.owner, p), p,
+                    path.extension() != ".pvtu");
+        arrays = {};
     }
     if (path.extension() == ".pvtu") write_pvtu(path, parts);
 }
@@ -458,24 +517,46 @@ SimplexMesh DistributedMesh::gather_whole() const {
             }
         }
     }
-    // Each element once, from the rank that counts it: its canonical position, then its corners' ids.
-    const int k = mesh.corners();
+    // Each element (each cell, for a mesh with cells) once, from the rank that counts it: its
+    // canonical position, (its type,) then its vertices' ids.
+    const bool cells = reducer().max(mesh.has_cells() ? 1.0 : 0.0) > 0.0;
     std::vector<std::int64_t> records;
-    for (ElementId e = 0; e < mesh.num_elements(); ++e)
-        if (counted[e]) {
-            records.push_back(element_order[e]);
-            for (VertexId v : mesh.element(e)) records.push_back(mesh.global_ids()[v]);
-        }
+    {
+        const std::vector<std::uint8_t> counted_cell = cells ? counted_cells(mesh, vertex_owner, rank) : counted;
+        const std::vector<GlobalId>& order = cells ? cell_order : element_order;
+        for (ElementId c = 0; c < mesh.num_cells(); ++c)
+            if (counted_cell[c]) {
+                records.push_back(order[c]);
+                if (cells) records.push_back(static_cast<std::int64_t>(mesh.cell_type(c)));
+                for (VertexId v : mesh.cell(c)) records.push_back(mesh.global_ids()[v]);
+            }
+    }
     auto all_records = gather_to_root(comm, records).values;
     std::vector<std::int64_t>().swap(records);
     if (rank != 0) return {};
-    std::vector<VertexId> connectivity(static_cast<std::size_t>(global_elements) * static_cast<std::size_t>(k));
-    for (std::size_t at = 0; at < all_records.size(); at += static_cast<std::size_t>(k) + 1) {
-        const auto position = static_cast<std::size_t>(all_records[at]) * static_cast<std::size_t>(k);
-        for (int c = 0; c < k; ++c) connectivity[position + static_cast<std::size_t>(c)] = static_cast<VertexId>(all_records[at + 1 + c]);
+    const int k = corner_count(mesh.kind());
+    const std::size_t head = cells ? 2 : 1, units = static_cast<std::size_t>(global_cells);
+    auto vertices_of = [&](std::size_t at) {
+        return static_cast<std::size_t>(cells ? cell_info(static_cast<CellType>(all_records[at + 1])).corners : k);
+    };
+    std::vector<CellType> types;
+    std::vector<std::int64_t> offsets;  // a mesh with cells: where each cell's ids start
+    if (cells) {
+        types.resize(units);
+        for (std::size_t at = 0; at < all_records.size(); at += head + vertices_of(at))
+            types[static_cast<std::size_t>(all_records[at])] = static_cast<CellType>(all_records[at + 1]);
+        offsets.assign(units + 1, 0);
+        for (std::size_t c = 0; c < units; ++c) offsets[c + 1] = offsets[c] + cell_info(types[c]).corners;
+    }
+    std::vector<VertexId> connectivity(cells ? static_cast<std::size_t>(offsets.back()) : units * static_cast<std::size_t>(k));
+    for (std::size_t at = 0; at < all_records.size(); at += head + vertices_of(at)) {
+        const auto position = static_cast<std::size_t>(all_records[at]);
+        const auto first = cells ? static_cast<std::size_t>(offsets[position]) : position * static_cast<std::size_t>(k);
+        for (std::size_t i = 0; i < vertices_of(at); ++i) connectivity[first + i] = static_cast<VertexId>(all_records[at + head + i]);
     }
     std::vector<std::int64_t>().swap(all_records);  // before the mesh builds its adjacency
-    SimplexMesh whole(mesh.kind(), std::move(coordinates), std::move(connectivity));
+    SimplexMesh whole = cells ? SimplexMesh::from_cells(std::move(coordinates), types, std::move(connectivity))
+                              : SimplexMesh(mesh.kind(), std::move(coordinates), std::move(connectivity));
     whole.set_fixed(std::move(fixed));
     whole.set_elements_flipped(mesh.elements_flipped());  // written back in the pieces' convention
     return whole;

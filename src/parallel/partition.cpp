@@ -86,19 +86,19 @@ std::vector<int> color_process_graph(int parts, std::span<const std::pair<int, i
 PartitionStatistics partition_statistics(const SimplexMesh& mesh, std::span<const int> part, int parts) {
     PartitionStatistics stats;
     stats.parts = parts;
-    // Part p holds every element touching a vertex it owns; the other vertices of those
-    // elements are its ghosts.
+    // Part p holds every cell (element, without cells) touching a vertex it owns; the other
+    // vertices of those cells are its ghosts.
     std::vector<std::set<int>> holders(static_cast<std::size_t>(mesh.num_vertices()));
     std::vector<std::int64_t> held(static_cast<std::size_t>(parts), 0);
     std::vector<int> touching;
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
         touching.clear();
-        for (VertexId v : mesh.element(e)) touching.push_back(part[v]);
+        for (VertexId v : mesh.cell(c)) touching.push_back(part[v]);
         std::sort(touching.begin(), touching.end());
         touching.erase(std::unique(touching.begin(), touching.end()), touching.end());
         for (int p : touching) {
             ++held[p];
-            for (VertexId v : mesh.element(e))
+            for (VertexId v : mesh.cell(c))
                 if (part[v] != p) holders[v].insert(p);
         }
     }

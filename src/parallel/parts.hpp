@@ -2,15 +2,16 @@
 // One rank's part as plain arrays: what rank 0 sends each rank when it splits a mesh, and what a
 // piece file holds; DistributedMesh::assemble() moves them into the part's mesh.
 #include <cstdint>
-#include <string>
+#include <span>
 #include <vector>
 
-#include "paloverde/core/error.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 
 namespace paloverde::parallel {
 
-// The pieces of one rank's part, as rank 0 sends them or a piece file holds them.
+// The pieces of one rank's part, as rank 0 sends them or a piece file holds them. A mesh with
+// cells sends its cells (connectivity stays empty): the part's elements are their corners, in
+// from_cells order, and element_order holds each corner's canonical position.
 struct PartArrays {
     std::vector<double> coordinates;
     std::vector<std::uint8_t> fixed;
@@ -18,15 +19,29 @@ struct PartArrays {
     std::vector<std::int32_t> owner;      // per vertex
     std::vector<std::int32_t> connectivity;
     std::vector<std::int64_t> element_order;
+    std::vector<std::uint8_t> cell_types;  // CellType
+    std::vector<std::int32_t> cell_connectivity;
+    std::vector<std::int64_t> cell_order;
 };
 
-// Parts hold simplices only so far: a mesh with quadrilaterals, hexahedra, wedges or pyramids
-// runs on one process (issue 18).
-inline void require_simplices(const SimplexMesh& mesh, const std::string& what) {
-    for (CellType type : mesh.cell_types())
-        if (!is_simplex(type))
-            throw OptionError(what + ": a mesh with " + std::string(cell_info(type).name) +
-                              " cells runs on one process for now; distributed runs take triangles and tetrahedra");
-}
+// The part's mesh from its arrays (moved out of them), with its fixed flags and global ids.
+SimplexMesh part_mesh(PartArrays& arrays, ElementKind kind);
+// Per cell of a part's mesh (per element without cells): counted by `rank`, the owner of its
+// vertex with the smallest canonical id (the first in local order: vertices are sorted by it).
+std::vector<std::uint8_t> counted_cells(const SimplexMesh& mesh, std::span<const std::int32_t> owner, int rank);
+// Per element: its cell's flag.
+std::vector<std::uint8_t> per_element(const SimplexMesh& mesh, std::span<const std::uint8_t> per_cell);
+
+// Canonical keys, `width` values each, flat: an element's sorted global ids padded with -1 to 4
+// (and its corner map, for a mesh with cells: corners of two cells may share their vertices); a
+// cell's sorted global ids padded with -1 to 8, then its type. Sorted keys give the canonical
+// order, the same however the mesh is numbered or split.
+constexpr int kCellKeyWidth = kMaxCellCorners + 1;
+void append_element_key(const SimplexMesh& mesh, ElementId e, int width, std::vector<std::int64_t>& keys);
+void append_cell_key(CellType type, std::span<const VertexId> cell, std::span<const GlobalId> ids,
+                     std::vector<std::int64_t>& keys);
+// Each key's position among the distinct keys in sorted order (copies of one element or cell,
+// held by several parts, share it); `distinct` is set to their number.
+std::vector<std::int64_t> key_positions(const std::vector<std::int64_t>& keys, int width, std::int64_t& distinct);
 
 }  // namespace paloverde::parallel

@@ -20,7 +20,7 @@ constexpr const char* kGhostCells = "vtkGhostType";  // 1: counted by another pi
 constexpr const char* kPartition = "PartitionId";
 
 void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
-                 std::span<const std::uint8_t> counted, int piece, bool mesquite_names) {
+                 std::span<const std::uint8_t> counted_cells, int piece, bool mesquite_names) {
     std::vector<Field> points(2), cells(2);
     points[0].name = mesquite_names ? "GLOBAL_ID" : kGlobalIds;
     points[1].name = mesquite_names ? "PROCESSOR_ID" : kOwner;
@@ -30,9 +30,9 @@ void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std
     }
     cells[0].name = kPartition;
     cells[1].name = kGhostCells;
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
         cells[0].values.push_back(piece);
-        cells[1].values.push_back(counted[e] ? 0.0 : 1.0);
+        cells[1].values.push_back(counted_cells[c] ? 0.0 : 1.0);
     }
     write_mesh(path, mesh, {}, points, cells);
 }
@@ -99,7 +99,6 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
         throw FileError(file.string(), 0, "a piece needs a `fixed` point field: a piece alone cannot tell the "
                                           "boundary of the whole mesh");
     const SimplexMesh& mesh = piece.mesh;
-    require_simplices(mesh, file.string());
     kind = mesh.kind();
     const VertexId n = mesh.num_vertices();
     for (VertexId v = 0; v < n; ++v) {
@@ -127,7 +126,10 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
         out.canonical.push_back(static_cast<std::int64_t>(ids->values[v]));
         out.owner.push_back(static_cast<std::int32_t>(owners->values[v]));
     }
-    for (VertexId v : mesh.connectivity()) out.connectivity.push_back(local[v]);
+    // A mesh with cells: its cells, whose corners the part's mesh takes anew.
+    for (VertexId v : mesh.has_cells() ? mesh.cell_connectivity() : mesh.connectivity())
+        (mesh.has_cells() ? out.cell_connectivity : out.connectivity).push_back(local[v]);
+    for (CellType type : mesh.cell_types()) out.cell_types.push_back(static_cast<std::uint8_t>(type));
     return out;
 }
 

@@ -10,9 +10,10 @@
 namespace paloverde::parallel {
 
 // Writes one piece: the part's mesh with its global ids, owners, piece number and ghost cells
-// (the elements counted by another piece); Mesquite's field names for its .vtk pattern.
+// (the cells, or elements, counted by another piece: `counted_cells` per cell); Mesquite's field
+// names for its .vtk pattern.
 void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
-                 std::span<const std::uint8_t> counted, int piece, bool mesquite_names);
+                 std::span<const std::uint8_t> counted_cells, int piece, bool mesquite_names);
 // Where piece p of `path` lives: OUT.pvtu -> OUT/OUT_p.vtu; OUT.vtk (Mesquite style) -> OUT_p.vtk.
 std::filesystem::path piece_path(const std::filesystem::path& path, int piece);
 // The .pvtu that lists `pieces` pieces.

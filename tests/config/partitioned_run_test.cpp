@@ -20,6 +20,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "support/cell_meshes.hpp"
 #include "support/io_checks.hpp"
 #include "support/solver_checks.hpp"
 #include "support/test_support.hpp"
@@ -556,6 +557,41 @@ BOOST_AUTO_TEST_CASE(mpirun_flips_a_mirrored_input_and_writes_it_back_mirrored) 
     const auto whole_out = pv::read_mesh(dir / "whole.vtu", as_is).mesh;
     BOOST_TEST(whole_out.num_elements() == mirror.num_elements());
     BOOST_TEST(pv::count_orientations(whole_out).inverted == whole_out.num_elements());
+}
+
+// A tangled mesh of hexahedra under the launcher: the serial mesh, bit for bit, written with its
+// cells; and from pieces to one file.
+BOOST_AUTO_TEST_CASE(mpirun_improves_a_mesh_of_hexahedra) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_hexahedra_np" + std::to_string(ranks));
+    const auto hexahedra = pv::test::tangled(pv::test::cube_grid(4, pv::test::Fill::Hexahedra), 1);
+    const auto input = dir / "hexahedra.vtu";
+    pv::write_mesh(input, hexahedra);
+    const std::string options = " -q --iterations 20 --threads 1";
+    const auto serial = run_cli("improve " + quoted(input) + " -o " + quoted(dir / "serial.vtu") + options + " --summary " +
+                                quoted(dir / "serial.json"));
+    BOOST_TEST_REQUIRE(serial.exit_code == 0, serial.output);
+    const auto r = mpirun_cli(dir, "improve " + quoted(input) + " -o " + quoted(dir / "out.vtu") + options + " --summary " +
+                                       quoted(dir / "out.json"));
+    BOOST_TEST_INFO(r.err);
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(relative_difference(dir / "serial.vtu", dir / "out.vtu") == 0.0);
+    const auto out = pv::read_mesh(dir / "out.vtu").mesh;
+    BOOST_TEST(out.has_cells());
+    BOOST_TEST(out.num_cells() == hexahedra.num_cells());
+    const auto a = nlohmann::json::parse(pv::test::read_text(dir / "serial.json"));
+    const auto b = nlohmann::json::parse(pv::test::read_text(dir / "out.json"));
+    BOOST_TEST(b["parallel"]["elements"].get<long>() == hexahedra.num_cells());  // cells, as the reports count
+    BOOST_TEST(b["steps"][0]["summary"]["iterations"] == a["steps"][0]["summary"]["iterations"]);
+    BOOST_TEST(b["steps"][0]["summary"]["inverted_after"] == a["steps"][0]["summary"]["inverted_after"]);
+    // Pieces of cells, gathered into one file by rank 0: the serial mesh in the canonical numbering.
+    const auto split = run_cli("partition " + quoted(input) + " -n " + std::to_string(ranks) + " -o " + quoted(dir / "in.pvtu"));
+    BOOST_TEST_REQUIRE(split.exit_code == 0, split.output);
+    const auto gathered = mpirun_cli(dir, "improve " + quoted(dir / "in.pvtu") + " -o " + quoted(dir / "whole.vtk") + options);
+    BOOST_TEST_INFO(gathered.err);
+    BOOST_TEST(gathered.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(gathered_difference(input, dir / "serial.vtu", dir / "whole.vtk") == 0.0);
+    BOOST_TEST(pv::read_mesh(dir / "whole.vtk").mesh.num_cells() == hexahedra.num_cells());
 }
 
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {

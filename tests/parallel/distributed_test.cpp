@@ -24,7 +24,7 @@
 #include "paloverde/wrappers.hpp"
 #include "support/sliding_checks.hpp"
 #include "support/solver_checks.hpp"
-#include "world.hpp"
+#include "distributed_checks.hpp"
 
 namespace pv = paloverde;
 namespace cfg = paloverde::config;
@@ -38,22 +38,9 @@ struct MpiSession {
 
 using paloverde::test::rank;
 using paloverde::test::ranks;
-
-pv::DistributedMesh scatter(const pv::SimplexMesh& whole, pv::ExchangeMode mode = pv::ExchangeMode::Colored) {
-    pv::DistributeOptions options;
-    options.exchange = mode;
-    return pv::DistributedMesh::scatter(MPI_COMM_WORLD, rank() == 0 ? &whole : nullptr, options);
-}
-
-// The largest coordinate difference, relative to the mesh's extent.
-double relative_difference(const pv::SimplexMesh& a, const pv::SimplexMesh& b) {
-    double extent = 0.0, difference = 0.0;
-    for (std::size_t i = 0; i < a.coordinates().size(); ++i) {
-        extent = std::max(extent, std::abs(a.coordinates()[i]));
-        difference = std::max(difference, std::abs(a.coordinates()[i] - b.coordinates()[i]));
-    }
-    return difference / extent;
-}
+using paloverde::test::relative_difference;
+using paloverde::test::scatter;
+using paloverde::test::serial_and_distributed;
 
 }  // namespace
 
@@ -171,32 +158,6 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
             BOOST_TEST(difference <= 1e-10);
         }
     }
-}
-
-// The global solver on `input`, serially and on the ranks: the distributed run must take the same
-// steps to the same mesh, bit for bit, and never make things worse. Returns both summaries (and
-// on rank 0 the distributed run's mesh in `result`, if given).
-std::pair<pv::Summary, pv::Summary> serial_and_distributed(const pv::SimplexMesh& input, const pv::GlobalSolverOptions& options,
-                                                           pv::SimplexMesh* result = nullptr) {
-    pv::SimplexMesh serial = input;
-    const auto serial_summary = pv::GlobalSolver(options).improve(serial);
-    BOOST_TEST_MESSAGE("serial: " << serial_summary.brief_report());
-    pv::SimplexMesh gathered = input;
-    auto part = scatter(input);
-    const auto summary = pv::GlobalSolver(options).improve(part);
-    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
-    BOOST_TEST(summary.iterations == serial_summary.iterations);
-    BOOST_TEST(summary.untangle_iterations == serial_summary.untangle_iterations);
-    BOOST_TEST(summary.after.inverted == serial_summary.after.inverted);
-    BOOST_TEST(summary.worst_after == serial_summary.worst_after);
-    if (rank() == 0) {
-        const double difference = relative_difference(gathered, serial);
-        BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report() << "; relative difference " << difference);
-        BOOST_TEST(difference == 0.0);
-    }
-    pv::test::check_never_worse(summary);
-    if (result) *result = std::move(gathered);
-    return {serial_summary, summary};
 }
 
 // The dihedral quality (dihedral_sine: each element's smallest angle sine, a nonsmooth minimum)
@@ -326,24 +287,10 @@ BOOST_AUTO_TEST_CASE(global_solver_hands_the_part_back_in_its_element_order) {
 // at its global id, with its owner's coordinates and flag; every element once.
 BOOST_AUTO_TEST_CASE(gather_whole_builds_the_whole_mesh_in_the_canonical_order) {
     pv::SimplexMesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
-    auto part = scatter(input);
-    // Moved on their owners, so that a ghost's stale copy would show.
-    for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v)
-        if (part.vertex_owner[v] == rank()) part.mesh.coordinates()[3 * static_cast<std::size_t>(v)] += 0.25;
-    const pv::SimplexMesh whole = part.gather_whole();
-    if (rank() != 0) {
-        BOOST_TEST(whole.num_vertices() == 0);
-        return;
-    }
+    const pv::SimplexMesh whole = pv::test::gathered_whole(input);
+    if (rank() != 0) return;
     const auto order = pv::locality_order(input);
-    BOOST_REQUIRE(whole.num_vertices() == input.num_vertices());
     BOOST_REQUIRE(whole.num_elements() == input.num_elements());
-    for (pv::VertexId v = 0; v < whole.num_vertices(); ++v) {
-        const auto o = static_cast<std::size_t>(order.old_vertex[static_cast<std::size_t>(v)]);
-        BOOST_TEST(whole.coordinates()[3 * static_cast<std::size_t>(v)] == input.coordinates()[3 * o] + 0.25);
-        BOOST_TEST(whole.coordinates()[3 * static_cast<std::size_t>(v) + 2] == input.coordinates()[3 * o + 2]);
-        BOOST_TEST(whole.fixed()[v] == input.fixed()[o]);
-    }
     std::vector<std::array<pv::VertexId, 4>> a, b;
     for (pv::ElementId e = 0; e < input.num_elements(); ++e) {
         std::array<pv::VertexId, 4> x{}, y{};
@@ -384,14 +331,7 @@ BOOST_AUTO_TEST_SUITE_END()
 
 BOOST_AUTO_TEST_SUITE(pieces)
 
-namespace {
-std::filesystem::path scratch(const std::string& name) {
-    auto dir = std::filesystem::temp_directory_path() / ("paloverde_pieces_" + std::to_string(ranks()));
-    if (rank() == 0) std::filesystem::create_directories(dir);
-    MPI_Barrier(MPI_COMM_WORLD);
-    return dir / name;
-}
-}  // namespace
+using paloverde::test::scratch;
 
 BOOST_AUTO_TEST_CASE(pieces_written_then_read_give_the_serial_answer) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
@@ -688,7 +628,7 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
     options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
     options.termination.max_iterations = 100;  // enough for both runs (check_no_worse_than_fixed)
     pv::SimplexMesh gathered = input;
-    const auto [serial, slid] = distributed::serial_and_distributed(input, options, &gathered);
+    const auto [serial, slid] = serial_and_distributed(input, options, &gathered);
     BOOST_REQUIRE(slid.boundary.has_value());
     BOOST_TEST(slid.boundary->moved > 0);
     BOOST_TEST(slid.boundary->sliding == serial.boundary->sliding);

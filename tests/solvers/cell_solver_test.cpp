@@ -26,12 +26,7 @@ pv::SimplexMesh grid(int fill) {
 }
 
 pv::SimplexMesh tangled_grid(int fill, int seed) {
-    auto mesh = grid(fill);
-    pv::PerturbOptions perturb;
-    perturb.fraction = 0.3;
-    perturb.amount = 0.8;
-    perturb.seed = static_cast<std::uint64_t>(seed);
-    pv::perturb(mesh, perturb);
+    auto mesh = pv::test::tangled(grid(fill), seed);
     BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted > 0);
     return mesh;
 }

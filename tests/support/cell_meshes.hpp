@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "paloverde/mesh/cell_types.hpp"
+#include "paloverde/mesh/perturb.hpp"
 #include "paloverde/mesh/simplex_mesh.hpp"
 
 namespace paloverde::test {
@@ -101,6 +102,17 @@ inline SimplexMesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
                 }
             }
     return s.mesh();
+}
+
+// A grid tangled as the tests of cells tangle it: 30% of its free vertices moved by up to 0.8
+// local edge lengths.
+inline SimplexMesh tangled(SimplexMesh mesh, int seed) {
+    PerturbOptions perturb;
+    perturb.fraction = 0.3;
+    perturb.amount = 0.8;
+    perturb.seed = static_cast<std::uint64_t>(seed);
+    paloverde::perturb(mesh, perturb);
+    return mesh;
 }
 
 }  // namespace paloverde::test

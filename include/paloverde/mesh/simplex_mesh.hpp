@@ -26,9 +26,10 @@ public:
     // A mesh of cells of one dimension (any mix of the types of that dimension), validated like
     // the constructor's arrays, naming the offending cell. Triangles or tetrahedra alone give the
     // plain simplex mesh (no cells); otherwise each cell's corners become elements, cell by cell
-    // in the order of its frames.
+    // in the order of its frames. `keep_cells`: keep them as cells even when all are triangles or
+    // all tetrahedra (a part of a mixed mesh is rated and reported as the whole mesh is).
     static SimplexMesh from_cells(std::vector<double> coordinates, std::span<const CellType> types,
-                                  std::vector<VertexId> cell_connectivity);
+                                  std::vector<VertexId> cell_connectivity, bool keep_cells = false);
 
     // Copies any Mesh through its batch interface.
     static SimplexMesh copy_of(const Mesh& mesh);

@@ -5,6 +5,9 @@
 // element that touches a vertex it owns, and the other vertices of those elements as ghosts:
 // copies refreshed from their owners through the exchange schedule. Each element is counted in
 // global sums by exactly one rank, the owner of its vertex with the smallest canonical id.
+// A mesh with cells (quadrilaterals, hexahedra, wedges, pyramids) is split into whole cells: a
+// rank holds every cell that touches a vertex it owns, the cell is counted by the owner of its
+// vertex with the smallest canonical id, and so are all its corners (the part's elements).
 //
 // Canonical ids: the vertices of the whole mesh in reverse Cuthill-McKee order (for locality).
 // A rank's vertices are in increasing canonical id, which `mesh.global_ids()` holds.
@@ -66,15 +69,15 @@ public:
 
     // Collective: reads pre-partitioned pieces, one per rank: a .pvtu and the .vtu files it lists,
     // or Mesquite-style per-rank files OUT_<rank>.vtk for a path OUT.vtk. Each piece holds the
-    // elements around the vertices it owns, with the point fields GlobalNodeIds (or GLOBAL_ID),
-    // OwnerRank (or PROCESSOR_ID) and `fixed`. Pieces that disagree (an id owned twice or by no
-    // piece, a ghost placed elsewhere than by its owner, missing elements, the wrong number of
-    // pieces) are an error on every rank.
+    // elements (whole cells) around the vertices it owns, with the point fields GlobalNodeIds (or
+    // GLOBAL_ID), OwnerRank (or PROCESSOR_ID) and `fixed`. Pieces that disagree (an id owned twice
+    // or by no piece, a ghost placed elsewhere than by its owner, missing elements, the wrong
+    // number of pieces) are an error on every rank.
     static DistributedMesh read_pieces(MPI_Comm comm, const std::filesystem::path& path,
                                        const DistributeOptions& options = {});
     // Collective: writes this distributed mesh as pieces (see read_pieces); rank 0 writes the
-    // .pvtu. Each piece has a PartitionId cell field, and vtkGhostType marks the elements another
-    // piece counts, so ParaView shows each element once, colored by rank.
+    // .pvtu. Each piece has a PartitionId cell field, and vtkGhostType marks the elements (cells)
+    // another piece counts, so ParaView shows each element once, colored by rank.
     void write_pieces(const std::filesystem::path& path) const;
     // Serial: cuts `whole` into `parts` pieces as scatter() would, and writes them.
     static void write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path);
@@ -83,14 +86,15 @@ public:
     // owners' current ones; the other ranks pass nullptr.
     void gather_coordinates(SimplexMesh* whole) const;
     // Collective: rank 0 gets the whole mesh built from the parts (for runs from pieces, where no
-    // rank has it), the other ranks an empty mesh. Vertices come in global id order, elements in
-    // their canonical order, with the current coordinates and the fixed flags. Rank 0 holds the
-    // whole mesh and, while it builds it, the gathered values of either the vertices (40 bytes
-    // each) or the elements (8 bytes per corner, plus 8).
+    // rank has it), the other ranks an empty mesh. Vertices come in global id order, elements (or
+    // cells) in their canonical order, with the current coordinates and the fixed flags. Rank 0
+    // holds the whole mesh and, while it builds it, the gathered values of either the vertices (40
+    // bytes each) or the elements (8 bytes per corner, plus 8; a cell's plus 16).
     SimplexMesh gather_whole() const;
 
     // Collective: the whole mesh's boundary at the current coordinates, in global ids, on every
-    // rank (a part's own boundary also has the faces where it was cut from the others').
+    // rank (a part's own boundary also has the faces where it was cut from the others'). Refused
+    // (MeshError on every rank) for a mesh with cells, as BoundaryFacets::of refuses it.
     BoundaryFacets gather_boundary() const;
 
     // Collective: refreshes ghost coordinates from their owners.
@@ -105,7 +109,11 @@ public:
     std::vector<int> vertex_owner;        // per local vertex
     std::vector<GlobalId> element_order;  // per local element: its canonical position
     std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank
-    GlobalId global_vertices = 0, global_elements = 0;
+    // A mesh with cells, per local cell: its canonical position (the cells sorted by their sorted
+    // global ids, then type); empty without cells.
+    std::vector<GlobalId> cell_order;
+    // The whole mesh's; global_cells is global_elements for a mesh without cells.
+    GlobalId global_vertices = 0, global_elements = 0, global_cells = 0;
     Vec3 plane_normal{0.0, 0.0, 1.0};     // triangle meshes: the whole mesh's plane
     // read_pieces: whether the elements were flipped, and why (the same on every rank). scatter()
     // takes the whole mesh's orientation as it is; the parts keep its elements_flipped() mark.

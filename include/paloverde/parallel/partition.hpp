@@ -28,8 +28,9 @@ struct PartitionStatistics {
     std::int64_t process_edges = 0;      // pairs of parts that exchange: messages per exchange, each way
     int colors = 0;                      // of the greedy edge coloring: the exchange's rounds
     int max_neighbours = 0;              // most partners of one part
-    std::int64_t largest_part_elements = 0;  // elements held (owned and ghost) by the largest part
+    std::int64_t largest_part_elements = 0;  // elements (cells) held, owned and ghost, by the largest part
 };
+// A mesh with cells is split into whole cells, as DistributedMesh splits it.
 PartitionStatistics partition_statistics(const SimplexMesh& mesh, std::span<const int> part, int parts);
 
 }  // namespace paloverde
