@@ -5,6 +5,9 @@
 
 #include "config/registry_internal.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/laplace_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 #include "paloverde/wrappers.hpp"
 
 namespace paloverde::config {
@@ -101,10 +104,22 @@ template <class O>
 OptionsKind options_kind(const Table<O>& table) {
     OptionsKind k;
     k.what = table.what();
+    k.untangles = requires(O o) {
+        o.untangle = true;
+        o.improve_shape = false;
+    };
+    k.untangle_only = [](SolverOptions& options) {
+        if constexpr (requires(O o) { o.improve_shape = false; }) {
+            O& o = options.get<O>();
+            o.untangle = true;
+            o.improve_shape = false;
+        }
+    };
+    k.set_threads = [](SolverOptions& options, int threads) { options.get<O>().threads = threads; };
     k.read = [&table](SolverOptions& o, const Node& n, const std::string& p, const Reader& r, const Skip& s,
-                      const std::vector<std::string>& also) { table.read(std::get<O>(o), n, p, r, s, also); };
-    k.write = [&table](const SolverOptions& o, const Skip& s, bool c) { return table.write(std::get<O>(o), s, c); };
-    k.describe = [&table](const SolverOptions& o, const Skip& s) { return table.describe(std::get<O>(o), s); };
+                      const std::vector<std::string>& also) { table.read(o.get<O>(), n, p, r, s, also); };
+    k.write = [&table](const SolverOptions& o, const Skip& s, bool c) { return table.write(o.get<O>(), s, c); };
+    k.describe = [&table](const SolverOptions& o, const Skip& s) { return table.describe(o.get<O>(), s); };
     k.keys = [&table](const Skip& s) { return table.keys(s); };
     k.has = [&table](const std::string& key) { return table.field(key) != nullptr; };
     return k;
@@ -112,8 +127,30 @@ OptionsKind options_kind(const Table<O>& table) {
 
 template <class O>
 const O& options_as(const SolverOptions& options, const std::string& name) {
-    if (const O* o = std::get_if<O>(&options)) return *o;
+    if (const O* o = options.get_if<O>()) return *o;
     throw OptionError("solver or wrapper '" + name + "' was given the options of another solver");
+}
+
+// The target_worst_quality a solver with options O aims at, if any (none while only untangling).
+template <class O>
+std::optional<double> shape_target(const O& o) {
+    if constexpr (requires { o.improve_shape; })
+        if (!o.improve_shape) return std::nullopt;
+    return o.termination.target_worst_quality;
+}
+
+// A solver's registry entry: S built from options O, which `kind` reads and writes.
+template <class S, class O>
+SolverKind solver_kind(std::string name, std::string help, const OptionsKind& kind, bool distributed = true) {
+    SolverKind s;
+    s.name = name;
+    s.help = std::move(help);
+    s.options = &kind;
+    s.defaults = [] { return SolverOptions(O{}); };
+    s.make = [name](const SolverOptions& o) { return std::make_unique<S>(options_as<O>(o, name)); };
+    s.target = [name](const SolverOptions& o) { return shape_target(options_as<O>(o, name)); };
+    s.distributed = distributed;
+    return s;
 }
 
 struct Tables {
@@ -287,51 +324,38 @@ Tables::Tables() {
     local_kind = options_kind(local);
     laplace_kind = options_kind(laplace);
 
-    const auto shape_target = [](const TerminationCriterion& t) { return t.target_worst_quality; };
-    solvers.push_back({"global",
-                       "The log-barrier solver of Sastry & Shontz: every free vertex moves at once; untangles first "
-                       "(hybrid metric), then raises the worst element.",
-                       &global_kind,
-                       {},
-                       [] { return SolverOptions(GlobalSolverOptions{}); },
-                       [](const SolverOptions& o) { return std::make_unique<GlobalSolver>(options_as<GlobalSolverOptions>(o, "global")); },
-                       [shape_target](const SolverOptions& o) {
-                           const auto& g = std::get<GlobalSolverOptions>(o);
-                           return g.improve_shape ? shape_target(g.termination) : std::nullopt;
-                       }});
-    solvers.push_back({"local",
-                       "The Freitag-Plassmann local smoother: one vertex at a time, by colors, raises the smallest "
-                       "quality of its elements; untangles first.",
-                       &local_kind,
-                       {},
-                       [] { return SolverOptions(LocalSolverOptions{}); },
-                       [](const SolverOptions& o) { return std::make_unique<LocalSolver>(options_as<LocalSolverOptions>(o, "local")); },
-                       [shape_target](const SolverOptions& o) {
-                           const auto& l = std::get<LocalSolverOptions>(o);
-                           return l.improve_shape ? shape_target(l.termination) : std::nullopt;
-                       }});
+    solvers.push_back(solver_kind<GlobalSolver, GlobalSolverOptions>(
+        "global",
+        "The log-barrier solver of Sastry & Shontz: every free vertex moves at once; untangles first (hybrid metric), "
+        "then raises the worst element.",
+        global_kind));
+    solvers.push_back(solver_kind<LocalSolver, LocalSolverOptions>(
+        "local",
+        "The Freitag-Plassmann local smoother: one vertex at a time, by colors, raises the smallest quality of its "
+        "elements; untangles first.",
+        local_kind));
+    // Two names for one solver: the name decides `smart`.
     const Skip smart_by_name{{"smart"}, "the name decides it: smart_laplace is smart Laplace, laplace is plain Laplace"};
     for (const bool smart : {true, false}) {
-        const std::string name = smart ? "smart_laplace" : "laplace";
-        solvers.push_back({name,
-                           smart ? "Smart Laplace: each vertex moves to the mean of its neighbours only if its worst "
-                                   "element does not get worse and nothing inverts. Does not untangle."
-                                 : "Plain Laplace (Jacobi): every free vertex moves to the mean of its neighbours; may "
-                                   "invert elements. Does not untangle.",
-                           &laplace_kind,
-                           smart_by_name,
-                           [smart] {
-                               LaplaceSolverOptions o;
-                               o.smart = smart;
-                               return SolverOptions(o);
-                           },
-                           [smart, name](const SolverOptions& o) {
-                               LaplaceSolverOptions l = options_as<LaplaceSolverOptions>(o, name);
-                               l.smart = smart;
-                               return std::make_unique<LaplaceSolver>(l);
-                           },
-                           [shape_target](const SolverOptions& o) { return shape_target(std::get<LaplaceSolverOptions>(o).termination); },
-                           false});
+        SolverKind s = solver_kind<LaplaceSolver, LaplaceSolverOptions>(
+            smart ? "smart_laplace" : "laplace",
+            smart ? "Smart Laplace: each vertex moves to the mean of its neighbours only if its worst element does not "
+                    "get worse and nothing inverts. Does not untangle."
+                  : "Plain Laplace (Jacobi): every free vertex moves to the mean of its neighbours; may invert "
+                    "elements. Does not untangle.",
+            laplace_kind, false);
+        s.skip = smart_by_name;
+        s.defaults = [smart] {
+            LaplaceSolverOptions o;
+            o.smart = smart;
+            return SolverOptions(o);
+        };
+        s.make = [smart, name = s.name](const SolverOptions& o) {
+            LaplaceSolverOptions l = options_as<LaplaceSolverOptions>(o, name);
+            l.smart = smart;
+            return std::make_unique<LaplaceSolver>(l);
+        };
+        solvers.push_back(std::move(s));
     }
 
     using Targets = std::vector<std::optional<double>>;
@@ -347,7 +371,7 @@ Tables::Tables() {
                          "shape_improvement does not untangle (untangle_then_improve does)"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::shape_improvement(options_as<GlobalSolverOptions>(o, "shape_improvement")); },
-                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<GlobalSolverOptions>(o).termination)}; }});
+                        [](const SolverOptions& o) { return Targets{o.get<GlobalSolverOptions>().termination.target_worst_quality}; }});
     wrappers.push_back({"local_shape_improvement", "Assess, improve with the local smoother (which untangles first), assess.",
                         "local", &local_kind,
                         {{"improve_shape"},
@@ -355,12 +379,12 @@ Tables::Tables() {
                          "(name: local, improve_shape: false)"},
                         [] { return SolverOptions(LocalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::local_shape_improvement(options_as<LocalSolverOptions>(o, "local_shape_improvement")); },
-                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LocalSolverOptions>(o).termination)}; }});
+                        [](const SolverOptions& o) { return Targets{o.get<LocalSolverOptions>().termination.target_worst_quality}; }});
     wrappers.push_back({"laplace", "Assess, smart Laplace (plain Laplace with `smart: false`, which may invert elements), assess.",
                         "smart_laplace", &laplace_kind, {},
                         [] { return SolverOptions(LaplaceSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::laplace(options_as<LaplaceSolverOptions>(o, "laplace")); },
-                        [shape_target](const SolverOptions& o) { return Targets{shape_target(std::get<LaplaceSolverOptions>(o).termination)}; }});
+                        [](const SolverOptions& o) { return Targets{o.get<LaplaceSolverOptions>().termination.target_worst_quality}; }});
     wrappers.push_back({"untangle_then_improve",
                         "Assess, untangle, then improve the shape, each with the global solver, assess: the default job.",
                         "global", &global_kind,
@@ -369,8 +393,8 @@ Tables::Tables() {
                          "checkpoint (use an untangle step and an improve step, each with its own)"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::untangle_then_improve(options_as<GlobalSolverOptions>(o, "untangle_then_improve")); },
-                        [shape_target](const SolverOptions& o) {
-                            return Targets{std::nullopt, shape_target(std::get<GlobalSolverOptions>(o).termination)};
+                        [](const SolverOptions& o) {
+                            return Targets{std::nullopt, o.get<GlobalSolverOptions>().termination.target_worst_quality};
                         }});
 
     // An option of another solver, misplaced: say whose it is.
@@ -427,16 +451,6 @@ const WrapperKind* find_wrapper(const std::string& name) {
 
 const Skip& untangle_skip() { return tables().untangle; }
 
-void untangle_only(SolverOptions& options) {
-    std::visit(
-        [](auto& o) {
-            if constexpr (requires { o.improve_shape; }) {
-                o.untangle = true;
-                o.improve_shape = false;
-            }
-        },
-        options);
-}
 const Table<AssessSpec>& assess_table() { return tables().assess; }
 
 std::string solvers_with(const std::string& key, const std::string& except) {
@@ -445,10 +459,6 @@ std::string solvers_with(const std::string& key, const std::string& except) {
         if (s.name != except && s.options->has(key) && !s.skip.has(key)) owners.push_back(s.name);
     if (owners.empty()) return "";
     return (owners.size() == 1 ? "solver " : "solvers ") + join(owners);
-}
-
-void set_threads(SolverOptions& options, int threads) {
-    std::visit([threads](auto& o) { o.threads = threads; }, options);
 }
 
 std::vector<ObjectInfo> object_infos() {

@@ -11,9 +11,15 @@
 
 namespace paloverde::config::detail {
 
-// One alternative of SolverOptions and its table, behind one interface.
+// One type of SolverOptions and its table, behind one interface (options_kind<O> in registry.cpp
+// builds it from the table alone).
 struct OptionsKind {
     std::string what;
+    // The solver untangles (its options have `untangle` and `improve_shape`).
+    bool untangles = false;
+    // An untangle step (and `--untangle`): untangle, then stop once no element is inverted.
+    std::function<void(SolverOptions&)> untangle_only;
+    std::function<void(SolverOptions&, int threads)> set_threads;
     std::function<void(SolverOptions&, const Node&, const std::string&, const Reader&, const Skip&,
                        const std::vector<std::string>&)>
         read;
@@ -54,14 +60,9 @@ const std::vector<WrapperKind>& wrapper_kinds();
 const WrapperKind* find_wrapper(const std::string& name);
 // An untangle step: the global solver's options without the shape phase's.
 const Skip& untangle_skip();
-// What an untangle step (and `--untangle`) means for the solvers that untangle, global and
-// local: untangle, then stop once no element is inverted. Other options are left as they are.
-void untangle_only(SolverOptions& options);
 const Table<AssessSpec>& assess_table();
 // Which solvers (other than `except`) take `key`: "solver global" / "solvers global, local".
 std::string solvers_with(const std::string& key, const std::string& except);
-
-void set_threads(SolverOptions& options, int threads);
 
 // The objects of every kind but "section" (registry.cpp) and the sections (schema.cpp).
 std::vector<ObjectInfo> object_infos();

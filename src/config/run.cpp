@@ -49,11 +49,12 @@ BuiltSolver build_solver(const StepSpec& step, int threads) {
     const auto* kind = find_solver(step.name);
     if (!kind) describe("solver", step.name);  // throws, listing the solvers
     SolverOptions options = step.options;
-    set_threads(options, threads);
+    kind->options->set_threads(options, threads);
     if (step.kind == StepSpec::Kind::Untangle) {
-        if (step.name != "global" && step.name != "local")
-            throw OptionError("an untangle step runs the global or the local solver (got '" + step.name + "')");
-        untangle_only(options);
+        if (!kind->options->untangles)
+            throw OptionError("an untangle step runs a solver that untangles, such as global or local (got '" +
+                              step.name + "')");
+        kind->options->untangle_only(options);
     }
     return {kind->make(options), kind->target(options)};
 }
@@ -172,7 +173,7 @@ BuiltQueue build_queue_of(std::span<const StepSpec> steps, int threads) {
                 const auto* kind = find_wrapper(step.name);
                 if (!kind) describe("wrapper", step.name);
                 SolverOptions options = step.options;
-                set_threads(options, threads);
+                kind->options->set_threads(options, threads);
                 b.queue.append(kind->make(options));
                 for (const auto& t : kind->targets(options)) b.targets.push_back(t);
                 break;

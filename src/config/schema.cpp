@@ -54,7 +54,7 @@ std::vector<StepSpec> RunSpec::default_queue() {
     step.kind = StepSpec::Kind::Improve;
     step.name = "global";
     step.label = "global";
-    step.options = GlobalSolverOptions{};
+    step.options = default_options("global");
     return {step};
 }
 
@@ -272,11 +272,14 @@ StepSpec read_step(const Node& node, const std::string& path, const Reader& r) {
     step.name = name && !name->is_null() ? one_of(*name, np, solver_names(), "solver") : "global";
     const SolverKind& s = *find_solver(step.name);
     if (step.kind == StepSpec::Kind::Untangle) {
-        if (step.name != "global" && step.name != "local")
-            fail(name->where, np, "only the global and local solvers untangle; " + step.name +
-                                      " moves vertices towards their neighbours' mean, whatever is inverted");
+        if (!s.options->untangles) {
+            std::vector<std::string> untanglers;
+            for (const auto& other : solver_kinds())
+                if (other.options->untangles) untanglers.push_back(other.name);
+            fail(name->where, np, "solver " + step.name + " does not untangle; these do: " + join(untanglers));
+        }
         step.options = s.defaults();
-        untangle_only(step.options);
+        s.options->untangle_only(step.options);
         s.options->read(step.options, body, p, r, untangle_skip(), {"name", "label"});
         step.label = optional_text(body, "label", p, r, "untangle");
         return step;

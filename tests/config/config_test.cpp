@@ -84,7 +84,7 @@ BOOST_AUTO_TEST_CASE(the_resolved_config_reads_back_to_itself) {
     // The defaults are those of the C++ options structs.
     const auto defaults = cfg::parse_config("", "empty");
     BOOST_REQUIRE(defaults.queue.size() == 1u);
-    const auto& global = std::get<pv::GlobalSolverOptions>(defaults.queue[0].options);
+    const auto& global = defaults.queue[0].options.get<pv::GlobalSolverOptions>();
     BOOST_TEST(global.termination.max_iterations == pv::GlobalSolverOptions{}.termination.max_iterations);
     BOOST_TEST(global.objective_options.barrier_shrink == pv::ObjectiveOptions{}.barrier_shrink);
     const std::string text = cfg::to_yaml(defaults, false);
@@ -102,23 +102,23 @@ BOOST_AUTO_TEST_CASE(a_rich_config_sets_what_it_says) {
     BOOST_REQUIRE(steps.size() == 7u);
     BOOST_TEST(steps[0].assess.histogram_bins == 4);
     BOOST_TEST(steps[0].label == "start");
-    const auto& untangle = std::get<pv::GlobalSolverOptions>(steps[1].options);
+    const auto& untangle = steps[1].options.get<pv::GlobalSolverOptions>();
     BOOST_TEST((steps[1].kind == cfg::StepSpec::Kind::Untangle && !untangle.improve_shape));
     BOOST_TEST(untangle.untangle_termination.max_iterations == 40);
-    const auto& g = std::get<pv::GlobalSolverOptions>(steps[2].options);
+    const auto& g = steps[2].options.get<pv::GlobalSolverOptions>();
     BOOST_TEST(g.objective == "p_mean");
     BOOST_TEST(g.objective_options.p == -4.0);
     BOOST_TEST(g.shape_metric == "mean_ratio");
     BOOST_TEST(g.metric_options.hybrid_sharpness == 12.5);
     BOOST_TEST((g.direction == pv::GlobalSolverOptions::Direction::SteepestAscent));
     BOOST_TEST(*g.termination.target_worst_quality == 0.25);
-    BOOST_TEST(std::get<pv::LocalSolverOptions>(steps[3].options).improve_below == 0.3);
-    BOOST_TEST((std::get<pv::LocalSolverOptions>(steps[3].options).coloring == pv::ColoringOrder::Greedy));
+    BOOST_TEST(steps[3].options.get<pv::LocalSolverOptions>().improve_below == 0.3);
+    BOOST_TEST((steps[3].options.get<pv::LocalSolverOptions>().coloring == pv::ColoringOrder::Greedy));
     BOOST_TEST(steps[4].label == "smooth");
-    BOOST_TEST(std::get<pv::LaplaceSolverOptions>(steps[4].options).smart);
-    BOOST_TEST(!std::get<pv::LaplaceSolverOptions>(steps[5].options).smart);
+    BOOST_TEST(steps[4].options.get<pv::LaplaceSolverOptions>().smart);
+    BOOST_TEST(!steps[5].options.get<pv::LaplaceSolverOptions>().smart);
     BOOST_TEST((steps[6].kind == cfg::StepSpec::Kind::Wrapper && steps[6].name == "laplace"));
-    BOOST_TEST(!std::get<pv::LaplaceSolverOptions>(steps[6].options).smart);
+    BOOST_TEST(!steps[6].options.get<pv::LaplaceSolverOptions>().smart);
     BOOST_TEST(spec.study[1].queue[0].name == "untangle_then_improve");
     BOOST_TEST(spec.output.metric == "edge_ratio");
     BOOST_TEST(spec.where("study[0].queue[2].improve.objective.p") == "run.yaml:14:40: study[0].queue[2].improve.objective.p");
@@ -189,7 +189,9 @@ BOOST_AUTO_TEST_CASE(an_out_of_range_value_is_named_with_its_line) {
                                "queue[0].improve.termination.max_iterations", "run.yaml:2:45", "out of range"},
                           Case{"output: {plot: p.png}\n", "output.plot", "run.yaml:1:16", ".svg"},
                           Case{"output: {mesh: out.abc}\n", "output.mesh", "run.yaml:1:16", ".vtk, .vtu, .msh or .mesh"},
-                          Case{"output: {mesh: out.node}\n", "output.mesh", "run.yaml:1:16", "the format to write"}}) {
+                          Case{"output: {mesh: out.node}\n", "output.mesh", "run.yaml:1:16", "the format to write"},
+                          Case{"queue:\n  - untangle: {name: smart_laplace}\n", "queue[0].untangle.name",
+                               "run.yaml:2:22", "does not untangle; these do: global, local"}}) {
         const auto e = error_of(c.yaml);
         BOOST_TEST_CONTEXT(e.what()) {
             BOOST_TEST(e.key() == c.key);
@@ -225,7 +227,7 @@ BOOST_AUTO_TEST_CASE(set_overrides_with_the_same_checks) {
                                                                    {"queue[1].assess=after"},
                                                                    {"output.history=h.csv"},
                                                                    {"input.fixed_vertices=[1, 2]"}});
-    const auto& g = std::get<pv::GlobalSolverOptions>(spec.queue[0].options);
+    const auto& g = spec.queue[0].options.get<pv::GlobalSolverOptions>();
     BOOST_TEST(g.objective_options.barrier_shrink == 0.5);
     BOOST_TEST(*g.termination.target_worst_quality == 0.3);
     BOOST_REQUIRE(spec.queue.size() == 2u);
@@ -239,7 +241,7 @@ BOOST_AUTO_TEST_CASE(set_overrides_with_the_same_checks) {
                                                                     {"queue=untangle_then_improve"},
                                                                     {"queue[0].wrapper.termination.max_iterations=3"}});
     BOOST_TEST((reset.queue[0].kind == cfg::StepSpec::Kind::Wrapper));
-    BOOST_TEST(std::get<pv::GlobalSolverOptions>(reset.queue[0].options).termination.max_iterations == 3);
+    BOOST_TEST(reset.queue[0].options.get<pv::GlobalSolverOptions>().termination.max_iterations == 3);
     // Errors name --set (or the flag standing for it) and the key.
     const auto bad = error_of(yaml, {{"queue[0].improve.termination.max_iterations=-3"}});
     BOOST_TEST(bad.where() == "--set");

@@ -9,22 +9,53 @@
 // (untangle, shape_improvement, local_shape_improvement, laplace, untangle_then_improve) and
 // "section" (the parts of a run config: run, input, partition, parallel, output, study method,
 // and the queue steps assess / improve / untangle / wrapper).
+#include <any>
 #include <memory>
 #include <string>
 #include <string_view>
-#include <variant>
+#include <type_traits>
 #include <vector>
 
-#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/core/error.hpp"
 #include "paloverde/solvers/instruction_queue.hpp"
-#include "paloverde/solvers/laplace_solver.hpp"
-#include "paloverde/solvers/local_solver.hpp"
 
 namespace paloverde::config {
 
-// The options of any solver; which alternative goes with which name: global -> Global,
-// local -> Local, smart_laplace / laplace -> Laplace (`smart` set by the name).
-using SolverOptions = std::variant<GlobalSolverOptions, LocalSolverOptions, LaplaceSolverOptions>;
+// The options of any solver or wrapper, whatever their type: the registry knows which type goes
+// with which name (global -> GlobalSolverOptions, local -> LocalSolverOptions, smart_laplace and
+// laplace -> LaplaceSolverOptions, `smart` set by the name), so a new solver brings its own
+// options struct and no list here grows.
+class SolverOptions {
+public:
+    SolverOptions() = default;
+    template <class Options>
+        requires(!std::is_same_v<std::decay_t<Options>, SolverOptions>)
+    SolverOptions(Options options) : value_(std::move(options)) {}
+
+    // The options as `Options`, or nullptr when they are of another type.
+    template <class Options>
+    const Options* get_if() const noexcept {
+        return std::any_cast<Options>(&value_);
+    }
+    template <class Options>
+    Options* get_if() noexcept {
+        return std::any_cast<Options>(&value_);
+    }
+    // The options as `Options`; throws OptionError when they are of another type.
+    template <class Options>
+    const Options& get() const {
+        if (const Options* o = get_if<Options>()) return *o;
+        throw OptionError("these are the options of another solver");
+    }
+    template <class Options>
+    Options& get() {
+        if (Options* o = get_if<Options>()) return *o;
+        throw OptionError("these are the options of another solver");
+    }
+
+private:
+    std::any value_;
+};
 
 struct OptionInfo {
     std::string key;            // as written in a config ("max_iterations")
