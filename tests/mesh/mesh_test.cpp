@@ -2,9 +2,9 @@
 #include <string>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/mesh/openmesh_adapter.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/mesh/mesh.hpp"
 
 namespace pv = paloverde;
 

@@ -6,8 +6,8 @@
 #include <vector>
 
 #include "paloverde/mesh/cell_types.hpp"
-#include "paloverde/mesh/perturb.hpp"
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/mesh/perturb.hpp"
 
 namespace paloverde::test {
 

@@ -12,8 +12,8 @@
 #include <string_view>
 #include <vector>
 
-#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/mesh/orientation.hpp"
 
 namespace paloverde {
 

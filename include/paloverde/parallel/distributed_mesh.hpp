@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "paloverde/mesh/boundary_surface.hpp"
-#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
