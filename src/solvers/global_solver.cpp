@@ -833,15 +833,14 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // (fandisk-100k-boundary: 440 iterations from -0.102 to -0.100). When the inverted count
         // did not fall over the window and, at the window's pace, the worst element would still
         // be inverted when the budget runs out, hand over to local untangling now.
-        const auto window = static_cast<std::size_t>(stop_.progress_window);
         if (untangling_ && progress.spans(best_history_)) {
-            const std::size_t then = best_history_.size() - 1 - window;
-            const double pace = (best_worst_ - best_history_[then]) / static_cast<double>(window);
+            const double pace = progress.pace(best_history_);
             const double left = static_cast<double>(stop_.max_iterations - iteration);
-            if (bad_history_.back() >= bad_history_[then] && best_worst_ + pace * left <= 0.0)
+            if (progress.did_not_fall(bad_history_) && best_worst_ + pace * left <= 0.0)
                 return end(TerminationReason::Converged,
                            "the worst element rose too slowly to become valid within the iteration budget (" +
-                               std::to_string(pace) + " per iteration over the last " + std::to_string(window) + ")");
+                               std::to_string(pace) + " per iteration over the last " +
+                               std::to_string(progress.window()) + ")");
         }
         // Half way up the band, the elements above it start to matter: a new focus.
         if (focusing_ && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {

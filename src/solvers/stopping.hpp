@@ -80,6 +80,11 @@ public:
     bool rose(std::span<const double> history) const {
         return spans(history) && history.back() > history[history.size() - 1 - window_];
     }
+    // The history's mean rise per entry over the window (spans() must hold).
+    double pace(std::span<const double> history) const {
+        return (history.back() - history[history.size() - 1 - window_]) / static_cast<double>(window_);
+    }
+    std::size_t window() const { return window_; }
 
 private:
     std::size_t window_;
