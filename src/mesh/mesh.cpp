@@ -252,9 +252,26 @@ void Mesh::set_fixed(std::vector<std::uint8_t> fixed) {
         throw MeshError("fixed flags: " + std::to_string(fixed.size()) + " given for " +
                         std::to_string(num_vertices()) + " vertices");
     fixed_ = std::move(fixed);
+    freedom_.clear();
 }
 
-void Mesh::fix_boundary() { fixed_ = boundary_vertices(*this); }
+void Mesh::set_degrees_of_freedom(std::vector<std::uint8_t> freedom) {
+    if (freedom.size() != static_cast<std::size_t>(num_vertices()))
+        throw MeshError("degrees of freedom: " + std::to_string(freedom.size()) + " given for " +
+                        std::to_string(num_vertices()) + " vertices");
+    std::vector<std::uint8_t> fixed(freedom.size());
+    for (std::size_t v = 0; v < freedom.size(); ++v) {
+        if (freedom[v] > 3)
+            throw MeshError("vertex " + std::to_string(v) + ": " + std::to_string(freedom[v]) +
+                            " degrees of freedom (at most 3)");
+        fixed[v] = freedom[v] == 0;
+    }
+    set_fixed(std::move(fixed));
+    if (std::any_of(freedom.begin(), freedom.end(), [](std::uint8_t d) { return d == 1 || d == 2; }))
+        freedom_ = std::move(freedom);
+}
+
+void Mesh::fix_boundary() { set_fixed(boundary_vertices(*this)); }
 
 VertexId Mesh::num_free_vertices() const noexcept {
     VertexId count = 0;

@@ -136,12 +136,12 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
     std::vector<VertexId> new_id(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) new_id[order.old_vertex[i]] = i;
     std::vector<double> xyz(3 * static_cast<std::size_t>(n));
-    std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n));
+    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(n));
     std::vector<GlobalId> global(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) {
         const VertexId old = order.old_vertex[i];
         for (int c = 0; c < 3; ++c) xyz[3 * i + c] = mesh.coordinates()[3 * static_cast<std::size_t>(old) + c];
-        fixed[i] = mesh.fixed()[old];
+        freedom[i] = static_cast<std::uint8_t>(mesh.degrees_of_freedom(old));
         global[i] = mesh.global_ids()[old];
     }
     std::vector<VertexId> connectivity;
@@ -149,7 +149,7 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
     for (ElementId old : order.old_element)
         for (VertexId v : mesh.element(old)) connectivity.push_back(new_id[v]);
     Mesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
-    out.set_fixed(std::move(fixed));
+    out.set_degrees_of_freedom(std::move(freedom));
     out.set_global_ids(std::move(global));
     out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
     out.carry_cells_from(mesh, new_id, order.old_element);

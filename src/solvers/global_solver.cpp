@@ -165,8 +165,8 @@ public:
         const VertexId n = work.mesh().num_vertices();
         caller_.assign(static_cast<std::size_t>(n), -1);
         for (VertexId v = 0; v < n; ++v)
-            if (const VertexId id = work.caller_vertex(v); boundary.slides(id)) {
-                caller_[v] = id;
+            if (work.mesh().slides(v)) {
+                caller_[v] = work.caller_vertex(v);
                 vertices_.push_back(v);
             }
     }

@@ -102,7 +102,7 @@ public:
         for (std::size_t i = 0; i < k; ++i) positive_[i] = element_orientation(mesh_, xyz, elements[i]) > 0;
         double* p = &xyz[3 * static_cast<std::size_t>(v)];
         const double length = detail::local_length(mesh_, xyz, v);
-        const bool slides = sliding_ && sliding_->slides(v);
+        const bool slides = sliding_ && mesh_.slides(v);
         double worst = evaluate(xyz, v, true, slides);
         bool moved = false;
         for (int step = 0; step < options_.ascent_steps; ++step) {

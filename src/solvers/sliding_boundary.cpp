@@ -74,19 +74,20 @@ SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options)
     // Whether the fixed flags are exactly the boundary, on every part.
     const bool boundary_fixed = part.reducer().max(on_boundary == fixed_ ? 0.0 : 1.0) == 0.0;
     slides_.assign(n, 0);
-    released_ = fixed_;
+    released_.resize(n);
     for (std::size_t v = 0; v < n; ++v) {
+        released_[v] = fixed_[v] ? 0 : 3;
         const BoundaryRole role = surface_.role(static_cast<VertexId>(v));
         if (role != BoundaryRole::Surface && role != BoundaryRole::Curve) continue;
         if (fixed_[v] && !boundary_fixed) continue;  // fixed by the user's own choice
         slides_[v] = 1;
-        released_[v] = 0;
+        released_[v] = role == BoundaryRole::Surface ? 2 : 1;
     }
 }
 
 SlidingBoundary::~SlidingBoundary() { mesh_.set_fixed(fixed_); }
 
-void SlidingBoundary::release() { mesh_.set_fixed(released_); }
+void SlidingBoundary::release() { mesh_.set_degrees_of_freedom(released_); }
 
 Summary SlidingBoundary::join(Summary fixed, std::optional<Summary> slid) const {
     auto worst_of_all = [](const Summary& s, const QualityReport& r) {

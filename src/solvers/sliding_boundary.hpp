@@ -2,9 +2,10 @@
 // Boundary vertices that slide on the input's boundary (boundary: slide, issue 17). A solver
 // that slides its boundary runs twice: the ordinary run with the boundary fixed (untangling and
 // shape), then a shape run from its result in which the sliding vertices move too
-// (`release()` frees their fixed flags, so that colorings, movable elements and reports count
-// them like any free vertex; a solver keeps each such vertex's moves on its surface patch or
-// feature curve with tangent() and project()). No run lowers the worst element, so the result is
+// (`release()` gives them 2 degrees of freedom on a surface patch, 1 on a feature curve
+// (Mesh::degrees_of_freedom), so that colorings, movable elements and reports count them like any
+// free vertex and a solver knows them by Mesh::slides(); it keeps each such vertex's moves on its
+// patch or curve with tangent() and project()). No run lowers the worst element, so the result is
 // never below the boundary-fixed run's; join() makes one Summary of the two.
 //
 // Which vertices slide: every boundary vertex on a patch or a curve (mesh/boundary_surface.hpp;
@@ -49,14 +50,13 @@ public:
     // rescales it). Collective.
     SlidingBoundary(MeshPart part, const SurfaceOptions& options);
     ~SlidingBoundary();  // gives the mesh its fixed flags back
-    // Frees the fixed flags of the vertices that slide, until destruction.
+    // Gives the vertices that slide their degrees of freedom (2 or 1), until destruction.
     void release();
     SlidingBoundary(const SlidingBoundary&) = delete;
     SlidingBoundary& operator=(const SlidingBoundary&) = delete;
 
     // The run works at unit scale: the input's coordinates times 2^exponent (exact).
     void set_scale_exponent(int exponent) { exponent_ = exponent; }
-    bool slides(VertexId v) const { return slides_[static_cast<std::size_t>(v)] != 0; }
     // At unit scale: the part of a move that stays on v's patch or curve to first order, and the
     // point of v's patch or curve nearest to p.
     Vec3 tangent(VertexId v, const Vec3& d) const { return surface_.tangent(v, d); }
@@ -74,8 +74,8 @@ private:
     Mesh& mesh_;
     BoundarySurface surface_;
     std::vector<std::uint8_t> fixed_;   // the flags the mesh had, given back at the end
-    std::vector<std::uint8_t> released_;  // the flags while the boundary slides
-    std::vector<std::uint8_t> slides_;  // per vertex
+    std::vector<std::uint8_t> released_;  // the degrees of freedom while the boundary slides
+    std::vector<std::uint8_t> slides_;  // per vertex: it slides once released
     std::vector<double> input_;         // the input's coordinates
     double volume_before_ = 0.0;
     int exponent_ = 0;

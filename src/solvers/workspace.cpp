@@ -187,11 +187,11 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
         connectivity.insert(connectivity.end(), corners.begin(), corners.end());
         positions.push_back(element_order_[e]);
     }
-    std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n));
-    for (VertexId v = 0; v < n; ++v) fixed[v] = !moves(v);
+    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(n));
+    for (VertexId v = 0; v < n; ++v) freedom[v] = moves(v) ? static_cast<std::uint8_t>(mesh_.degrees_of_freedom(v)) : 0;
     f.mesh = Mesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
                   std::move(connectivity));
-    f.mesh.set_fixed(std::move(fixed));
+    f.mesh.set_degrees_of_freedom(std::move(freedom));
     if (mesh_.has_cells()) {  // the corners keep their maps
         std::vector<VertexId> same(static_cast<std::size_t>(n));
         std::iota(same.begin(), same.end(), VertexId{0});

@@ -5,6 +5,7 @@
 #include "paloverde/mesh/mesh.hpp"
 #include "paloverde/mesh/openmesh_adapter.hpp"
 #include "paloverde/mesh/orientation.hpp"
+#include "paloverde/mesh/renumber.hpp"
 
 namespace pv = paloverde;
 
@@ -52,6 +53,33 @@ BOOST_AUTO_TEST_CASE(boundary_of_two_tets_is_every_vertex_and_of_a_grid_all_but_
     tris.fix_boundary();
     BOOST_TEST(tris.num_free_vertices() == 1);
     BOOST_TEST(tris.fixed()[4] == 0);
+}
+
+BOOST_AUTO_TEST_CASE(degrees_of_freedom_say_where_a_vertex_moves_and_survive_renumbering) {
+    auto mesh = two_tets();
+    mesh.set_degrees_of_freedom({0, 3, 2, 1, 0});
+    BOOST_TEST(mesh.fixed()[0] == 1);
+    BOOST_TEST(mesh.fixed()[2] == 0);
+    BOOST_TEST(mesh.num_free_vertices() == 3);
+    BOOST_TEST(!mesh.can_move(4));
+    BOOST_TEST(mesh.can_move(3));
+    BOOST_TEST((!mesh.slides(1) && mesh.slides(2) && mesh.slides(3) && !mesh.slides(0)));
+    // A renumbered copy keeps each vertex's freedom under its new id.
+    const auto order = pv::locality_order(mesh);
+    const auto copy = pv::renumbered(mesh, order);
+    for (pv::VertexId v = 0; v < copy.num_vertices(); ++v)
+        BOOST_TEST(copy.degrees_of_freedom(v) == mesh.degrees_of_freedom(order.old_vertex[v]));
+    // Fixed flags alone: 0 or 3 again.
+    mesh.set_fixed({1, 0, 0, 0, 1});
+    BOOST_TEST(mesh.degrees_of_freedom(2) == 3);
+    BOOST_TEST(!mesh.slides(3));
+    try {
+        mesh.set_degrees_of_freedom({0, 3, 4, 1, 0});
+        BOOST_FAIL("no error for 4 degrees of freedom");
+    } catch (const pv::MeshError& e) {
+        BOOST_TEST(message_has(e, "vertex 2"));
+    }
+    BOOST_CHECK_THROW(mesh.set_degrees_of_freedom({0, 3}), pv::MeshError);
 }
 
 BOOST_AUTO_TEST_CASE(planar_triangles_are_oriented_by_the_majority_normal) {

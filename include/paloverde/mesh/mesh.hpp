@@ -91,16 +91,27 @@ public:
     // 1 for vertices that must not move.
     std::span<const std::uint8_t> fixed() const noexcept { return fixed_; }
     // Where a vertex may move, decided here for every solver and assessment: in 3 directions (a
-    // free vertex) or in none (a fixed one). Sliding boundary vertices will take 2 on a surface,
-    // 1 on a feature curve (issue 17): solvers ask can_move(), not the fixed flag.
-    int degrees_of_freedom(VertexId v) const noexcept { return fixed_[v] ? 0 : 3; }
+    // free vertex), 2 (on a surface, a sliding boundary vertex), 1 (along a feature curve) or none
+    // (a fixed one). Solvers ask can_move() and slides(), not the fixed flag.
+    int degrees_of_freedom(VertexId v) const noexcept {
+        return freedom_.empty() ? (fixed_[v] ? 0 : 3) : freedom_[v];
+    }
     bool can_move(VertexId v) const noexcept { return degrees_of_freedom(v) > 0; }
+    // It moves, but on a surface or a curve only.
+    bool slides(VertexId v) const noexcept {
+        const int d = degrees_of_freedom(v);
+        return d == 1 || d == 2;
+    }
+    // Each vertex's degrees of freedom (0 to 3); the fixed flags follow (fixed: 0). Throws
+    // MeshError for a wrong size or a value above 3.
+    void set_degrees_of_freedom(std::vector<std::uint8_t> freedom);
     // Element e has a vertex that can move: the only elements a vertex mover changes (movable).
     bool element_can_move(ElementId e) const noexcept {
         for (VertexId v : element(e))
             if (can_move(v)) return true;
         return false;
     }
+    // Fixed (0) or free (3) only: any surface or curve freedom is dropped.
     void set_fixed(std::vector<std::uint8_t> fixed);
     // Fixes exactly the vertices on the boundary (faces of one cell in 3D, edges of one in 2D).
     void fix_boundary();
@@ -144,6 +155,7 @@ private:
     std::vector<std::int64_t> vertex_element_offsets_{0};
     std::vector<ElementId> vertex_elements_;
     std::vector<std::uint8_t> fixed_;
+    std::vector<std::uint8_t> freedom_;  // empty while every vertex is fixed or free
     std::vector<GlobalId> global_ids_;
     bool planar_ = false;
     Vec3 plane_normal_{0.0, 0.0, 1.0};
