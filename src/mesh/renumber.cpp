@@ -117,17 +117,20 @@ Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t
     std::vector<VertexId> new_id(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) new_id[result.old_vertex[i]] = i;
 
+    // Elements by (group, lowest new vertex id, old id): a counting sort, as the keys are small.
     const ElementId m = mesh.num_elements();
-    std::vector<std::pair<std::int64_t, ElementId>> keys(static_cast<std::size_t>(m));
+    std::vector<std::int64_t> key(static_cast<std::size_t>(m));
+    std::vector<std::int64_t> first_of(2 * (static_cast<std::size_t>(n) + 1) + 1, 0);
     for (ElementId e = 0; e < m; ++e) {
         VertexId lowest = n;
         for (VertexId v : mesh.element(e)) lowest = std::min(lowest, new_id[v]);
         const std::int64_t group = !last_group.empty() && last_group[e] ? 1 : 0;
-        keys[e] = {group * (static_cast<std::int64_t>(n) + 1) + lowest, e};
+        key[e] = group * (static_cast<std::int64_t>(n) + 1) + lowest;
+        ++first_of[static_cast<std::size_t>(key[e]) + 1];
     }
-    std::sort(keys.begin(), keys.end());
+    std::partial_sum(first_of.begin(), first_of.end(), first_of.begin());
     result.old_element.resize(static_cast<std::size_t>(m));
-    for (ElementId i = 0; i < m; ++i) result.old_element[i] = keys[i].second;
+    for (ElementId e = 0; e < m; ++e) result.old_element[first_of[static_cast<std::size_t>(key[e])]++] = e;
     return result;
 }
 
@@ -159,23 +162,32 @@ SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
 std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key) {
     const ElementId m = mesh.num_elements();
     const int k = mesh.corners();
-    std::vector<std::array<GlobalId, 4>> keys(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
-        auto& key = keys[e];
-        key.fill(-1);
-        for (int i = 0; i < k; ++i) key[i] = vertex_key[mesh.element(e)[i]];
-        std::sort(key.begin(), key.begin() + k);
-    }
-    std::vector<ElementId> sorted(static_cast<std::size_t>(m));
-    std::iota(sorted.begin(), sorted.end(), ElementId{0});
-    // Two corners of different cells may share their vertices: their maps tell them apart.
     const auto maps = mesh.corner_maps();
-    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) {
-        if (keys[a] != keys[b] || maps.empty()) return keys[a] < keys[b];
-        return maps[a] < maps[b];
-    });
+    // Sorted in one array with their keys (an order of ids that looks its keys up would miss the
+    // cache at every comparison). Two corners of different cells may share their vertices: their
+    // maps tell them apart; no two elements have the same key and map.
+    struct Keyed {
+        std::array<GlobalId, 4> key;
+        std::uint8_t map;
+        ElementId element;
+        bool operator<(const Keyed& o) const {
+            for (int i = 0; i < 4; ++i)
+                if (key[i] != o.key[i]) return key[i] < o.key[i];
+            return map < o.map;
+        }
+    };
+    std::vector<Keyed> sorted(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        Keyed& entry = sorted[e];
+        entry.key.fill(-1);
+        for (int i = 0; i < k; ++i) entry.key[i] = vertex_key[mesh.element(e)[i]];
+        std::sort(entry.key.begin(), entry.key.begin() + k);
+        entry.map = maps.empty() ? 0 : maps[e];
+        entry.element = e;
+    }
+    std::sort(sorted.begin(), sorted.end());
     std::vector<GlobalId> position(static_cast<std::size_t>(m));
-    for (ElementId i = 0; i < m; ++i) position[sorted[i]] = i;
+    for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
     return position;
 }
 

@@ -95,18 +95,21 @@ Workspace::~Workspace() {
 
 std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                          GlobalId global_elements) {
-    // Movable elements first, each group in canonical order.
+    // Movable elements first, each group in canonical order: the elements in canonical order
+    // (placed by their positions when these number them from 0, as serially; else sorted), then
+    // split stably.
     const ElementId m = mesh_.num_elements();
     std::vector<ElementId> order(static_cast<std::size_t>(m));
     std::iota(order.begin(), order.end(), ElementId{0});
     {
-        std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
-        for (ElementId e = 0; e < m; ++e) movable[e] = mesh_.element_can_move(e);
-        std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
-            if (movable[a] != movable[b]) return movable[a] > movable[b];
-            return element_order[a] < element_order[b];
-        });
-        movable_ = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 1));
+        const bool numbered = std::all_of(element_order.begin(), element_order.end(),
+                                          [m](GlobalId position) { return position >= 0 && position < m; });
+        if (numbered)
+            for (ElementId e = 0; e < m; ++e) order[static_cast<std::size_t>(element_order[e])] = e;
+        else
+            std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
+        const auto frozen = std::stable_partition(order.begin(), order.end(), [&](ElementId e) { return mesh_.element_can_move(e); });
+        movable_ = static_cast<ElementId>(frozen - order.begin());
     }
     mesh_ = reordered_elements(mesh_, order);
     element_order = permuted(element_order, order);
