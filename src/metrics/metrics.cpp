@@ -2,6 +2,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/prefetch.hpp"
 #include "kernels.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
@@ -73,19 +74,6 @@ void gather(const VertexId* c, const double* coords, const std::uint8_t* maps, E
     if (maps && maps[e]) map_corner<K>(corner_map(maps[e]), x);
 }
 
-// How many elements ahead a pass asks for the corners it will gather: a mesh in file order
-// (before any renumbering) scatters an element's vertices over memory, and the loads of one
-// element would otherwise wait on the cache one after another.
-constexpr ElementId kPrefetchAhead = 8;
-template <int K>
-void prefetch_corners(const VertexId* c, const double* coords) {
-    for (int i = 0; i < K; ++i) {
-        const double* p = coords + 3 * static_cast<std::size_t>(c[i]);
-        __builtin_prefetch(p);
-        __builtin_prefetch(p + 2);  // the vertex may straddle two cache lines
-    }
-}
-
 // The element-by-element passes, for kernels and for a program's own metrics alike: each
 // element's K corners gathered into a small buffer, rated by rate(kind tag, e, corners, gradient
 // or nullptr), and its weighted gradient scattered.
@@ -97,7 +85,8 @@ void rate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId f
     const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
     double x[3 * K];
     for (ElementId e = first; e < last; ++e) {
-        if (e + kPrefetchAhead < last) prefetch_corners<K>(conn + static_cast<std::size_t>(e + kPrefetchAhead) * K, coords);
+        if (e + detail::kPrefetchAhead < last)
+            detail::prefetch_corners(conn + static_cast<std::size_t>(e + detail::kPrefetchAhead) * K, K, coords);
         gather<K>(conn + static_cast<std::size_t>(e) * K, coords, maps, e, x);
         quality[e - first] = rate(std::integral_constant<int, K>{}, e, x, nullptr);
     }
@@ -241,7 +230,11 @@ private:
     // block hold a degenerate element at the origin, which rates 0 without trouble.
     // A cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits).
     void gather_block(const VertexId* conn, const double* coords, const std::uint8_t* maps, ElementId first, int count,
-                      TetBlock& x, double* reference_volume) const {
+                      TetBlock& x, double* reference_volume, ElementId last) const {
+        // While this block is rated, the next one's corners come in.
+        if (const ElementId next = first + count; next < last)
+            detail::prefetch_corners(conn + 4 * static_cast<std::size_t>(next),
+                                     4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
         gather_tets(conn + 4 * static_cast<std::size_t>(first), coords, count, x);
         if (maps)
             for (int j = 0; j < count; ++j)
@@ -263,7 +256,7 @@ private:
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
             kernel_.tet_block(path_, x, reference_volume, q, nullptr);
             std::copy(q, q + count, quality + (b - first));
         }
@@ -279,7 +272,7 @@ private:
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
             kernel_.tet_block(path_, x, reference_volume, q, &g);
             for (int j = 0; j < count; ++j) {
                 const ElementId e = b + j;
