@@ -10,32 +10,49 @@ VertexGraph vertex_graph(const SimplexMesh& mesh) { return vertex_graph(mesh, fa
 
 VertexGraph vertex_graph(const SimplexMesh& mesh, bool cell_edges) {
     cell_edges = cell_edges && mesh.has_cells();
-    VertexGraph graph;
-    const VertexId n = mesh.num_vertices();
-    graph.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
-    // One pass: each vertex's distinct neighbours, sorted, appended in vertex order. By Euler's
-    // formula a mesh has about as many edges as vertices and elements together (plus half its
-    // boundary faces), and each edge is listed twice.
-    graph.neighbours.reserve(2 * (static_cast<std::size_t>(n) + static_cast<std::size_t>(mesh.num_elements())) +
-                             static_cast<std::size_t>(n) / 2);
-    // seen[w] == v + 1 once w is listed for v: each neighbour is kept once, and only the short
-    // list of distinct ones is sorted.
-    std::vector<VertexId> seen(static_cast<std::size_t>(n), 0);
-    for (VertexId v = 0; v < n; ++v) {
-        const auto begin = graph.neighbours.size();
-        for (ElementId e : mesh.elements_of(v)) {
-            const auto corner = mesh.element(e);
-            for (VertexId w : corner) {
-                // A cell's edges join a corner's vertex to its frame's others (cell_types.hpp).
-                if (cell_edges && corner[0] != v && w != corner[0]) continue;
-                if (w != v && seen[w] != v + 1) {
-                    seen[w] = v + 1;
-                    graph.neighbours.push_back(w);
-                }
-            }
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    const auto k = static_cast<std::size_t>(mesh.corners());
+    const auto connectivity = mesh.connectivity();
+    // Every element's edges, each at its lower end, in passes over the elements in order (rows
+    // counted first): reading the elements around each vertex instead would miss the cache at
+    // nearly every element. A cell's edges join a corner's vertex to its frame's others
+    // (cell_types.hpp).
+    auto for_each_edge = [&](auto visit) {
+        for (std::size_t at = 0; at < connectivity.size(); at += k) {
+            const VertexId* c = connectivity.data() + at;
+            for (std::size_t i = 0; i < (cell_edges ? 1 : k); ++i)
+                for (std::size_t j = i + 1; j < k; ++j) visit(std::min(c[i], c[j]), std::max(c[i], c[j]));
         }
-        std::sort(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(begin), graph.neighbours.end());
-        graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(graph.neighbours.size());
+    };
+    std::vector<std::int64_t> row(n + 1, 0);
+    for_each_edge([&](VertexId low, VertexId) { ++row[static_cast<std::size_t>(low) + 1]; });
+    std::partial_sum(row.begin(), row.end(), row.begin());
+    std::vector<VertexId> higher(static_cast<std::size_t>(row[n]));
+    {
+        std::vector<std::int64_t> next(row.begin(), row.end() - 1);
+        for_each_edge([&](VertexId low, VertexId high) { higher[static_cast<std::size_t>(next[static_cast<std::size_t>(low)]++)] = high; });
+    }
+    // Each row sorted, without repeats, in place: a vertex's higher neighbours. Its lower ones are
+    // the vertices in whose rows it appears.
+    std::vector<std::int64_t> higher_end(n), lower(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+        const auto first = higher.begin() + row[v];
+        std::sort(first, higher.begin() + row[v + 1]);
+        const auto last = std::unique(first, higher.begin() + row[v + 1]);
+        higher_end[v] = last - higher.begin();
+        for (auto w = first; w != last; ++w) ++lower[static_cast<std::size_t>(*w)];
+    }
+    // Each vertex's list, sorted: its lower neighbours in increasing order, then its higher ones.
+    VertexGraph graph;
+    graph.offsets.assign(n + 1, 0);
+    for (std::size_t v = 0; v < n; ++v) graph.offsets[v + 1] = graph.offsets[v] + lower[v] + (higher_end[v] - row[v]);
+    graph.neighbours.resize(static_cast<std::size_t>(graph.offsets[n]));
+    std::vector<std::int64_t> next_lower(graph.offsets.begin(), graph.offsets.end() - 1);
+    for (std::size_t v = 0; v < n; ++v) {
+        const auto first = higher.begin() + row[v], last = higher.begin() + higher_end[v];
+        std::copy(first, last, graph.neighbours.begin() + graph.offsets[v] + lower[v]);
+        for (auto w = first; w != last; ++w)
+            graph.neighbours[static_cast<std::size_t>(next_lower[static_cast<std::size_t>(*w)]++)] = static_cast<VertexId>(v);
     }
     return graph;
 }
