@@ -120,8 +120,10 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
             if (counted[e]) counted_.push_back(e);
     global_movable_ = reducer_->total(static_cast<double>(counted.empty() ? movable_ : counted_.size()));
 
-    // The metric scale: the mean absolute element volume over the whole mesh, summed exactly.
-    scale_ = MetricScale::of(mesh_);
+    // The metric scale: the mean absolute element volume over the whole mesh, summed exactly
+    // (the reference volume is this sum's, so MetricScale::of's rounded one need not be made).
+    scale_.oriented_triangles = mesh_.kind() == ElementKind::Tetrahedron || mesh_.is_planar();
+    scale_.plane_normal = mesh_.plane_normal();
     {
         const std::vector<double> volume = absolute_volumes();
         ExactSum sum;
