@@ -135,7 +135,7 @@ QualityAssessor::QualityAssessor(const std::vector<std::string>& metric_names, i
     for (const auto& name : names_) make_metric(name);  // unknown names fail here, not mid-run
 }
 
-QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const double> xyz) const {
+QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> xyz) const {
     const Reducer serial;
     return assess(mesh, xyz, {}, {}, serial, mesh.plane_normal());
 }
@@ -148,7 +148,7 @@ QualityReport QualityAssessor::assess(const MeshPart& whole_or_part) const {
     return assess(part.mesh, part.mesh.coordinates(), part.counted, owned, part.reducer(), part.plane_normal);
 }
 
-QualityReport QualityAssessor::assess(const SimplexMesh& mesh, std::span<const double> xyz,
+QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> xyz,
                                       std::span<const std::uint8_t> counted, std::span<const std::uint8_t> owned,
                                       const Reducer& reducer, const Vec3& plane_normal) const {
     const bool distributed = !counted.empty();

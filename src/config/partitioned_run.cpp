@@ -281,7 +281,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
                 part.write_pieces(r.mesh_written);
             } else if (pieces) {
                 // No rank has the whole mesh: rank 0 builds it from the parts for this write only.
-                SimplexMesh whole;
+                Mesh whole;
                 together(comm, true, [&] { whole = part.gather_whole(); });
                 together(comm, rank == 0, [&] { write_mesh(r.mesh_written, whole, write); });
             } else {

@@ -72,7 +72,7 @@ MeshFile read_input(const RunSpec& spec) {
     read.fix_boundary = in.fixed != FixedVertices::None;
     read.orientation = in.orientation;
     MeshFile file = read_mesh(in.mesh, read);
-    SimplexMesh& mesh = file.mesh;
+    Mesh& mesh = file.mesh;
     switch (in.fixed) {
         case FixedVertices::Auto: break;
         case FixedVertices::Boundary: mesh.fix_boundary(); break;

@@ -762,7 +762,7 @@ RawMesh read_gmsh(const std::string& path) { return GmshReader(path).read(); }
 // tag 0 (no physical group) and elementary tag 1. Binary data is written in the host's byte
 // order, which the endianness marker records.
 void write_gmsh(std::ostream& stream, const MeshToWrite& data, Encoding encoding) {
-    const SimplexMesh& mesh = data.mesh;
+    const Mesh& mesh = data.mesh;
     const bool binary = encoding == Encoding::Binary;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const std::size_t m = data.cells();

@@ -251,7 +251,7 @@ RawMesh read_medit(const std::string& path) { return MeditReader(path).read(); }
 // fields; the fixed flags come back by boundary detection. Each cell type has a section of its
 // own, in the order of cell_types.hpp: a mixed mesh's cells come back grouped by type.
 void write_medit(std::ostream& stream, const MeshToWrite& data) {
-    const SimplexMesh& mesh = data.mesh;
+    const Mesh& mesh = data.mesh;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const std::size_t m = data.cells();
     const std::vector<std::int64_t> vertex_refs = references(data.point_fields, n, "point");

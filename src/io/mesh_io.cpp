@@ -63,7 +63,7 @@ std::string listed(const std::vector<Id>& ids) {
 // for an interior one). One pass over the elements lists each face at its smallest vertex, in
 // rows counted beforehand, so the lists to sort are short; reading the elements in order rather
 // than around each vertex keeps the pass out of the cache misses of the vertex-to-element lists.
-std::vector<std::uint8_t> manifold_boundary(const SimplexMesh& mesh, const std::string& path) {
+std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string& path) {
     const int k = mesh.corners();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const auto connectivity = mesh.connectivity();
@@ -135,7 +135,7 @@ std::vector<std::uint8_t> manifold_boundary(const SimplexMesh& mesh, const std::
 // The same for a mesh with cells: every face (an edge in 2D) of every cell, as its sorted
 // vertices, sorted together. A face of one cell is on the boundary; one of three or more is
 // refused. (A triangle of a tetrahedron and of a pyramid or wedge are the same face.)
-std::vector<std::uint8_t> manifold_cell_boundary(const SimplexMesh& mesh, const std::string& path) {
+std::vector<std::uint8_t> manifold_cell_boundary(const Mesh& mesh, const std::string& path) {
     struct Face {
         std::array<VertexId, 4> vertices;  // sorted, then -1
         ElementId cell;
@@ -302,7 +302,7 @@ MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& 
 
     MeshFile out;
     try {
-        out.mesh = SimplexMesh::from_cells(std::move(raw.coordinates), raw.cell_types, std::move(raw.cell_connectivity));
+        out.mesh = Mesh::from_cells(std::move(raw.coordinates), raw.cell_types, std::move(raw.cell_connectivity));
         check_no_duplicate_elements(out.mesh);
     } catch (const MeshError& e) {
         throw FileError(path, 0, e.what());
@@ -366,7 +366,7 @@ MeshFile read_mesh(const std::filesystem::path& path, const ReadOptions& options
 }
 
 void write_mesh(const std::filesystem::path& path,
-                const SimplexMesh& mesh,
+                const Mesh& mesh,
                 const WriteOptions& options,
                 std::span<const Field> point_fields,
                 std::span<const Field> cell_fields) {

@@ -54,7 +54,7 @@ std::string handled_cells(int CellInfo::*code);
 // their vertices are in `connectivity`, in the canonical order of the file's convention (mirrored
 // back for a mesh flipped on reading).
 struct MeshToWrite {
-    const SimplexMesh& mesh;
+    const Mesh& mesh;
     std::span<const VertexId> connectivity;  // every cell's vertices, cell after cell
     std::span<const Field> point_fields;     // includes `fixed` when requested
     std::span<const Field> cell_fields;      // one tuple per cell

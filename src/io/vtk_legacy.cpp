@@ -581,7 +581,7 @@ RawMesh read_vtk_legacy(const std::string& path) {
 void write_vtk_legacy(std::ostream& stream, const MeshToWrite& data, Encoding encoding) {
     vtk::check_unique_names(data.point_fields, "point", true);
     vtk::check_unique_names(data.cell_fields, "cell", true);
-    const SimplexMesh& mesh = data.mesh;
+    const Mesh& mesh = data.mesh;
     const bool binary = encoding == Encoding::Binary;
     LegacyWriter w(stream, binary);
     vtk::Output& out = w.out();

@@ -521,7 +521,7 @@ private:
 
     vtk::Output out_;
     const MeshToWrite& data_;
-    const SimplexMesh& mesh_;
+    const Mesh& mesh_;
     bool binary_;
     std::vector<ArrayToWrite> appended_;
 };

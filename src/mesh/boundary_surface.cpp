@@ -122,7 +122,7 @@ BoundarySurface::~BoundarySurface() = default;
 BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
 BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
 
-BoundaryFacets BoundaryFacets::of(const SimplexMesh& mesh) {
+BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
     BoundaryFacets out;
     out.kind = mesh.kind();
     const bool tets = out.kind == ElementKind::Tetrahedron;
@@ -178,7 +178,7 @@ std::vector<GlobalId> identity(VertexId n) {
 }
 }  // namespace
 
-BoundarySurface::BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& options)
+BoundarySurface::BoundarySurface(const Mesh& mesh, const SurfaceOptions& options)
     : BoundarySurface(BoundaryFacets::of(mesh), identity(mesh.num_vertices()), options) {}
 
 BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,

@@ -31,7 +31,7 @@ Kernel::Point_3 point3(std::span<const double> xyz, VertexId v) {
 
 // A planar mesh's triangles keep their orientation when projected onto the coordinate plane most
 // aligned with the mesh plane, flipped if the normal points down that axis.
-int planar_triangle_orientation(const SimplexMesh& mesh, std::span<const double> xyz, std::span<const VertexId> c) {
+int planar_triangle_orientation(const Mesh& mesh, std::span<const double> xyz, std::span<const VertexId> c) {
     const Vec3& n = mesh.plane_normal();
     int axis = 0;
     for (int i = 1; i < 3; ++i)
@@ -64,7 +64,7 @@ TetDeterminant tet_determinant(const double* p0, const double* p1, const double*
 }
 }  // namespace
 
-int element_orientation(const SimplexMesh& mesh, std::span<const double> xyz, ElementId element) {
+int element_orientation(const Mesh& mesh, std::span<const double> xyz, ElementId element) {
     const auto c = mesh.element(element);
     if (mesh.kind() == ElementKind::Tetrahedron) {
         // A filter ahead of CGAL's predicate: a determinant farther from zero than its error bound
@@ -85,7 +85,7 @@ int element_orientation(const SimplexMesh& mesh, std::span<const double> xyz, El
     return CGAL::collinear(point3(xyz, c[0]), point3(xyz, c[1]), point3(xyz, c[2])) ? 0 : 1;
 }
 
-OrientationCounts count_orientations(const SimplexMesh& mesh, std::span<const double> xyz) {
+OrientationCounts count_orientations(const Mesh& mesh, std::span<const double> xyz) {
     // A cell is as oriented as its worst corner.
     std::vector<std::int8_t> cell(static_cast<std::size_t>(mesh.num_cells()), 1);
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
@@ -110,7 +110,7 @@ std::string_view to_string(OrientationMode mode) {
 }
 
 
-SignedMeasure signed_measure(const SimplexMesh& mesh, std::span<const double> xyz, int scale_exponent,
+SignedMeasure signed_measure(const Mesh& mesh, std::span<const double> xyz, int scale_exponent,
                              const Vec3& plane_normal, std::span<const std::uint8_t> counted) {
     const bool tets = mesh.kind() == ElementKind::Tetrahedron;
     int axis = 0;
@@ -168,7 +168,7 @@ OrientationDecision decide_orientation(OrientationMode mode, bool oriented, cons
     return d;
 }
 
-OrientationDecision orient(SimplexMesh& mesh, OrientationMode mode) {
+OrientationDecision orient(Mesh& mesh, OrientationMode mode) {
     const bool oriented = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
     SignedMeasure measure;
     if (oriented) measure = signed_measure(mesh, mesh.coordinates(), unit_scale_exponent(mesh.coordinates()), mesh.plane_normal());

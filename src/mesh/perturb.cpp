@@ -15,7 +15,7 @@ void PerturbOptions::validate() const {
     if (!interior && !boundary) throw OptionError("choose interior vertices, boundary vertices or both");
 }
 
-VertexId perturb(SimplexMesh& mesh, const PerturbOptions& options) {
+VertexId perturb(Mesh& mesh, const PerturbOptions& options) {
     options.validate();
     const VertexGraph graph = vertex_graph(mesh, true);
     const bool planar = mesh.kind() == ElementKind::Triangle;

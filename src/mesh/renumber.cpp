@@ -6,9 +6,9 @@
 
 namespace paloverde {
 
-VertexGraph vertex_graph(const SimplexMesh& mesh) { return vertex_graph(mesh, false); }
+VertexGraph vertex_graph(const Mesh& mesh) { return vertex_graph(mesh, false); }
 
-VertexGraph vertex_graph(const SimplexMesh& mesh, bool cell_edges) {
+VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
     cell_edges = cell_edges && mesh.has_cells();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const auto k = static_cast<std::size_t>(mesh.corners());
@@ -97,7 +97,7 @@ VertexId pseudo_peripheral(const VertexGraph& g, VertexId start) {
 
 }  // namespace
 
-Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t> last_group) {
+Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_group) {
     const VertexGraph g = vertex_graph(mesh);
     const VertexId n = mesh.num_vertices();
     const auto degree = [&](VertexId v) { return g.offsets[v + 1] - g.offsets[v]; };
@@ -151,7 +151,7 @@ Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t
     return result;
 }
 
-SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
+Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
     const VertexId n = mesh.num_vertices();
     std::vector<VertexId> new_id(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) new_id[order.old_vertex[i]] = i;
@@ -168,7 +168,7 @@ SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
     connectivity.reserve(mesh.connectivity().size());
     for (ElementId old : order.old_element)
         for (VertexId v : mesh.element(old)) connectivity.push_back(new_id[v]);
-    SimplexMesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
+    Mesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
     out.set_fixed(std::move(fixed));
     out.set_global_ids(std::move(global));
     out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
@@ -176,7 +176,7 @@ SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order) {
     return out;
 }
 
-std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key) {
+std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<const GlobalId> vertex_key) {
     const ElementId m = mesh.num_elements();
     const int k = mesh.corners();
     const auto maps = mesh.corner_maps();

@@ -6,7 +6,7 @@
 #include "kernels.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -78,7 +78,7 @@ void gather(const VertexId* c, const double* coords, const std::uint8_t* maps, E
 // element's K corners gathered into a small buffer, rated by rate(kind tag, e, corners, gradient
 // or nullptr), and its weighted gradient scattered.
 template <int K, class Rate>
-void rate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
+void rate_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
                Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
@@ -93,7 +93,7 @@ void rate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId f
 }
 
 template <int K, bool Curvature, class Rate>
-void accumulate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+void accumulate_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                      const QualityMetric::GradientTarget& target, Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
@@ -113,14 +113,14 @@ void accumulate_each(const SimplexMesh& mesh, std::span<const double> xyz, Eleme
 
 // The two passes over any mesh: K from its kind, curvature when the target asks for it.
 template <class Rate>
-void evaluate_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
+void evaluate_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, double* quality,
                    Rate&& rate) {
     if (mesh.kind() == ElementKind::Tetrahedron) rate_each<4>(mesh, xyz, first, last, quality, rate);
     else rate_each<3>(mesh, xyz, first, last, quality, rate);
 }
 
 template <class Rate>
-void accumulate_gradient_each(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+void accumulate_gradient_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                               const QualityMetric::GradientTarget& target, Rate&& rate) {
     const bool curvature = target.curvature && target.curvature_weight;
     if (mesh.kind() == ElementKind::Tetrahedron) {
@@ -164,7 +164,7 @@ public:
                                                 : kernel_.tri(corners, gradient, scale_);
     }
 
-    void evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+    void evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                   double* quality) const override {
         if constexpr (kHasBlocks) {
             if (blocks_pay(mesh, first, last)) return evaluate_blocks(mesh, xyz, first, last, quality);
@@ -175,7 +175,7 @@ public:
         });
     }
 
-    void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+    void accumulate_gradient(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                              const GradientTarget& target) const override {
         require_gradient();
         const bool curvature = target.curvature && target.curvature_weight;
@@ -199,7 +199,7 @@ private:
 
     // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
     // time, and a block of one would cost 16. (Both paths give the same bits.)
-    static bool blocks_pay(const SimplexMesh& mesh, ElementId first, ElementId last) {
+    static bool blocks_pay(const Mesh& mesh, ElementId first, ElementId last) {
         return mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock;
     }
 
@@ -248,7 +248,7 @@ private:
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
 
-    void evaluate_blocks(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+    void evaluate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                          double* quality) const {
         const VertexId* conn = mesh.connectivity().data();
         const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
@@ -264,7 +264,7 @@ private:
 
     // Adds to the target in the order accumulate_each does: bit for bit the same sums.
     template <bool Curvature>
-    void accumulate_blocks(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+    void accumulate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                            const GradientTarget& target) const {
         const VertexId* conn = mesh.connectivity().data();
         const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
@@ -296,9 +296,9 @@ private:
 }  // namespace
 }  // namespace metrics
 
-MetricScale MetricScale::of(const SimplexMesh& mesh) { return of(mesh, mesh.coordinates()); }
+MetricScale MetricScale::of(const Mesh& mesh) { return of(mesh, mesh.coordinates()); }
 
-MetricScale MetricScale::of(const SimplexMesh& mesh, std::span<const double> coordinates) {
+MetricScale MetricScale::of(const Mesh& mesh, std::span<const double> coordinates) {
     MetricScale scale;
     scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
     scale.plane_normal = mesh.plane_normal();
@@ -321,7 +321,7 @@ void MetricOptions::validate() const {
         throw OptionError("hybrid_sharpness must be a positive number (got " + std::to_string(hybrid_sharpness) + ")");
 }
 
-double QualityMetric::element_value(const SimplexMesh& mesh, std::span<const double> xyz, ElementId e,
+double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xyz, ElementId e,
                                    double* gradient) const {
     const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
     const VertexId* c = mesh.connectivity().data() + static_cast<std::size_t>(e) * mesh.corners();
@@ -337,14 +337,14 @@ double QualityMetric::element_value(const SimplexMesh& mesh, std::span<const dou
                                                    : rate(std::integral_constant<int, 3>{});
 }
 
-void ElementMetric::evaluate(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+void ElementMetric::evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                              double* quality) const {
     const ElementKind kind = mesh.kind();
     metrics::evaluate_each(mesh, xyz, first, last, quality,
                            [&](auto, ElementId, const double* x, double*) { return value(kind, x); });
 }
 
-void ElementMetric::accumulate_gradient(const SimplexMesh& mesh, std::span<const double> xyz, ElementId first,
+void ElementMetric::accumulate_gradient(const Mesh& mesh, std::span<const double> xyz, ElementId first,
                                         ElementId last, const GradientTarget& target) const {
     if (!has_gradient()) throw OptionError("metric '" + std::string(name()) + "' has no gradient");
     const ElementKind kind = mesh.kind();

@@ -35,7 +35,7 @@ struct CanonicalOrders {
     std::vector<std::int64_t> first_corner;   // a mesh with cells: per cell, its first corner in `element`
 };
 
-CanonicalOrders canonical_orders(const SimplexMesh& whole, std::vector<GlobalId> canonical) {
+CanonicalOrders canonical_orders(const Mesh& whole, std::vector<GlobalId> canonical) {
     CanonicalOrders orders;
     orders.element = canonical_element_positions(whole, canonical);
     if (whole.has_cells()) {
@@ -63,7 +63,7 @@ CanonicalOrders canonical_orders(const SimplexMesh& whole, std::vector<GlobalId>
 
 // Rank 0: splits the whole mesh into the ranks' parts. Each part holds the cells (the elements,
 // without cells) that touch a vertex it owns.
-std::vector<PartArrays> split(const SimplexMesh& whole, const CanonicalOrders& orders, std::span<const int> part, int ranks) {
+std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, std::span<const int> part, int ranks) {
     const bool with_cells = whole.has_cells();
     const std::span<const GlobalId> canonical = orders.vertex;
     // Each part's cells, counted first so that each list is allocated once.
@@ -140,7 +140,7 @@ struct WholeSplit {
     std::vector<VertexId> original_vertex;  // canonical id -> index in the whole mesh
 };
 
-WholeSplit split_whole(const SimplexMesh& whole, int ranks) {
+WholeSplit split_whole(const Mesh& whole, int ranks) {
     if (whole.num_vertices() < ranks)
         throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
                           std::to_string(ranks) + " processes: use at most as many processes as vertices");
@@ -204,7 +204,7 @@ DistributedMesh::~DistributedMesh() = default;
 DistributedMesh::DistributedMesh(DistributedMesh&&) noexcept = default;
 DistributedMesh& DistributedMesh::operator=(DistributedMesh&&) noexcept = default;
 
-DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const SimplexMesh* whole, const DistributeOptions& options) {
+DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const DistributeOptions& options) {
     options.validate();
     DistributedMesh out;
     out.comm = comm;
@@ -384,7 +384,7 @@ void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
     });
 }
 
-void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path) {
+void DistributedMesh::write_partitioned(const Mesh& whole, int parts, const std::filesystem::path& path) {
     if (path.extension() != ".pvtu" && path.extension() != ".vtk")
         throw OptionError("pieces are written as OUT.pvtu (with OUT/OUT_<rank>.vtu) or Mesquite-style OUT.vtk "
                           "(OUT_<rank>.vtk); got '" + path.string() + "'");
@@ -393,7 +393,7 @@ void DistributedMesh::write_partitioned(const SimplexMesh& whole, int parts, con
     const ElementKind kind = whole.kind();
     for (int p = 0; p < parts; ++p) {
         PartArrays& arrays = split.parts[p];
-        SimplexMesh piece = part_mesh(arrays, kind);
+        Mesh piece = part_mesh(arrays, kind);
         piece.set_elements_flipped(whole.elements_flipped());
         write_piece(piece_path(path, p), piece, arrays.owner, counted_cells(piece, arrays.owner, p), p,
                     path.extension() != ".pvtu");
@@ -475,7 +475,7 @@ void DistributedMesh::owned_vertices(std::vector<std::int64_t>& ids, std::vector
         }
 }
 
-void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
+void DistributedMesh::gather_coordinates(Mesh* whole) const {
     std::vector<std::int64_t> ids;
     std::vector<double> xyz;
     owned_vertices(ids, xyz);
@@ -492,7 +492,7 @@ void DistributedMesh::gather_coordinates(SimplexMesh* whole) const {
     }
 }
 
-SimplexMesh DistributedMesh::gather_whole() const {
+Mesh DistributedMesh::gather_whole() const {
     // Vertices first, their buffers freed before the elements come: rank 0 holds the gathered
     // arrays of one kind at a time next to the mesh it builds.
     std::vector<double> coordinates;
@@ -555,8 +555,8 @@ SimplexMesh DistributedMesh::gather_whole() const {
         for (std::size_t i = 0; i < vertices_of(at); ++i) connectivity[first + i] = static_cast<VertexId>(all_records[at + head + i]);
     }
     std::vector<std::int64_t>().swap(all_records);  // before the mesh builds its adjacency
-    SimplexMesh whole = cells ? SimplexMesh::from_cells(std::move(coordinates), types, std::move(connectivity))
-                              : SimplexMesh(mesh.kind(), std::move(coordinates), std::move(connectivity));
+    Mesh whole = cells ? Mesh::from_cells(std::move(coordinates), types, std::move(connectivity))
+                              : Mesh(mesh.kind(), std::move(coordinates), std::move(connectivity));
     whole.set_fixed(std::move(fixed));
     whole.set_elements_flipped(mesh.elements_flipped());  // written back in the pieces' convention
     return whole;

@@ -11,7 +11,7 @@ const Reducer kWholeMeshReducer;
 const Halo kNoGhosts;
 }  // namespace
 
-MeshPart::MeshPart(SimplexMesh& whole) : mesh_(&whole), reducer_(&kWholeMeshReducer), halo_(&kNoGhosts) {}
+MeshPart::MeshPart(Mesh& whole) : mesh_(&whole), reducer_(&kWholeMeshReducer), halo_(&kNoGhosts) {}
 
 MeshPart::MeshPart(DistributedMesh& part)
     : mesh_(&part.mesh), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}

@@ -14,7 +14,7 @@
 
 namespace paloverde {
 
-std::vector<int> partition_vertices(const SimplexMesh& mesh, int parts) {
+std::vector<int> partition_vertices(const Mesh& mesh, int parts) {
     const VertexId n = mesh.num_vertices();
     if (parts < 1) throw OptionError("the number of parts must be at least 1 (got " + std::to_string(parts) + ")");
     if (parts > n)
@@ -83,7 +83,7 @@ std::vector<int> color_process_graph(int parts, std::span<const std::pair<int, i
     return color;
 }
 
-PartitionStatistics partition_statistics(const SimplexMesh& mesh, std::span<const int> part, int parts) {
+PartitionStatistics partition_statistics(const Mesh& mesh, std::span<const int> part, int parts) {
     PartitionStatistics stats;
     stats.parts = parts;
     // Part p holds every cell (element, without cells) touching a vertex it owns; the other

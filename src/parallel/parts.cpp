@@ -6,26 +6,26 @@
 
 namespace paloverde::parallel {
 
-SimplexMesh part_mesh(PartArrays& arrays, ElementKind kind) {
+Mesh part_mesh(PartArrays& arrays, ElementKind kind) {
     static_assert(std::is_same_v<std::int32_t, VertexId> && std::is_same_v<std::int64_t, GlobalId> &&
                   sizeof(CellType) == 1, "the part's arrays are moved into the mesh, not copied");
-    SimplexMesh mesh;
+    Mesh mesh;
     if (arrays.cell_types.empty()) {
-        mesh = SimplexMesh(kind, std::move(arrays.coordinates), std::move(arrays.connectivity));
+        mesh = Mesh(kind, std::move(arrays.coordinates), std::move(arrays.connectivity));
     } else {
         std::vector<CellType> types(arrays.cell_types.size());
         std::transform(arrays.cell_types.begin(), arrays.cell_types.end(), types.begin(),
                        [](std::uint8_t t) { return static_cast<CellType>(t); });
         std::vector<std::uint8_t>().swap(arrays.cell_types);
         // Kept as cells even if this part's are all simplices: every part is rated as the whole.
-        mesh = SimplexMesh::from_cells(std::move(arrays.coordinates), types, std::move(arrays.cell_connectivity), true);
+        mesh = Mesh::from_cells(std::move(arrays.coordinates), types, std::move(arrays.cell_connectivity), true);
     }
     mesh.set_fixed(std::move(arrays.fixed));
     mesh.set_global_ids(std::move(arrays.canonical));
     return mesh;
 }
 
-std::vector<std::uint8_t> counted_cells(const SimplexMesh& mesh, std::span<const std::int32_t> owner, int rank) {
+std::vector<std::uint8_t> counted_cells(const Mesh& mesh, std::span<const std::int32_t> owner, int rank) {
     std::vector<std::uint8_t> counted(static_cast<std::size_t>(mesh.num_cells()));
     for (ElementId c = 0; c < mesh.num_cells(); ++c) {
         const auto vertices = mesh.cell(c);
@@ -34,13 +34,13 @@ std::vector<std::uint8_t> counted_cells(const SimplexMesh& mesh, std::span<const
     return counted;
 }
 
-std::vector<std::uint8_t> per_element(const SimplexMesh& mesh, std::span<const std::uint8_t> per_cell) {
+std::vector<std::uint8_t> per_element(const Mesh& mesh, std::span<const std::uint8_t> per_cell) {
     std::vector<std::uint8_t> out(static_cast<std::size_t>(mesh.num_elements()));
     for (ElementId e = 0; e < mesh.num_elements(); ++e) out[e] = per_cell[mesh.cell_of(e)];
     return out;
 }
 
-void append_element_key(const SimplexMesh& mesh, ElementId e, int width, std::vector<std::int64_t>& keys) {
+void append_element_key(const Mesh& mesh, ElementId e, int width, std::vector<std::int64_t>& keys) {
     const auto at = keys.size();
     keys.resize(at + static_cast<std::size_t>(width), -1);
     const auto corners = mesh.element(e);

@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde::parallel {
 
@@ -25,19 +25,19 @@ struct PartArrays {
 };
 
 // The part's mesh from its arrays (moved out of them), with its fixed flags and global ids.
-SimplexMesh part_mesh(PartArrays& arrays, ElementKind kind);
+Mesh part_mesh(PartArrays& arrays, ElementKind kind);
 // Per cell of a part's mesh (per element without cells): counted by `rank`, the owner of its
 // vertex with the smallest canonical id (the first in local order: vertices are sorted by it).
-std::vector<std::uint8_t> counted_cells(const SimplexMesh& mesh, std::span<const std::int32_t> owner, int rank);
+std::vector<std::uint8_t> counted_cells(const Mesh& mesh, std::span<const std::int32_t> owner, int rank);
 // Per element: its cell's flag.
-std::vector<std::uint8_t> per_element(const SimplexMesh& mesh, std::span<const std::uint8_t> per_cell);
+std::vector<std::uint8_t> per_element(const Mesh& mesh, std::span<const std::uint8_t> per_cell);
 
 // Canonical keys, `width` values each, flat: an element's sorted global ids padded with -1 to 4
 // (and its corner map, for a mesh with cells: corners of two cells may share their vertices); a
 // cell's sorted global ids padded with -1 to 8, then its type. Sorted keys give the canonical
 // order, the same however the mesh is numbered or split.
 constexpr int kCellKeyWidth = kMaxCellCorners + 1;
-void append_element_key(const SimplexMesh& mesh, ElementId e, int width, std::vector<std::int64_t>& keys);
+void append_element_key(const Mesh& mesh, ElementId e, int width, std::vector<std::int64_t>& keys);
 void append_cell_key(CellType type, std::span<const VertexId> cell, std::span<const GlobalId> ids,
                      std::vector<std::int64_t>& keys);
 // Each key's position among the distinct keys in sorted order (copies of one element or cell,

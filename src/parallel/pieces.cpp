@@ -19,7 +19,7 @@ constexpr const char* kOwner = "OwnerRank";
 constexpr const char* kGhostCells = "vtkGhostType";  // 1: counted by another piece (ParaView hides those)
 constexpr const char* kPartition = "PartitionId";
 
-void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
+void write_piece(const std::filesystem::path& path, const Mesh& mesh, std::span<const int> owner,
                  std::span<const std::uint8_t> counted_cells, int piece, bool mesquite_names) {
     std::vector<Field> points(2), cells(2);
     points[0].name = mesquite_names ? "GLOBAL_ID" : kGlobalIds;
@@ -98,7 +98,7 @@ PartArrays read_piece(const std::filesystem::path& file, int ranks, ElementKind&
     if (!piece.fixed_from_file)
         throw FileError(file.string(), 0, "a piece needs a `fixed` point field: a piece alone cannot tell the "
                                           "boundary of the whole mesh");
-    const SimplexMesh& mesh = piece.mesh;
+    const Mesh& mesh = piece.mesh;
     kind = mesh.kind();
     const VertexId n = mesh.num_vertices();
     for (VertexId v = 0; v < n; ++v) {

@@ -4,7 +4,7 @@
 #include <filesystem>
 #include <span>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "parallel/parts.hpp"
 
 namespace paloverde::parallel {
@@ -12,7 +12,7 @@ namespace paloverde::parallel {
 // Writes one piece: the part's mesh with its global ids, owners, piece number and ghost cells
 // (the cells, or elements, counted by another piece: `counted_cells` per cell); Mesquite's field
 // names for its .vtk pattern.
-void write_piece(const std::filesystem::path& path, const SimplexMesh& mesh, std::span<const int> owner,
+void write_piece(const std::filesystem::path& path, const Mesh& mesh, std::span<const int> owner,
                  std::span<const std::uint8_t> counted_cells, int piece, bool mesquite_names);
 // Where piece p of `path` lives: OUT.pvtu -> OUT/OUT_p.vtu; OUT.vtk (Mesquite style) -> OUT_p.vtk.
 std::filesystem::path piece_path(const std::filesystem::path& path, int piece);

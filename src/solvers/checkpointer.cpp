@@ -237,7 +237,7 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
       part_(whole_or_part.distributed()), saved_at_(Clock::now()) {
     options_.validate();
     if (!writes() && !resumes()) return;
-    const SimplexMesh& mesh = whole_or_part.mesh();
+    const Mesh& mesh = whole_or_part.mesh();
     const DistributedMesh* part = part_;
     const VertexId n = mesh.num_vertices();
     keys_.resize(static_cast<std::size_t>(n));

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/parallel/reducer.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"

@@ -50,7 +50,7 @@ public:
         g_.assign(x_.size(), 0.0);
         // The energy is scale-free per element, so its curvature at a vertex goes as the sum of
         // 1 / (element size)^2 over the vertex's elements: its inverse is the vertex's step scale.
-        const SimplexMesh& mesh = work.mesh();
+        const Mesh& mesh = work.mesh();
         const double power = mesh.kind() == ElementKind::Tetrahedron ? -2.0 / 3.0 : -1.0;
         step_scale_.assign(static_cast<std::size_t>(mesh.num_vertices()), 0.0);
         for (ElementId e = 0; e < work.movable_elements(); ++e) {

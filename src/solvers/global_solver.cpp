@@ -181,7 +181,7 @@ public:
         }
     }
     // Every sliding vertex that `mesh` lets move, back onto its patch or curve.
-    void project(const SimplexMesh& mesh, std::span<double> xyz) const {
+    void project(const Mesh& mesh, std::span<double> xyz) const {
 #pragma omp parallel for schedule(static) if (vertices_.size() > detail::kParallelThreshold / 16)
         for (std::size_t i = 0; i < vertices_.size(); ++i)
             if (mesh.can_move(vertices_[i])) project(vertices_[i], xyz);
@@ -308,7 +308,7 @@ void Phase::refocus() {
     whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
     work_.evaluate(metric_, x_, whole_q_);
     ++summary_.quality_passes;
-    const SimplexMesh& mesh = work_.mesh();
+    const Mesh& mesh = work_.mesh();
     focus_base_ = quality_stats(work_, whole_q_, counted_).worst;
     focus_top_ = focus_base_ + band_ * (metric_.ideal_value() - focus_base_);
     // A vertex moves when one of its elements lies in the band. The owner holds every element of
@@ -339,7 +339,7 @@ void Phase::refocus() {
 
 void Phase::focus_on_moving() {
     work_.unfocus();
-    const SimplexMesh& whole = work_.mesh();
+    const Mesh& whole = work_.mesh();
     // The elements that stay out, at the positions they keep while the focus lasts.
     whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
     work_.evaluate(metric_, x_, whole_q_);
@@ -351,7 +351,7 @@ void Phase::focus_on_moving() {
             }
     frozen_ = frozen_stats(reducer_, work_.counted(whole_q_, counted_));
     work_.focus(moving_);
-    const SimplexMesh& focus = work_.mesh();
+    const Mesh& focus = work_.mesh();
     const auto owned = work_.owned();
     double count = 0.0;
     for (VertexId v = 0; v < focus.num_vertices(); ++v) count += owned[v] && focus.can_move(v);
@@ -397,7 +397,7 @@ void Phase::record(const Stats& s, double objective, double step, double gain) {
 }
 
 bool Phase::line_search(double objective, double max_direction) {
-    const SimplexMesh& mesh = work_.mesh();
+    const Mesh& mesh = work_.mesh();
     const ElementId movable = work_.movable_elements();
     const double length = work_.reference_length();
     // An element blocks a step when it leaves the objective's domain or becomes non-positive
@@ -863,7 +863,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
 int local_untangle_sweeps(const detail::Workspace& work, const VertexColoring* coloring, std::vector<double>& xyz,
                           const QualityMetric& hybrid, Summary& summary, const IterationObserver& observer,
                           Clock::time_point start) {
-    const SimplexMesh& mesh = work.mesh();
+    const Mesh& mesh = work.mesh();
     const auto owned = work.owned();
     const auto classes = coloring ? coloring->classes() : std::vector<std::vector<VertexId>>{};
     std::vector<double> q(static_cast<std::size_t>(work.movable_elements()));

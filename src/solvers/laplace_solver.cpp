@@ -24,7 +24,7 @@ LaplaceSolver::LaplaceSolver(LaplaceSolverOptions options) : options_(std::move(
 Summary LaplaceSolver::improve(MeshPart part) {
     if (part.distributed())
         throw OptionError("'" + std::string(name()) + "' has no distributed version: smooth the whole mesh serially");
-    SimplexMesh& mesh = part.mesh();
+    Mesh& mesh = part.mesh();
     detail::ThreadScope threads(options_.threads);
     detail::SolverRun run(part, std::string(name()), options_.metric);
     Summary& summary = run.summary;

@@ -87,7 +87,7 @@ Vec3 min_norm_point(const std::vector<Vec3>& points) {
 // projected on its tangent space, and each trial point back onto the surface before it is rated.
 class VertexAscent {
 public:
-    VertexAscent(const SimplexMesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
+    VertexAscent(const Mesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
                  const detail::SlidingBoundary* sliding = nullptr)
         : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding) {}
 
@@ -179,7 +179,7 @@ private:
         return worst;
     }
 
-    const SimplexMesh& mesh_;
+    const Mesh& mesh_;
     const QualityMetric& metric_;
     const LocalSolverOptions& options_;
     const detail::SlidingBoundary* sliding_;
@@ -211,7 +211,7 @@ Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundar
     if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
     detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
-    const SimplexMesh& mesh = whole_or_part.mesh();
+    const Mesh& mesh = whole_or_part.mesh();
     DistributedMesh* part = whole_or_part.distributed();
     if (!part) {
         Domain domain{mesh, detail::movable_elements(mesh), whole_or_part.reducer(), whole_or_part.halo(),
@@ -252,7 +252,7 @@ Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundar
 
 Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,
                                   const detail::SlidingBoundary* sliding) {
-    const SimplexMesh& mesh = domain.mesh;
+    const Mesh& mesh = domain.mesh;
     const Reducer& reducer = domain.reducer;
     Summary& summary = run.summary;
     // A resumed run continues at the sweep boundary it was checkpointed at.

@@ -117,7 +117,7 @@ std::vector<Vec3> move_basis(ElementKind kind, const MetricScale& scale) {
 
 }  // namespace
 
-VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale) {
+VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale) {
     VertexUntangle result;
     const int k = mesh.corners();
     const auto elements = mesh.elements_of(v);
@@ -179,7 +179,7 @@ VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, V
     return result;
 }
 
-std::vector<double> local_reference_volumes(const SimplexMesh& mesh, std::span<const double> xyz,
+std::vector<double> local_reference_volumes(const Mesh& mesh, std::span<const double> xyz,
                                             const MetricScale& scale, const Halo& halo, ElementId count) {
     std::vector<double> volume(static_cast<std::size_t>(mesh.num_elements()));
     MetricScale unit = scale;
@@ -285,7 +285,7 @@ std::array<double, D> newton_direction(const std::array<double, 3>& g, const std
 
 }  // namespace
 
-VertexEnergy::VertexEnergy(const SimplexMesh& mesh, std::span<const double> reference, const MetricScale& scale,
+VertexEnergy::VertexEnergy(const Mesh& mesh, std::span<const double> reference, const MetricScale& scale,
                            double epsilon)
     : mesh_(mesh), reference_(reference), scale_(scale), metric_(make_untangle_energy(epsilon, kUntangleTheta)),
       basis_(move_basis(mesh.kind(), scale)) {

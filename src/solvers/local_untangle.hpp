@@ -13,7 +13,7 @@
 #include <span>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/halo.hpp"
 
@@ -28,12 +28,12 @@ struct VertexUntangle {
 // Moves vertex v in xyz only if afterwards every one of its elements has positive volume, so a
 // valid element is never inverted. `scale` gives the plane of triangle meshes and the volume
 // unit (scaled_volume).
-VertexUntangle untangle_vertex(const SimplexMesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale);
+VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale);
 
 // A local, scale-free size for each of the first `count` elements: the mean over its corners of
 // the mean absolute volume of each corner's elements (ghost corners take their owners' means).
 // Flat neighbourhoods fall back on scale.reference_volume.
-std::vector<double> local_reference_volumes(const SimplexMesh& mesh, std::span<const double> xyz,
+std::vector<double> local_reference_volumes(const Mesh& mesh, std::span<const double> xyz,
                                             const MetricScale& scale, const Halo& halo, ElementId count);
 
 // The weight of the energy's volume term, in the global and the local solver (Garanzha et al. use
@@ -58,7 +58,7 @@ double next_epsilon(double epsilon, double energy_start, double energy_end, doub
 // written and only v's elements read: vertices of one color can run this at the same time.
 class VertexEnergy {
 public:
-    VertexEnergy(const SimplexMesh& mesh, std::span<const double> reference, const MetricScale& scale, double epsilon);
+    VertexEnergy(const Mesh& mesh, std::span<const double> reference, const MetricScale& scale, double epsilon);
     // Damped Newton steps (the 3x3 Hessian, 2x2 for planar triangles, by forward differences of
     // the analytic gradient) with a backtracking line search. A step is taken only if it lowers
     // the energy and leaves no more of v's elements inverted than before (decided exactly).
@@ -68,7 +68,7 @@ private:
     double energy(std::span<const double> xyz, VertexId v, std::array<double, 3>* gradient);
     int inverted(std::span<const double> xyz, VertexId v) const;
 
-    const SimplexMesh& mesh_;
+    const Mesh& mesh_;
     std::span<const double> reference_;
     MetricScale scale_;
     std::unique_ptr<QualityMetric> metric_;

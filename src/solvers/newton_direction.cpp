@@ -57,7 +57,7 @@ void NewtonDirection::product(const QualityMetric& metric, const ObjectiveFuncti
 
 void NewtonDirection::precondition(std::span<const double> curvature) {
     const auto owned = work_.owned();
-    const SimplexMesh& mesh = work_.mesh();
+    const Mesh& mesh = work_.mesh();
 #pragma omp parallel for schedule(static) if (owned.size() > kParallelThreshold)
     for (std::size_t v = 0; v < owned.size(); ++v) {
         if (owned[v] && mesh.can_move(static_cast<VertexId>(v))) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
@@ -96,7 +96,7 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
                                   std::span<const double> gradient, double damping, double tolerance, int max_products,
                                   std::span<double> direction) {
     const auto owned = work_.owned();
-    const SimplexMesh& mesh = work_.mesh();
+    const Mesh& mesh = work_.mesh();
     const std::size_t n = owned.size();
     const double c_total = prepare(metric, x, q.size(), curvature_weight);
     r_.assign(gradient.begin(), gradient.end());

@@ -139,7 +139,7 @@ private:
     }
 
     MeshPart part_;
-    SimplexMesh& mesh_;
+    Mesh& mesh_;
     Clock::time_point start_;
     QualityAssessor assessor_;
     std::vector<double> original_;  // the input, at its own scale
@@ -148,7 +148,7 @@ private:
 };
 
 // Elements with at least one free vertex: the only ones a vertex mover changes.
-inline std::vector<ElementId> movable_elements(const SimplexMesh& mesh) {
+inline std::vector<ElementId> movable_elements(const Mesh& mesh) {
     std::vector<ElementId> out;
     for (ElementId e = 0; e < mesh.num_elements(); ++e)
         if (mesh.element_can_move(e)) out.push_back(e);
@@ -156,7 +156,7 @@ inline std::vector<ElementId> movable_elements(const SimplexMesh& mesh) {
 }
 
 // Orientation <= 0, decided exactly, among `elements`.
-inline long count_not_positive(const SimplexMesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements) {
+inline long count_not_positive(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements) {
     long count = 0;
 #pragma omp parallel for schedule(static) reduction(+ : count) if (elements.size() >= 4096)
     for (std::size_t i = 0; i < elements.size(); ++i) count += element_orientation(mesh, xyz, elements[i]) <= 0;
@@ -168,7 +168,7 @@ struct SweepStats {
 };
 // Worst and mean quality over `elements`; the sum runs in element order, so it does not depend
 // on the thread count.
-inline SweepStats sweep_stats(const QualityMetric& metric, const SimplexMesh& mesh, std::span<const double> xyz,
+inline SweepStats sweep_stats(const QualityMetric& metric, const Mesh& mesh, std::span<const double> xyz,
                               std::span<const ElementId> elements, std::vector<double>& scratch) {
     scratch.resize(elements.size());
 #pragma omp parallel for schedule(static) if (elements.size() >= 4096)
@@ -185,7 +185,7 @@ inline SweepStats sweep_stats(const QualityMetric& metric, const SimplexMesh& me
 }
 
 // Smallest quality among the elements of vertex v.
-inline double patch_minimum(const QualityMetric& metric, const SimplexMesh& mesh, std::span<const double> xyz, VertexId v) {
+inline double patch_minimum(const QualityMetric& metric, const Mesh& mesh, std::span<const double> xyz, VertexId v) {
     double worst = std::numeric_limits<double>::infinity();
     for (ElementId e : mesh.elements_of(v)) {
         double q;
@@ -196,7 +196,7 @@ inline double patch_minimum(const QualityMetric& metric, const SimplexMesh& mesh
 }
 
 // The mean edge length at v: the natural unit for how far it may move.
-inline double local_length(const SimplexMesh& mesh, std::span<const double> xyz, VertexId v) {
+inline double local_length(const Mesh& mesh, std::span<const double> xyz, VertexId v) {
     double sum = 0.0;
     int count = 0;
     for (ElementId e : mesh.elements_of(v))

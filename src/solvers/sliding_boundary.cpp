@@ -13,7 +13,7 @@ namespace {
 
 // The whole mesh's volume (area for planar triangles), at the input's scale.
 double volume_of(const MeshPart& part) {
-    const SimplexMesh& mesh = part.mesh();
+    const Mesh& mesh = part.mesh();
     const auto xyz = mesh.coordinates();
     double largest = 0.0;
     for (double c : xyz) largest = std::max(largest, std::abs(c));

@@ -71,7 +71,7 @@ public:
 
 private:
     MeshPart part_;
-    SimplexMesh& mesh_;
+    Mesh& mesh_;
     BoundarySurface surface_;
     std::vector<std::uint8_t> fixed_;   // the flags the mesh had, given back at the end
     std::vector<std::uint8_t> released_;  // the flags while the boundary slides

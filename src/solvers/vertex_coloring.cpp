@@ -18,7 +18,7 @@ namespace {
 
 // Smallest-last (Matula & Beck): repeatedly remove a vertex of least remaining degree; coloring
 // in the reverse of that order gives each vertex at most its degree-at-removal colors to avoid.
-std::vector<VertexId> smallest_last(const VertexGraph& graph, const SimplexMesh& mesh) {
+std::vector<VertexId> smallest_last(const VertexGraph& graph, const Mesh& mesh) {
     const VertexId n = mesh.num_vertices();
     std::vector<int> degree(static_cast<std::size_t>(n), 0);
     int max_degree = 0;
@@ -68,7 +68,7 @@ std::vector<VertexId> smallest_last(const VertexGraph& graph, const SimplexMesh&
 
 }  // namespace
 
-VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order) {
+VertexColoring color_vertices(const Mesh& mesh, ColoringOrder order) {
     const VertexId n = mesh.num_vertices();
     VertexColoring result;
     result.color.assign(static_cast<std::size_t>(n), -1);
@@ -97,7 +97,7 @@ VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order) {
     return result;
 }
 
-bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring) {
+bool is_proper_coloring(const Mesh& mesh, const VertexColoring& coloring) {
     if (coloring.color.size() != static_cast<std::size_t>(mesh.num_vertices())) return false;
     for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
         const int c = coloring.color[v];
@@ -115,7 +115,7 @@ bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring)
 }
 
 VertexColoring color_vertices(const DistributedMesh& part) {
-    const SimplexMesh& mesh = part.mesh;
+    const Mesh& mesh = part.mesh;
     const auto ids = mesh.global_ids();
     const Reducer& reducer = part.reducer();
     const VertexId n = mesh.num_vertices();

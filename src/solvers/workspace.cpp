@@ -36,7 +36,7 @@ Workspace::Workspace(MeshPart part, bool renumber)
         if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
         return;
     }
-    const SimplexMesh& mesh = part.mesh();
+    const Mesh& mesh = part.mesh();
     if (renumber) {
         Renumbering order = locality_order(mesh);
         own_ = renumbered(mesh, order);
@@ -68,7 +68,7 @@ std::vector<ElementId> inverse(std::span<const ElementId> order) {
     return out;
 }
 // The mesh with its elements in `order` (element i is element order[i]), vertices unchanged.
-SimplexMesh reordered_elements(const SimplexMesh& mesh, std::vector<ElementId> order) {
+Mesh reordered_elements(const Mesh& mesh, std::vector<ElementId> order) {
     Renumbering elements;
     elements.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
     std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
@@ -83,7 +83,7 @@ Workspace::~Workspace() {
     // or nothing: should memory run out, the part stays whole, in the workspace's order.
     try {
         const std::vector<ElementId> back = inverse(part_order_);
-        SimplexMesh mesh = reordered_elements(part_->mesh, back);
+        Mesh mesh = reordered_elements(part_->mesh, back);
         std::vector<GlobalId> element_order = permuted(part_->element_order, back);
         std::vector<std::uint8_t> counted = permuted(part_->counted, back);
         part_->mesh = std::move(mesh);
@@ -145,7 +145,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
     return order;
 }
 
-Workspace::Lanes Workspace::make_lanes(const SimplexMesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
+Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
                                        GlobalId global_elements) {
     // A lane is a run of movable elements in one block of the canonical order. Lane partials are
     // added in lane order, elements within a lane in order: for an owned vertex, the same sums in
@@ -171,7 +171,7 @@ Workspace::Lanes Workspace::make_lanes(const SimplexMesh& mesh, ElementId movabl
     return lanes;
 }
 
-std::vector<VertexId> Workspace::free_vertices_of(const SimplexMesh& mesh) {
+std::vector<VertexId> Workspace::free_vertices_of(const Mesh& mesh) {
     std::vector<VertexId> free;
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (mesh.can_move(v)) free.push_back(v);
@@ -194,8 +194,8 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
     }
     std::vector<std::uint8_t> fixed(static_cast<std::size_t>(n));
     for (VertexId v = 0; v < n; ++v) fixed[v] = !moves(v);
-    f.mesh = SimplexMesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
-                         std::move(connectivity));
+    f.mesh = Mesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
+                  std::move(connectivity));
     f.mesh.set_fixed(std::move(fixed));
     if (mesh_.has_cells()) {  // the corners keep their maps
         std::vector<VertexId> same(static_cast<std::size_t>(n));
@@ -238,7 +238,7 @@ std::vector<double> Workspace::local_reference_volumes() const {
 }
 
 void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const {
-    const SimplexMesh& mesh = this->mesh();
+    const Mesh& mesh = this->mesh();
     const ElementId movable = movable_elements();
     const ElementId chunks = (movable + kEvaluateChunk - 1) / kEvaluateChunk;
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > kParallelThreshold)
@@ -251,7 +251,7 @@ void Workspace::evaluate(const QualityMetric& metric, std::span<const double> xy
 void Workspace::gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
                          std::span<double> gradient, std::span<const double> curvature_weight,
                          std::span<double> curvature) {
-    const SimplexMesh& mesh = this->mesh();
+    const Mesh& mesh = this->mesh();
     const ElementId movable = movable_elements();
     Lanes& lanes = focus_ ? focus_->lanes : lanes_;
     const bool with_curvature = !curvature.empty();

@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "core/exact_sums.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/mesh_part.hpp"
@@ -36,7 +36,7 @@ public:
     Workspace& operator=(const Workspace&) = delete;
 
     // The elements a solver works on: the movable elements, or while focused those of the focus.
-    const SimplexMesh& mesh() const { return focus_ ? focus_->mesh : mesh_; }
+    const Mesh& mesh() const { return focus_ ? focus_->mesh : mesh_; }
     ElementId movable_elements() const { return focus_ ? static_cast<ElementId>(focus_->elements.size()) : movable_; }
     // Per vertex: this process owns it (computes its gradient and moves it).
     std::span<const std::uint8_t> owned() const { return owned_; }
@@ -99,7 +99,7 @@ private:
         std::vector<double> curvature;  // 6 per lane vertex, allocated on first use
     };
     struct Focus {
-        SimplexMesh mesh;                // every vertex, the focus elements; only moving vertices free
+        Mesh mesh;                // every vertex, the focus elements; only moving vertices free
         std::vector<ElementId> elements; // the whole's movable element of each focus element
         std::vector<ElementId> counted;  // focus elements counted here (distributed runs)
         double global_count = 0.0;
@@ -112,16 +112,16 @@ private:
     std::vector<ElementId> finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                   GlobalId global_elements);
     // Lanes over elements [0, movable) of `mesh`, whose canonical positions are `element_order`.
-    static Lanes make_lanes(const SimplexMesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
+    static Lanes make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
                             GlobalId global_elements);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
-    static std::vector<VertexId> free_vertices_of(const SimplexMesh& mesh);
+    static std::vector<VertexId> free_vertices_of(const Mesh& mesh);
 
-    SimplexMesh* original_;             // the part's mesh
-    SimplexMesh own_;                   // serial runs: the mesh in canonical order
+    Mesh* original_;             // the part's mesh
+    Mesh own_;                   // serial runs: the mesh in canonical order
     DistributedMesh* part_ = nullptr;    // distributed runs: the part, whose elements mesh_ reorders
     std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
-    SimplexMesh& mesh_;                  // own_, or the part's mesh
+    Mesh& mesh_;                  // own_, or the part's mesh
     std::vector<VertexId> old_vertex_;  // serial, renumbered: caller's id of each vertex
     ElementId movable_ = 0;
     std::vector<std::uint8_t> owned_;

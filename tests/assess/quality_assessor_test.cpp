@@ -13,7 +13,7 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 
 namespace {
 // The smallest dihedral angle of a tet by CGAL's own formula: an independent check.
-double cgal_min_dihedral(const pv::SimplexMesh& mesh, pv::ElementId e) {
+double cgal_min_dihedral(const pv::Mesh& mesh, pv::ElementId e) {
     const auto c = mesh.element(e);
     K::Point_3 p[4];
     for (int i = 0; i < 4; ++i) {
@@ -69,8 +69,8 @@ BOOST_AUTO_TEST_CASE(tangled_mesh_counts_its_nine_inverted_tets) {
 
 BOOST_AUTO_TEST_CASE(statistics_split_movable_and_frozen_elements) {
     // Two tets: the first has a free vertex, the second only fixed ones.
-    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1},
-                         {0, 1, 2, 3, 1, 4, 2, 3});
+    pv::Mesh mesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1},
+                  {0, 1, 2, 3, 1, 4, 2, 3});
     mesh.set_fixed({0, 1, 1, 1, 1});
     const auto report = pv::QualityAssessor({"aspect_ratio", "scaled_volume"}, 4).assess(mesh);
     BOOST_TEST(report.frozen_elements == 1);

@@ -97,7 +97,7 @@ double gathered_difference(const std::filesystem::path& input, const std::filesy
         for (std::size_t c = 0; c < 3; ++c)
             difference = std::max(difference, std::abs(g.coordinates()[3 * static_cast<std::size_t>(v) + c] - s.coordinates()[3 * o + c]));
     }
-    const auto elements = [](const pv::SimplexMesh& m, std::span<const pv::VertexId> map) {
+    const auto elements = [](const pv::Mesh& m, std::span<const pv::VertexId> map) {
         std::vector<std::array<pv::VertexId, 4>> keys;
         for (pv::ElementId e = 0; e < m.num_elements(); ++e) {
             std::array<pv::VertexId, 4> key{-1, -1, -1, -1};

@@ -20,7 +20,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde::fuzz {
 
@@ -106,7 +106,7 @@ struct Cells {
     std::vector<CellType> types;
     std::vector<VertexId> vertices;
 };
-inline Cells cells_of(const SimplexMesh& mesh, std::span<const ElementId> order = {}) {
+inline Cells cells_of(const Mesh& mesh, std::span<const ElementId> order = {}) {
     Cells out;
     for (ElementId i = 0; i < mesh.num_cells(); ++i) {
         const ElementId c = order.empty() ? i : order[static_cast<std::size_t>(i)];
@@ -117,7 +117,7 @@ inline Cells cells_of(const SimplexMesh& mesh, std::span<const ElementId> order 
 }
 // The cells in the order a Medit file holds them: grouped by type (in the order of
 // cell_types.hpp), in mesh order within a type.
-inline Cells grouped_by_type(const SimplexMesh& mesh) {
+inline Cells grouped_by_type(const Mesh& mesh) {
     std::vector<ElementId> order(static_cast<std::size_t>(mesh.num_cells()));
     for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<ElementId>(c);
     std::stable_sort(order.begin(), order.end(),
@@ -148,8 +148,8 @@ inline void check_round_trip(const MeshFile& file, const std::filesystem::path& 
     } catch (const Error& e) {
         throw CheckFailure("a mesh written as " + how + " cannot be read back: " + e.what());
     }
-    const SimplexMesh& a = file.mesh;
-    const SimplexMesh& b = back.mesh;
+    const Mesh& a = file.mesh;
+    const Mesh& b = back.mesh;
     check(a.kind() == b.kind(), "the element kind changed in a round trip through " + how);
     // Medit holds a section per cell type: a mixed mesh comes back with its cells grouped by type.
     const Cells cells_a = format == MeshFormat::Medit ? grouped_by_type(a) : cells_of(a);

@@ -35,7 +35,7 @@ std::string number(double value) {
 }
 
 // TetGen has no writer: the seed is written here, numbered from 1, one point attribute.
-std::string tetgen_text(const SimplexMesh& mesh) {
+std::string tetgen_text(const Mesh& mesh) {
     std::ostringstream out;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     out << "# generated from a shared mesh\n" << n << " 3 1 0\n";

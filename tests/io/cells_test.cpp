@@ -139,7 +139,7 @@ CellMesh quad_tri() {
     return m;
 }
 
-SimplexMesh build(const CellMesh& m) { return SimplexMesh::from_cells(m.xyz, m.types, m.cells); }
+Mesh build(const CellMesh& m) { return Mesh::from_cells(m.xyz, m.types, m.cells); }
 
 // Every cell mirrored (CellInfo::mirror): a file of the mirror convention.
 CellMesh mirrored(CellMesh m) {
@@ -175,7 +175,7 @@ const Target kTargets[] = {{"a.vtk", Encoding::Ascii, false}, {"b.vtk", Encoding
                            {"g.mesh", Encoding::Ascii, true}};
 
 // The cell order of a Medit file: grouped by type, in mesh order within a type.
-std::vector<ElementId> medit_order(const SimplexMesh& mesh) {
+std::vector<ElementId> medit_order(const Mesh& mesh) {
     std::vector<ElementId> order(static_cast<std::size_t>(mesh.num_cells()));
     for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<ElementId>(c);
     std::stable_sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return mesh.cell_type(a) < mesh.cell_type(b); });
@@ -245,7 +245,7 @@ BOOST_AUTO_TEST_SUITE(cells)
 BOOST_AUTO_TEST_CASE(the_test_meshes_are_valid) {
     for (const Case& c : kCases) {
         BOOST_TEST_CONTEXT(c.name) {
-            const SimplexMesh mesh = build(c.make());
+            const Mesh mesh = build(c.make());
             BOOST_TEST(mesh.has_cells());
             BOOST_TEST(count_orientations(mesh).inverted == 0);
             BOOST_TEST(count_orientations(mesh).degenerate == 0);
@@ -260,7 +260,7 @@ BOOST_AUTO_TEST_CASE(the_test_meshes_are_valid) {
 // what was written, in every format and encoding. A Medit file holds a section per type (the
 // cells come back grouped by type) and no fields but `ref`; its fixed flags are the boundary.
 BOOST_DATA_TEST_CASE(every_cell_type_round_trips_through_every_format, bdata::make(kCases), c) {
-    SimplexMesh mesh = build(c.make());
+    Mesh mesh = build(c.make());
     std::vector<std::uint8_t> fixed(static_cast<std::size_t>(mesh.num_vertices()));
     for (std::size_t v = 0; v < fixed.size(); ++v) fixed[v] = v % 3 == 0;
     mesh.set_fixed(fixed);
@@ -307,8 +307,8 @@ BOOST_DATA_TEST_CASE(every_cell_type_round_trips_through_every_format, bdata::ma
 // A file whose every cell is mirrored is flipped on reading in every format (3D cells: a planar
 // mesh's orientation follows its own cells), and written back in its own order.
 BOOST_DATA_TEST_CASE(a_mirrored_file_is_flipped_on_reading_and_written_back_as_it_was, bdata::make(k3dCases), c) {
-    const SimplexMesh original = build(c.make());
-    const SimplexMesh mirror = build(mirrored(c.make()));
+    const Mesh original = build(c.make());
+    const Mesh mirror = build(mirrored(c.make()));
     ReadOptions as_is;
     as_is.orientation = OrientationMode::AsIs;
     const ScratchDir dir(std::string("cells_mirrored_") + c.name);
@@ -476,7 +476,7 @@ BOOST_AUTO_TEST_CASE(a_face_of_three_cells_is_refused) {
     m.add(CellType::Hexahedron, {0, 1, 3, 2, 4, 5, 7, 6});
     m.add(CellType::Hexahedron, {4, 5, 7, 6, 8, 9, 11, 10});
     m.add(CellType::Hexahedron, {4, 5, 7, 6, 12, 13, 15, 14});
-    const SimplexMesh mesh = build(m);
+    const Mesh mesh = build(m);
     const ScratchDir dir("cells_non_manifold");
     for (const Target& target : kTargets) {
         write_mesh(dir / target.name, mesh);

@@ -12,7 +12,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
@@ -45,8 +45,8 @@ struct Bytes {
 
 // Writes `mesh` with a fixed-flag pattern that boundary detection would not give, a 3-component
 // point field and a cell field, reads it back, and checks that everything survived exactly.
-void check_gmsh_round_trip(const SimplexMesh& original, const ScratchDir& dir, Encoding encoding) {
-    SimplexMesh mesh = original;
+void check_gmsh_round_trip(const Mesh& original, const ScratchDir& dir, Encoding encoding) {
+    Mesh mesh = original;
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const auto m = static_cast<std::size_t>(mesh.num_elements());
     std::vector<std::uint8_t> fixed(n);
@@ -504,14 +504,14 @@ BOOST_AUTO_TEST_CASE(shared_meshes_round_trip_exactly) {
 
 BOOST_AUTO_TEST_CASE(triangle_mesh_round_trips_exactly) {
     const ScratchDir dir("gmsh_round_trip_tri");
-    const SimplexMesh mesh = awkward_triangles();
+    const Mesh mesh = awkward_triangles();
     check_gmsh_round_trip(mesh, dir, Encoding::Ascii);
     check_gmsh_round_trip(mesh, dir, Encoding::Binary);
 }
 
 BOOST_AUTO_TEST_CASE(without_fixed_field_the_boundary_is_fixed) {
     const ScratchDir dir("gmsh_no_fixed");
-    const SimplexMesh mesh = awkward_triangles();
+    const Mesh mesh = awkward_triangles();
     WriteOptions options;
     options.write_fixed = false;
     write_mesh(dir / "plain.msh", mesh, options);
@@ -524,7 +524,7 @@ BOOST_AUTO_TEST_CASE(without_fixed_field_the_boundary_is_fixed) {
 
 BOOST_AUTO_TEST_CASE(ascii_writer_output_is_plain_msh22) {
     const ScratchDir dir("gmsh_ascii_text");
-    const SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.1}, {0, 1, 2, 3});
+    const Mesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.1}, {0, 1, 2, 3});
     WriteOptions options;
     options.encoding = Encoding::Ascii;
     options.write_fixed = false;
@@ -538,7 +538,7 @@ BOOST_AUTO_TEST_CASE(ascii_writer_output_is_plain_msh22) {
 
 BOOST_AUTO_TEST_CASE(field_name_with_a_quote_cannot_be_written) {
     const ScratchDir dir("gmsh_bad_name");
-    const SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 3});
+    const Mesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 3});
     const Field bad[] = {Field{"say \"hi\"", 1, {1, 2, 3, 4}}};
     BOOST_CHECK_THROW(write_mesh(dir / "bad.msh", mesh, {}, bad), Error);
     BOOST_TEST(!fs::exists(dir / "bad.msh"));

@@ -11,7 +11,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
@@ -215,7 +215,7 @@ BOOST_AUTO_TEST_CASE(shared_meshes_round_trip_exactly) {
 
 BOOST_AUTO_TEST_CASE(triangle_mesh_round_trips_with_refs) {
     const ScratchDir dir("medit_round_trip_tri");
-    SimplexMesh mesh = awkward_triangles();
+    Mesh mesh = awkward_triangles();
     std::vector<std::uint8_t> fixed(static_cast<std::size_t>(mesh.num_vertices()), 1);
     mesh.set_fixed(fixed);  // not representable in Medit: boundary detection decides on reading
     Field vertex_refs{"ref", 1, {}};
@@ -239,7 +239,7 @@ BOOST_AUTO_TEST_CASE(triangle_mesh_round_trips_with_refs) {
 
 BOOST_AUTO_TEST_CASE(writer_output_without_refs) {
     const ScratchDir dir("medit_writer");
-    const SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.1}, {0, 1, 2, 3});
+    const Mesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 0.1}, {0, 1, 2, 3});
     write_mesh(dir / "one.mesh", mesh);
     BOOST_TEST(read_text(dir / "one.mesh") ==
                "MeshVersionFormatted 2\n\nDimension 3\n\nVertices\n4\n0 0 0 0\n1 0 0 0\n0 1 0 0\n0 0 0.1 0\n\n"
@@ -248,7 +248,7 @@ BOOST_AUTO_TEST_CASE(writer_output_without_refs) {
 
 BOOST_AUTO_TEST_CASE(refs_that_are_not_integers_cannot_be_written) {
     const ScratchDir dir("medit_bad_refs");
-    const SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 3});
+    const Mesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 3});
     const Field fractional[] = {Field{"ref", 1, {0.5}}};
     BOOST_CHECK_THROW(write_mesh(dir / "bad.mesh", mesh, {}, {}, fractional), Error);
     const Field vector[] = {Field{"ref", 2, {1, 2, 3, 4, 5, 6, 7, 8}}};

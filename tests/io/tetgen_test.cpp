@@ -10,7 +10,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 

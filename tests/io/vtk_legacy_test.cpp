@@ -16,7 +16,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
@@ -81,7 +81,7 @@ std::size_t count_nonzero(const Field& f) {
     return static_cast<std::size_t>(std::count_if(f.values.begin(), f.values.end(), [](double v) { return v != 0.0; }));
 }
 
-std::size_t count_fixed(const SimplexMesh& mesh) {
+std::size_t count_fixed(const Mesh& mesh) {
     return static_cast<std::size_t>(std::count(mesh.fixed().begin(), mesh.fixed().end(), std::uint8_t{1}));
 }
 
@@ -181,7 +181,7 @@ BOOST_AUTO_TEST_CASE(round_trips_every_shared_mesh_in_ascii_and_binary) {
     all.insert(all.end(), std::begin(kSharedTriangles), std::end(kSharedTriangles));
     for (const SharedMesh& shared : all) {
         const MeshFile original = read_mesh(shared_data(shared.path));
-        const SimplexMesh& mesh = original.mesh;
+        const Mesh& mesh = original.mesh;
         // Values that only survive a text round trip with 17 significant digits.
         Field quality{"quality", 1, {}};
         for (ElementId e = 0; e < mesh.num_elements(); ++e) quality.values.push_back(1.0 / (3.0 + e) - 1e-300 * e);

@@ -19,7 +19,7 @@
 #include "io/text_scanner.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/io_checks.hpp"
 #include "support/test_support.hpp"
 
@@ -391,7 +391,7 @@ BOOST_AUTO_TEST_CASE(round_trips_shared_meshes_in_ascii_and_binary) {
     ScratchDir dir("vtu_round_trip");
     for (const char* name : kSharedMeshes) {
         const MeshFile original = read_mesh(shared_data(name));
-        const SimplexMesh& mesh = original.mesh;
+        const Mesh& mesh = original.mesh;
         Field quality{"quality", 1, {}};
         for (ElementId e = 0; e < mesh.num_elements(); ++e) quality.values.push_back(1.0 / (3.0 + e) - 1e-300 * e);
         Field velocity{"velocity <m/s>", 3, {}};

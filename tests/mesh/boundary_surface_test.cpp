@@ -14,11 +14,11 @@ namespace pv = paloverde;
 namespace {
 
 // The bundled example (examples/data/tangled_cube.vtk).
-pv::SimplexMesh bundled_cube() {
+pv::Mesh bundled_cube() {
     return pv::read_mesh(std::filesystem::path(PALOVERDE_SOURCE_DIR) / "examples/data/tangled_cube.vtk").mesh;
 }
 
-pv::Vec3 at(const pv::SimplexMesh& mesh, pv::VertexId v) {
+pv::Vec3 at(const pv::Mesh& mesh, pv::VertexId v) {
     const auto x = mesh.coordinates();
     return {x[3 * static_cast<std::size_t>(v)], x[3 * static_cast<std::size_t>(v) + 1], x[3 * static_cast<std::size_t>(v) + 2]};
 }
@@ -138,7 +138,7 @@ BOOST_AUTO_TEST_CASE(a_square_of_triangles_has_four_corners) {
             const int a = 3 * j + i, b = a + 1, c = a + 3, d = a + 4;
             tris.insert(tris.end(), {a, b, d, a, d, c});
         }
-    const pv::SimplexMesh mesh(pv::ElementKind::Triangle, xyz, tris);
+    const pv::Mesh mesh(pv::ElementKind::Triangle, xyz, tris);
     const pv::BoundarySurface surface(mesh);
     BOOST_TEST(surface.count(pv::BoundaryRole::Corner) == 4u);
     BOOST_TEST(surface.count(pv::BoundaryRole::Curve) == 4u);
@@ -183,7 +183,7 @@ BOOST_AUTO_TEST_CASE(the_surface_is_the_same_whatever_the_numbering) {
         const auto k = mesh.element(e);
         for (int i : {0, 2, 3, 1}) corners.push_back(renamed(k[i]));
     }
-    const pv::SimplexMesh other(pv::ElementKind::Tetrahedron, std::move(xyz), std::move(corners));
+    const pv::Mesh other(pv::ElementKind::Tetrahedron, std::move(xyz), std::move(corners));
     const pv::BoundarySurface surface(mesh), same(other);
     BOOST_TEST(same.count(pv::BoundaryRole::Curve) == surface.count(pv::BoundaryRole::Curve));
     const double h = 0.01 * surface.bounding_box_diagonal();

@@ -23,7 +23,7 @@ namespace {
 // A flat slab [0,1]^2 x [0,0.1] whose boundary is triangulated (the top face finely, n x n
 // squares) and coned to one interior vertex; that vertex then moved above the top face, which
 // inverts the 2 n^2 tets on the top face: most of them, while the total volume stays the slab's.
-pv::SimplexMesh slab_with_its_centre_above(int n) {
+pv::Mesh slab_with_its_centre_above(int n) {
     const double h = 0.1;
     std::vector<double> xyz = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};  // bottom corners 0..3
     auto top = [&](int i, int j) { return static_cast<VertexId>(4 + j * (n + 1) + i); };
@@ -48,11 +48,11 @@ pv::SimplexMesh slab_with_its_centre_above(int n) {
     side(0, 3, [&](int s) { return top(0, s); });
     std::vector<VertexId> tets;
     for (const auto& f : faces) tets.insert(tets.end(), {f[0], f[1], f[2], centre});
-    pv::SimplexMesh mesh(ElementKind::Tetrahedron, xyz, tets);
+    pv::Mesh mesh(ElementKind::Tetrahedron, xyz, tets);
     for (pv::ElementId e = 0; e < mesh.num_elements(); ++e)
         if (pv::element_orientation(mesh, mesh.coordinates(), e) < 0) std::swap(tets[4 * e + 1], tets[4 * e + 2]);
     xyz[3 * static_cast<std::size_t>(centre) + 2] = 2 * h;
-    return pv::SimplexMesh(ElementKind::Tetrahedron, std::move(xyz), std::move(tets));
+    return pv::Mesh(ElementKind::Tetrahedron, std::move(xyz), std::move(tets));
 }
 
 }  // namespace
@@ -121,8 +121,8 @@ BOOST_AUTO_TEST_CASE(the_total_decides_where_most_elements_are_inverted) {
 
 // A total of zero (a tet and its mirror image) says nothing: the file's order is kept.
 BOOST_AUTO_TEST_CASE(a_zero_total_keeps_the_files_order) {
-    pv::SimplexMesh pair(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1},
-                         {0, 1, 2, 3, 0, 1, 2, 4});
+    pv::Mesh pair(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, -1},
+                  {0, 1, 2, 3, 0, 1, 2, 4});
     BOOST_TEST(pv::count_orientations(pair).inverted == 1);
     const auto d = pv::orient(pair, OrientationMode::Auto);
     BOOST_TEST(d.sign == 0);
@@ -143,7 +143,7 @@ BOOST_AUTO_TEST_CASE(triangles_follow_their_plane_normal) {
     BOOST_TEST(d.sign == 1);
     BOOST_TEST(pv::count_orientations(mirror).inverted == pv::count_orientations(tangled).inverted);
     BOOST_TEST(mirror.plane_normal()[2] == -tangled.plane_normal()[2]);
-    pv::SimplexMesh bent(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 0, 3, 1});
+    pv::Mesh bent(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 0, 3, 1});
     BOOST_TEST_REQUIRE(!bent.is_planar());
     const auto none = pv::orient(bent, OrientationMode::Auto);
     BOOST_TEST(!none.oriented);
@@ -175,7 +175,7 @@ BOOST_AUTO_TEST_CASE(element_orientation_is_the_exact_sign_near_flat_and_far_fro
             for (double c : corner) xyz.push_back(c * scale);
         for (int i = 0; i < 4; ++i) tets.push_back(static_cast<VertexId>(4 * t + i));
     }
-    const pv::SimplexMesh mesh(ElementKind::Tetrahedron, xyz, tets);
+    const pv::Mesh mesh(ElementKind::Tetrahedron, xyz, tets);
     auto point = [&](VertexId v) { return Kernel::Point_3(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]); };
     int flat = 0;
     for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {

@@ -9,7 +9,7 @@
 
 #include "metrics/tet_blocks.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "support/test_support.hpp"
 
@@ -30,7 +30,7 @@ std::vector<pm::BlockPath> paths() {
     return out;
 }
 
-std::vector<double> corners_of(const pv::SimplexMesh& mesh, pv::ElementId e) {
+std::vector<double> corners_of(const pv::Mesh& mesh, pv::ElementId e) {
     std::vector<double> x;
     for (pv::VertexId v : mesh.element(e))
         for (int d = 0; d < 3; ++d) x.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + d]);
@@ -82,7 +82,7 @@ void check_blocks(const std::string& name, const std::vector<std::vector<double>
     }
 }
 
-std::vector<std::vector<double>> mesh_elements(const pv::SimplexMesh& mesh) {
+std::vector<std::vector<double>> mesh_elements(const pv::Mesh& mesh) {
     std::vector<std::vector<double>> out;
     for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) out.push_back(corners_of(mesh, e));
     return out;

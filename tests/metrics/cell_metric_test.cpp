@@ -22,13 +22,13 @@ const std::vector<pv::CellType> kCells{pv::CellType::Quadrilateral, pv::CellType
                                        pv::CellType::Pyramid};
 
 // One cell of `type` at the given corner positions (its ideal shape when empty).
-pv::SimplexMesh one_cell(pv::CellType type, std::vector<double> xyz = {}) {
+pv::Mesh one_cell(pv::CellType type, std::vector<double> xyz = {}) {
     if (xyz.empty())
         for (const auto& p : pv::ideal_cell(type)) xyz.insert(xyz.end(), p.begin(), p.end());
     std::vector<pv::VertexId> cell(static_cast<std::size_t>(pv::cell_info(type).corners));
     for (std::size_t i = 0; i < cell.size(); ++i) cell[i] = static_cast<pv::VertexId>(i);
     const pv::CellType types[] = {type};
-    return pv::SimplexMesh::from_cells(std::move(xyz), types, std::move(cell));
+    return pv::Mesh::from_cells(std::move(xyz), types, std::move(cell));
 }
 
 std::vector<double> ideal_coordinates(pv::CellType type) {
@@ -47,7 +47,7 @@ std::vector<std::string> metrics_for_cells() {
     return out;
 }
 
-std::vector<double> rate(const pv::QualityMetric& metric, const pv::SimplexMesh& mesh, std::span<const double> xyz) {
+std::vector<double> rate(const pv::QualityMetric& metric, const pv::Mesh& mesh, std::span<const double> xyz) {
     std::vector<double> q(static_cast<std::size_t>(mesh.num_elements()));
     metric.evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
     return q;

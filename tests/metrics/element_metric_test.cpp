@@ -43,11 +43,11 @@ void register_once() {
 }
 
 // Tangled: the solvers untangle it first, then raise the metric.
-pv::SimplexMesh perturbed_tire() { return pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.5, 3); }
+pv::Mesh perturbed_tire() { return pv::test::perturbed_shared_mesh("mesquite/tets/tire.vtk", 0.5, 3); }
 
 // The coordinates `input` is moved to by a solver with these options.
 template <class Solver, class Options>
-std::vector<double> improved(const pv::SimplexMesh& input, const Options& options) {
+std::vector<double> improved(const pv::Mesh& input, const Options& options) {
     auto mesh = input;
     const auto summary = Solver(options).improve(mesh);
     BOOST_TEST(summary.success(), summary.message);

@@ -39,7 +39,7 @@ const char* const kGridNames[] = {"quadrilaterals", "hexahedra", "wedges", "pyra
 // Kuhn's tetrahedra in every cube but the corner one, a hexahedron: on 4 ranks some parts hold
 // tetrahedra only, and must still hold them as cells to be rated as the whole mesh is. (The
 // hexahedron's faces do not conform to the tetrahedra's: their vertices are fixed as boundary.)
-pv::SimplexMesh tetrahedra_and_a_hexahedron(int n) {
+pv::Mesh tetrahedra_and_a_hexahedron(int n) {
     const auto tets = pv::test::cube_grid(n, Fill::Tetrahedra), hexes = pv::test::cube_grid(n, Fill::Hexahedra);
     std::vector<pv::CellType> types{pv::CellType::Hexahedron};
     std::vector<pv::VertexId> cells(hexes.cell(0).begin(), hexes.cell(0).end());
@@ -47,19 +47,19 @@ pv::SimplexMesh tetrahedra_and_a_hexahedron(int n) {
         types.push_back(pv::CellType::Tetrahedron);
         cells.insert(cells.end(), tets.element(e).begin(), tets.element(e).end());
     }
-    auto mesh = pv::SimplexMesh::from_cells({tets.coordinates().begin(), tets.coordinates().end()}, types, std::move(cells));
+    auto mesh = pv::Mesh::from_cells({tets.coordinates().begin(), tets.coordinates().end()}, types, std::move(cells));
     mesh.fix_boundary();
     return mesh;
 }
 
-pv::SimplexMesh grid(int g) {
+pv::Mesh grid(int g) {
     if (g == 0) return pv::test::quad_grid(16);
     if (g < 5) return pv::test::cube_grid(6, static_cast<Fill>(g - 1));
     if (g == 5) return tetrahedra_and_a_hexahedron(6);
     return pv::test::shared_mesh("mesquite/mixed/mixed-hex-pyr-tet.vtk");
 }
 
-pv::SimplexMesh tangled_grid(int g, int seed) {
+pv::Mesh tangled_grid(int g, int seed) {
     auto mesh = pv::test::tangled(grid(g), seed);
     BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted > 0);
     return mesh;
@@ -173,7 +173,7 @@ BOOST_DATA_TEST_CASE(the_local_smoother_gives_the_one_rank_mesh, bdata::make(kGr
         BOOST_TEST(summary.iterations == alone_summary.iterations);
         BOOST_TEST(summary.worst_after == alone_summary.worst_after);
         check_same_report(summary.after, alone_summary.after);
-        pv::SimplexMesh from_one = input, from_all = input;
+        pv::Mesh from_one = input, from_all = input;
         alone.gather_coordinates(&from_one);
         part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
         if (rank() == 0) BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
@@ -198,7 +198,7 @@ BOOST_DATA_TEST_CASE(the_report_is_the_serial_one, bdata::make(kGrids), g) {
 BOOST_DATA_TEST_CASE(gather_whole_gives_back_the_cells, bdata::make(kGrids), g) {
     BOOST_TEST_CONTEXT(kGridNames[g]) {
         const auto input = grid(g);
-        const pv::SimplexMesh whole = pv::test::gathered_whole(input);
+        const pv::Mesh whole = pv::test::gathered_whole(input);
         if (rank() != 0) return;
         BOOST_REQUIRE(whole.has_cells());
         BOOST_REQUIRE(whole.num_cells() == input.num_cells());
@@ -248,7 +248,7 @@ BOOST_DATA_TEST_CASE(pieces_of_cells_give_the_serial_answer, bdata::make(kGrids)
         pv::GlobalSolverOptions options;
         options.termination.max_iterations = 10;
         options.untangle_termination.max_iterations = 150;
-        pv::SimplexMesh serial = input;
+        pv::Mesh serial = input;
         const auto serial_summary = pv::GlobalSolver(options).improve(serial);
         const auto order = pv::locality_order(input);
         for (const std::string name : {"cells.pvtu", "cells.vtk"}) {

@@ -16,7 +16,7 @@
 
 namespace paloverde::test {
 
-inline DistributedMesh scatter(const SimplexMesh& whole, ExchangeMode mode = ExchangeMode::Colored) {
+inline DistributedMesh scatter(const Mesh& whole, ExchangeMode mode = ExchangeMode::Colored) {
     DistributeOptions options;
     options.exchange = mode;
     return DistributedMesh::scatter(MPI_COMM_WORLD, rank() == 0 ? &whole : nullptr, options);
@@ -31,7 +31,7 @@ inline std::filesystem::path scratch(const std::string& name) {
 }
 
 // The largest coordinate difference, relative to the mesh's extent.
-inline double relative_difference(const SimplexMesh& a, const SimplexMesh& b) {
+inline double relative_difference(const Mesh& a, const Mesh& b) {
     double extent = 0.0, difference = 0.0;
     for (std::size_t i = 0; i < a.coordinates().size(); ++i) {
         extent = std::max(extent, std::abs(a.coordinates()[i]));
@@ -44,11 +44,11 @@ inline double relative_difference(const SimplexMesh& a, const SimplexMesh& b) {
 // along x (so that a ghost's stale copy would show). Rank 0 checks that every vertex comes at its
 // global id (canonical order) with its owner's coordinates and fixed flag, and gets the whole
 // mesh; the other ranks an empty one.
-inline SimplexMesh gathered_whole(const SimplexMesh& input) {
+inline Mesh gathered_whole(const Mesh& input) {
     auto part = scatter(input);
     for (VertexId v = 0; v < part.mesh.num_vertices(); ++v)
         if (part.vertex_owner[v] == rank()) part.mesh.coordinates()[3 * static_cast<std::size_t>(v)] += 0.25;
-    SimplexMesh whole = part.gather_whole();
+    Mesh whole = part.gather_whole();
     if (rank() != 0) {
         BOOST_TEST(whole.num_vertices() == 0);
         return whole;
@@ -70,12 +70,12 @@ inline SimplexMesh gathered_whole(const SimplexMesh& input) {
 // The global solver on `input`, serially and on the ranks: the distributed run must take the same
 // steps to the same mesh, bit for bit, and never make things worse. Returns both summaries (and
 // on rank 0 the distributed run's mesh in `result`, if given).
-inline std::pair<Summary, Summary> serial_and_distributed(const SimplexMesh& input, const GlobalSolverOptions& options,
-                                                          SimplexMesh* result = nullptr) {
-    SimplexMesh serial = input;
+inline std::pair<Summary, Summary> serial_and_distributed(const Mesh& input, const GlobalSolverOptions& options,
+                                                          Mesh* result = nullptr) {
+    Mesh serial = input;
     const auto serial_summary = GlobalSolver(options).improve(serial);
     BOOST_TEST_MESSAGE("serial: " << serial_summary.brief_report());
-    SimplexMesh gathered = input;
+    Mesh gathered = input;
     auto part = scatter(input);
     const auto summary = GlobalSolver(options).improve(part);
     part.gather_coordinates(rank() == 0 ? &gathered : nullptr);

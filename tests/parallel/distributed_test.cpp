@@ -127,7 +127,7 @@ BOOST_AUTO_TEST_CASE(gather_returns_the_mesh_and_the_report_equals_the_serial_on
         BOOST_TEST(distributed.metrics[i].all.mean == serial.metrics[i].all.mean);
         BOOST_TEST(distributed.metrics[i].all.histogram == serial.metrics[i].all.histogram);
     }
-    pv::SimplexMesh copy = whole;
+    pv::Mesh copy = whole;
     for (double& c : copy.coordinates()) c = 0.0;
     part.gather_coordinates(rank() == 0 ? &copy : nullptr);
     if (rank() == 0) BOOST_TEST(relative_difference(copy, whole) == 0.0);
@@ -140,10 +140,10 @@ BOOST_AUTO_TEST_CASE(global_solver_gives_the_serial_answer) {
         pv::GlobalSolverOptions options;
         options.termination.max_iterations = 12;
         options.untangle_termination.max_iterations = 150;
-        pv::SimplexMesh serial = input;
+        pv::Mesh serial = input;
         const auto serial_summary = pv::GlobalSolver(options).improve(serial);
 
-        pv::SimplexMesh gathered = input;
+        pv::Mesh gathered = input;
         auto part = scatter(input, mode);
         const auto summary = pv::GlobalSolver(options).improve(part);
         part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
@@ -227,13 +227,13 @@ BOOST_AUTO_TEST_CASE(local_untangling_where_the_ascent_stalls_gives_the_same_ans
     auto local_rounds = [](const pv::Summary& s) {
         return std::count_if(s.history.begin(), s.history.end(), [](const auto& r) { return r.phase == "untangle_local"; });
     };
-    pv::SimplexMesh alone = input;
+    pv::Mesh alone = input;
     auto alone_part = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input, {});
     const auto alone_summary = pv::GlobalSolver(options).improve(alone_part);
     alone_part.gather_coordinates(&alone);
     BOOST_TEST_REQUIRE(local_rounds(alone_summary) > 0);
 
-    pv::SimplexMesh gathered = input;
+    pv::Mesh gathered = input;
     auto part = scatter(input);
     const auto summary = pv::GlobalSolver(options).improve(part);
     part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
@@ -247,7 +247,7 @@ BOOST_AUTO_TEST_CASE(local_untangling_where_the_ascent_stalls_gives_the_same_ans
     pv::test::check_never_worse(summary);
 
     // The serial run untangles too.
-    pv::SimplexMesh serial = input;
+    pv::Mesh serial = input;
     const auto serial_summary = pv::GlobalSolver(options).improve(serial);
     BOOST_TEST(serial_summary.after.inverted == 0);
 }
@@ -256,9 +256,9 @@ BOOST_AUTO_TEST_CASE(shape_improvement_on_a_valid_mesh_matches_too) {
     const auto input = pv::test::shared_mesh("stellar/house2.node");
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 15;
-    pv::SimplexMesh serial = input;
+    pv::Mesh serial = input;
     const auto serial_summary = pv::GlobalSolver(options).improve(serial);
-    pv::SimplexMesh gathered = input;
+    pv::Mesh gathered = input;
     auto part = scatter(input);
     const auto summary = pv::GlobalSolver(options).improve(part);
     part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
@@ -286,8 +286,8 @@ BOOST_AUTO_TEST_CASE(global_solver_hands_the_part_back_in_its_element_order) {
 // gather_whole() builds on rank 0 the mesh no rank holds in a run from pieces: every vertex once,
 // at its global id, with its owner's coordinates and flag; every element once.
 BOOST_AUTO_TEST_CASE(gather_whole_builds_the_whole_mesh_in_the_canonical_order) {
-    pv::SimplexMesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
-    const pv::SimplexMesh whole = pv::test::gathered_whole(input);
+    pv::Mesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    const pv::Mesh whole = pv::test::gathered_whole(input);
     if (rank() != 0) return;
     const auto order = pv::locality_order(input);
     BOOST_REQUIRE(whole.num_elements() == input.num_elements());
@@ -307,7 +307,7 @@ BOOST_AUTO_TEST_CASE(more_ranks_than_vertices_is_an_error_on_every_rank) {
     // ranks - 1 vertices (at least one element needs 3; fewer vertices make a mesh of none).
     std::vector<double> xyz;
     for (int i = 0; i < ranks() - 1; ++i) xyz.insert(xyz.end(), {double(i), 0.0, 0.0});
-    const pv::SimplexMesh tiny(pv::ElementKind::Triangle, xyz, {});
+    const pv::Mesh tiny(pv::ElementKind::Triangle, xyz, {});
     BOOST_CHECK_THROW(scatter(tiny), pv::OptionError);
 }
 
@@ -345,7 +345,7 @@ BOOST_AUTO_TEST_CASE(pieces_written_then_read_give_the_serial_answer) {
         pv::GlobalSolverOptions options;
         options.termination.max_iterations = 10;
         const auto summary = pv::GlobalSolver(options).improve(part);
-        pv::SimplexMesh serial = input;
+        pv::Mesh serial = input;
         const auto serial_summary = pv::GlobalSolver(options).improve(serial);
         BOOST_TEST(summary.worst_after == serial_summary.worst_after);
         BOOST_TEST(summary.iterations == serial_summary.iterations);
@@ -476,7 +476,7 @@ BOOST_AUTO_TEST_CASE(untangles_and_never_makes_the_worst_element_worse) {
     BOOST_TEST_MESSAGE(ranks() << " ranks: " << summary.brief_report());
     BOOST_TEST(summary.before.inverted > 0);
     BOOST_TEST(summary.after.inverted == 0);
-    pv::SimplexMesh gathered = input;
+    pv::Mesh gathered = input;
     part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
     if (rank() == 0) {
         BOOST_TEST(pv::count_orientations(gathered).inverted == 0);
@@ -505,7 +505,7 @@ BOOST_AUTO_TEST_CASE(energy_untangling_gives_the_one_rank_answer) {
     auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input);
     const auto alone_summary = pv::LocalSolver(options).improve(alone);
     BOOST_TEST(summary.iterations == alone_summary.iterations);
-    pv::SimplexMesh from_one = input, from_all = input;
+    pv::Mesh from_one = input, from_all = input;
     alone.gather_coordinates(&from_one);
     part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
     if (rank() == 0) {
@@ -520,7 +520,7 @@ BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
     options.termination.max_iterations = 8;
     auto part = scatter(input);
     const auto summary = pv::LocalSolver(options).improve(part);
-    pv::SimplexMesh serial = input;
+    pv::Mesh serial = input;
     const auto serial_summary = pv::LocalSolver(options).improve(serial);
     BOOST_TEST(summary.worst_after > summary.worst_before);
     BOOST_TEST(summary.after.inverted == 0);
@@ -530,7 +530,7 @@ BOOST_AUTO_TEST_CASE(improves_a_valid_mesh_like_the_serial_smoother) {
     // Colors and updates do not depend on the split: the same mesh as on one rank.
     auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &input);
     pv::LocalSolver(options).improve(alone);
-    pv::SimplexMesh from_one = input, from_all = input;
+    pv::Mesh from_one = input, from_all = input;
     alone.gather_coordinates(&from_one);
     part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
     if (rank() == 0) BOOST_TEST(relative_difference(from_all, from_one) == 0.0);
@@ -547,10 +547,10 @@ BOOST_AUTO_TEST_CASE(a_queue_runs_on_a_part_as_on_the_whole_mesh) {
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 8;
     options.untangle_termination.max_iterations = 150;
-    pv::SimplexMesh serial = input;
+    pv::Mesh serial = input;
     const pv::QueueResult serial_result = pv::wrappers::untangle_then_improve(options).run(serial);
 
-    pv::SimplexMesh gathered = input;
+    pv::Mesh gathered = input;
     auto part = scatter(input);
     const pv::QueueResult result = pv::wrappers::untangle_then_improve(options).run(part);
     part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
@@ -590,7 +590,7 @@ BOOST_AUTO_TEST_CASE(a_whole_run_writes_the_serial_answer) {
     if (rank() == 0) {
         pv::GlobalSolverOptions solver_options;
         solver_options.termination.max_iterations = 10;
-        pv::SimplexMesh serial = input;
+        pv::Mesh serial = input;
         pv::GlobalSolver(solver_options).improve(serial);
         const auto written = pv::read_mesh(output).mesh;
         BOOST_TEST(relative_difference(written, serial) <= 1e-10);
@@ -608,7 +608,7 @@ BOOST_AUTO_TEST_SUITE(distributed_sliding)
 // the worst element of all no lower. (Its own boundary-fixed run has half the budget: on a budget
 // too small for both, tri_20258 after 30 iterations, a fixed run on all of it can end higher.)
 template <class Solver, class Options>
-void check_no_worse_than_fixed(const pv::SimplexMesh& input, Options options, const pv::Summary& slid) {
+void check_no_worse_than_fixed(const pv::Mesh& input, Options options, const pv::Summary& slid) {
     options.boundary = Options::Boundary::Fixed;
     auto part = scatter(input);
     const auto fixed = Solver(options).improve(part);
@@ -627,7 +627,7 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
     pv::GlobalSolverOptions options;
     options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
     options.termination.max_iterations = 100;  // enough for both runs (check_no_worse_than_fixed)
-    pv::SimplexMesh gathered = input;
+    pv::Mesh gathered = input;
     const auto [serial, slid] = serial_and_distributed(input, options, &gathered);
     BOOST_REQUIRE(slid.boundary.has_value());
     BOOST_TEST(slid.boundary->moved > 0);
@@ -657,7 +657,7 @@ BOOST_AUTO_TEST_CASE(the_local_smoother_slides_to_the_one_rank_mesh) {
     BOOST_TEST(slid.boundary->moved > 0);
     BOOST_TEST(slid.boundary->moved == alone_summary.boundary->moved);
     check_no_worse_than_fixed<pv::LocalSolver>(input, options, slid);
-    pv::SimplexMesh from_one = input, from_all = input;
+    pv::Mesh from_one = input, from_all = input;
     alone.gather_coordinates(&from_one);
     part.gather_coordinates(rank() == 0 ? &from_all : nullptr);
     if (rank() == 0) {

@@ -46,13 +46,13 @@ int main(int argc, char** argv) {
         }
     }
     omp_set_num_threads(threads);
-    const pv::SimplexMesh grid = pv::test::cube_grid(n, fill);
+    const pv::Mesh grid = pv::test::cube_grid(n, fill);
     std::cout << "grid " << n << "^3: " << grid.num_cells() << " cells, " << grid.num_elements() << " corner simplices, "
               << grid.num_vertices() << " vertices; " << threads << " thread(s)\n";
     std::cout << "seed solver    inverted_before inverted_after worst_after iterations seconds us/it/cell us/it/corner\n";
     for (int seed = 1; seed <= seeds; ++seed)
         for (int method : {0, 1}) {
-            pv::SimplexMesh mesh = grid;
+            pv::Mesh mesh = grid;
             pv::PerturbOptions perturb;
             perturb.fraction = fraction;
             perturb.amount = amount;

@@ -66,12 +66,12 @@ int main(int argc, char** argv) {
 
         // Rank 0 reads and splits the mesh, as `paloverde run` does (a failure there stops every rank).
         auto start = Clock::now();
-        pv::SimplexMesh whole;
+        pv::Mesh whole;
         pv::parallel::together(MPI_COMM_WORLD, rank == 0, [&] { whole = pv::read_mesh(argv[1]).mesh; });
         double read_seconds = seconds_since(start);
         MPI_Bcast(&read_seconds, 1, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         auto part = pv::DistributedMesh::scatter(MPI_COMM_WORLD, rank == 0 ? &whole : nullptr, distribute);
-        whole = pv::SimplexMesh();
+        whole = pv::Mesh();
 
         MPI_Barrier(MPI_COMM_WORLD);
         start = Clock::now();

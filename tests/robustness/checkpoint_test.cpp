@@ -18,12 +18,12 @@ using pv::test::StopRequestCleared;
 namespace {
 
 struct Outcome {
-    pv::SimplexMesh mesh;
+    pv::Mesh mesh;
     pv::Summary summary;
 };
 
 template <class Solver, class Options>
-Outcome run(const pv::SimplexMesh& input, const Options& options, pv::IterationObserver observer = {}) {
+Outcome run(const pv::Mesh& input, const Options& options, pv::IterationObserver observer = {}) {
     Outcome out{input, {}};
     Solver solver(options);
     if (observer) solver.set_observer(std::move(observer));
@@ -50,7 +50,7 @@ struct CheckpointCopies {
 
 // Checks that resuming from each copy ends as `reference` did.
 template <class Solver, class Options>
-void check_resumes(const pv::SimplexMesh& input, Options options, const CheckpointCopies& copies, const Outcome& reference,
+void check_resumes(const pv::Mesh& input, Options options, const CheckpointCopies& copies, const Outcome& reference,
                    std::size_t expected) {
     BOOST_TEST_REQUIRE(copies.phase.size() == expected);
     for (const auto& [iteration, path] : copies.at) {
@@ -234,7 +234,7 @@ namespace {
 // A valid checkpoint of a short global run on tire, and the options that wrote it.
 struct Written {
     pv::test::ScratchDir dir{"checkpoint_refused"};
-    pv::SimplexMesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    pv::Mesh input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
     pv::GlobalSolverOptions options;
     fs::path file = dir / "run.ckpt";
     std::string bytes;
@@ -251,7 +251,7 @@ struct Written {
 
 // Resuming from `bytes` throws a FileError whose message has `words`; the mesh is left as it was.
 template <class Solver, class Options>
-void check_refused(const pv::SimplexMesh& input, Options options, const fs::path& path, const std::string& bytes,
+void check_refused(const pv::Mesh& input, Options options, const fs::path& path, const std::string& bytes,
                    const std::string& words) {
     pv::test::write_bytes(path, bytes);
     options.checkpoint.resume = path.string();

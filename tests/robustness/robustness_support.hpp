@@ -22,7 +22,7 @@ struct StopRequestCleared {
 };
 
 // Bit for bit the same coordinates.
-inline bool same_coordinates(const SimplexMesh& a, const SimplexMesh& b) {
+inline bool same_coordinates(const Mesh& a, const Mesh& b) {
     return a.coordinates().size() == b.coordinates().size() &&
            std::equal(a.coordinates().begin(), a.coordinates().end(), b.coordinates().begin(),
                       [](double x, double y) { return std::bit_cast<std::uint64_t>(x) == std::bit_cast<std::uint64_t>(y); });

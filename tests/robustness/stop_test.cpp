@@ -41,7 +41,7 @@ std::pair<long, double> best_by_rule(const pv::Summary& s, const std::string& ph
 }
 
 template <class Solver>
-pv::Summary stopped_at(Solver& solver, pv::SimplexMesh& mesh, int k) {
+pv::Summary stopped_at(Solver& solver, pv::Mesh& mesh, int k) {
     solver.set_observer([k](const pv::IterationRecord& r) {
         if (r.iteration == k) pv::request_stop();
     });

@@ -21,17 +21,17 @@ namespace {
 const std::vector<int> kFills{0, 1, 2, 3, 4};  // quadrilaterals, then each Fill
 const char* const kFillNames[] = {"quadrilaterals", "hexahedra", "wedges", "pyramids", "mixed"};
 
-pv::SimplexMesh grid(int fill) {
+pv::Mesh grid(int fill) {
     return fill == 0 ? pv::test::quad_grid(12) : pv::test::cube_grid(5, static_cast<Fill>(fill - 1));
 }
 
-pv::SimplexMesh tangled_grid(int fill, int seed) {
+pv::Mesh tangled_grid(int fill, int seed) {
     auto mesh = pv::test::tangled(grid(fill), seed);
     BOOST_TEST_REQUIRE(pv::count_orientations(mesh).inverted > 0);
     return mesh;
 }
 
-pv::Summary improve(int method, pv::SimplexMesh& mesh) {
+pv::Summary improve(int method, pv::Mesh& mesh) {
     if (method == 0) return pv::GlobalSolver().improve(mesh);
     return pv::LocalSolver().improve(mesh);
 }

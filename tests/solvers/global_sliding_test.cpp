@@ -30,7 +30,7 @@ pv::GlobalSolverOptions global(Boundary boundary) {
 }
 
 // The smallest dihedral angle of all the mesh's tets, in degrees.
-double smallest_dihedral(const pv::SimplexMesh& mesh) {
+double smallest_dihedral(const pv::Mesh& mesh) {
     std::vector<double> angles(static_cast<std::size_t>(mesh.num_elements()));
     pv::make_metric("min_dihedral_deg")->evaluate(mesh, mesh.coordinates(), 0, mesh.num_elements(), angles.data());
     return *std::min_element(angles.begin(), angles.end());

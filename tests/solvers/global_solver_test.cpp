@@ -326,7 +326,7 @@ BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
     BOOST_TEST((summary.reason == pv::TerminationReason::NothingToMove));
     BOOST_TEST(!summary.success());
     BOOST_TEST(summary.message.find("fixed") != std::string::npos);
-    pv::SimplexMesh empty;
+    pv::Mesh empty;
     BOOST_TEST((pv::GlobalSolver().improve(empty).reason == pv::TerminationReason::NothingToMove));
 }
 
@@ -363,8 +363,8 @@ BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
 
 BOOST_AUTO_TEST_CASE(surface_triangle_meshes_are_refused) {
     // A tetrahedron's surface: triangles not in one plane.
-    pv::SimplexMesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
-                         {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+    pv::Mesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
+                  {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
     mesh.set_fixed({0, 1, 1, 1});
     BOOST_CHECK_THROW(pv::GlobalSolver().improve(mesh), pv::MeshError);
 }

@@ -259,7 +259,7 @@ BOOST_AUTO_TEST_CASE(all_vertices_fixed_means_nothing_to_move) {
     const auto summary = pv::LocalSolver().improve(mesh);
     BOOST_TEST((summary.reason == pv::TerminationReason::NothingToMove));
     BOOST_TEST(!summary.success());
-    pv::SimplexMesh empty;
+    pv::Mesh empty;
     BOOST_TEST((pv::LocalSolver().improve(empty).reason == pv::TerminationReason::NothingToMove));
 }
 
@@ -305,7 +305,7 @@ BOOST_DATA_TEST_CASE(smart_laplace_never_makes_anything_worse, bdata::make(kVali
 
 // A fan around one free vertex whose neighbours form a polygon with a deep notch from the top:
 // their mean lies above the notch's tip, outside the polygon's kernel, so moving there inverts.
-pv::SimplexMesh notched_fan() {
+pv::Mesh notched_fan() {
     std::vector<double> xyz = {0.5, 0.1, 0,  // 0: free, below the notch's tip
                                0, 0, 0,  1, 0, 0,  1, 1, 0,  0.6, 1, 0,  0.5, 0.2, 0,  0.4, 1, 0,  0, 1, 0};
     std::vector<pv::VertexId> triangles = {0, 1, 2,  0, 2, 3,  0, 3, 4,  0, 4, 5,  0, 5, 6,  0, 6, 7,  0, 7, 1};
@@ -316,7 +316,7 @@ pv::SimplexMesh notched_fan() {
         const auto* c = &xyz[3 * triangles[t + 2]];
         if ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) < 0) std::swap(triangles[t + 1], triangles[t + 2]);
     }
-    pv::SimplexMesh mesh(pv::ElementKind::Triangle, xyz, triangles);
+    pv::Mesh mesh(pv::ElementKind::Triangle, xyz, triangles);
     mesh.set_fixed({0, 1, 1, 1, 1, 1, 1, 1});
     return mesh;
 }

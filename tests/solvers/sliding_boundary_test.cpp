@@ -121,9 +121,9 @@ BOOST_AUTO_TEST_CASE(bad_feature_angles_are_refused) {
 
 // Two tets sharing only an edge: four boundary faces meet there, and no surface is defined.
 BOOST_AUTO_TEST_CASE(a_non_manifold_boundary_is_refused) {
-    pv::SimplexMesh mesh(pv::ElementKind::Tetrahedron,
-                         {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, -1, 0.5, 0.5, -2},
-                         {0, 1, 2, 3, 1, 0, 4, 5});
+    pv::Mesh mesh(pv::ElementKind::Tetrahedron,
+                  {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, -1, 0.5, 0.5, -2},
+                  {0, 1, 2, 3, 1, 0, 4, 5});
     auto options = sliding();
     try {
         pv::LocalSolver(options).improve(mesh);

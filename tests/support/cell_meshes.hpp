@@ -7,7 +7,7 @@
 
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/perturb.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde::test {
 
@@ -38,15 +38,15 @@ struct CellSoup {
         xyz.insert(xyz.end(), {x, y, z});
         return static_cast<VertexId>(xyz.size() / 3 - 1);
     }
-    SimplexMesh mesh() const {
-        SimplexMesh m = SimplexMesh::from_cells(xyz, types, cells);
+    Mesh mesh() const {
+        Mesh m = Mesh::from_cells(xyz, types, cells);
         m.fix_boundary();
         return m;
     }
 };
 
 // A unit square of n x n quadrilaterals.
-inline SimplexMesh quad_grid(int n) {
+inline Mesh quad_grid(int n) {
     CellSoup s;
     for (int j = 0; j <= n; ++j)
         for (int i = 0; i <= n; ++i) s.point(double(i) / n, double(j) / n, 0.0);
@@ -64,7 +64,7 @@ enum class Fill { Hexahedra, Wedges, Pyramids, Mixed, Tetrahedra };
 // triangles; elsewhere hexahedra and pyramids in a checkerboard), or six tetrahedra each (Kuhn's
 // split: one per path from corner 000 to 111 along the axes), the simplex mesh of the same
 // vertices to compare with.
-inline SimplexMesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
+inline Mesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
     CellSoup s;
     for (int k = 0; k <= n; ++k)
         for (int j = 0; j <= n; ++j)
@@ -106,7 +106,7 @@ inline SimplexMesh cube_grid(int n, Fill fill = Fill::Hexahedra) {
 
 // A grid tangled as the tests of cells tangle it: 30% of its free vertices moved by up to 0.8
 // local edge lengths.
-inline SimplexMesh tangled(SimplexMesh mesh, int seed) {
+inline Mesh tangled(Mesh mesh, int seed) {
     PerturbOptions perturb;
     perturb.fraction = 0.3;
     perturb.amount = 0.8;

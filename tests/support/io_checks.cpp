@@ -78,7 +78,7 @@ void check_error_in_new_file(const ScratchDir& dir, std::string_view extension, 
     check_error(path, fragments);
 }
 
-double signed_volume(const SimplexMesh& mesh, ElementId e) {
+double signed_volume(const Mesh& mesh, ElementId e) {
     const auto t = mesh.element(e);
     const Vec3 a = mesh.point(t[0]), b = mesh.point(t[1]), c = mesh.point(t[2]), d = mesh.point(t[3]);
     const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
@@ -87,7 +87,7 @@ double signed_volume(const SimplexMesh& mesh, ElementId e) {
     return u[0] * (v[1] * w[2] - v[2] * w[1]) - u[1] * (v[0] * w[2] - v[2] * w[0]) + u[2] * (v[0] * w[1] - v[1] * w[0]);
 }
 
-int count_tets(const SimplexMesh& mesh, bool positive) {
+int count_tets(const Mesh& mesh, bool positive) {
     int count = 0;
     for (ElementId e = 0; e < mesh.num_elements(); ++e) count += positive ? signed_volume(mesh, e) > 0.0 : signed_volume(mesh, e) < 0.0;
     return count;
@@ -102,7 +102,7 @@ void check_same_values(const std::vector<double>& a, const std::vector<double>& 
     BOOST_TEST(std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
 }
 
-void check_same_mesh(const SimplexMesh& a, const SimplexMesh& b) {
+void check_same_mesh(const Mesh& a, const Mesh& b) {
     BOOST_TEST(static_cast<int>(a.kind()) == static_cast<int>(b.kind()));
     BOOST_REQUIRE_EQUAL(a.num_vertices(), b.num_vertices());
     BOOST_REQUIRE_EQUAL(a.num_elements(), b.num_elements());
@@ -110,7 +110,7 @@ void check_same_mesh(const SimplexMesh& a, const SimplexMesh& b) {
     BOOST_TEST(std::equal(a.connectivity().begin(), a.connectivity().end(), b.connectivity().begin()));
 }
 
-SimplexMesh awkward_triangles() {
+Mesh awkward_triangles() {
     const int nx = 5, ny = 4;
     std::vector<double> xyz;
     for (int j = 0; j < ny; ++j)
@@ -124,7 +124,7 @@ SimplexMesh awkward_triangles() {
             const VertexId v = j * nx + i;
             triangles.insert(triangles.end(), {v, v + 1, v + nx + 1, v, v + nx + 1, v + nx});
         }
-    return SimplexMesh(ElementKind::Triangle, std::move(xyz), std::move(triangles));
+    return Mesh(ElementKind::Triangle, std::move(xyz), std::move(triangles));
 }
 
 }  // namespace paloverde::test

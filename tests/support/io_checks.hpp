@@ -8,7 +8,7 @@
 #include <string_view>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "support/test_support.hpp"
 
 namespace paloverde::test {
@@ -48,11 +48,11 @@ void check_error_in_new_file(const ScratchDir& dir, std::string_view extension, 
 
 // Six times the signed volume of tetrahedron `e` (positive when its corners are ordered the
 // right-handed way).
-double signed_volume(const SimplexMesh& mesh, ElementId e);
+double signed_volume(const Mesh& mesh, ElementId e);
 
 // How many tetrahedra have a positive (or, with positive = false, a negative) signed volume.
-int count_tets(const SimplexMesh& mesh, bool positive);
-inline int positive_tets(const SimplexMesh& mesh) { return count_tets(mesh, true); }
+int count_tets(const Mesh& mesh, bool positive);
+inline int positive_tets(const Mesh& mesh) { return count_tets(mesh, true); }
 
 // Same size and the same values bit for bit (so -0.0 and 0.0 differ, and NaNs compare by payload).
 bool same_bits(std::span<const double> a, std::span<const double> b);
@@ -61,10 +61,10 @@ bool same_bits(std::span<const double> a, std::span<const double> b);
 void check_same_values(const std::vector<double>& a, const std::vector<double>& b);
 
 // Checks the same kind, connectivity, and coordinates bit for bit (so -0.0 and 0.0 differ).
-void check_same_mesh(const SimplexMesh& a, const SimplexMesh& b);
+void check_same_mesh(const Mesh& a, const Mesh& b);
 
 // A small triangle mesh off the xy plane with awkward coordinates: thirds, square roots, -0.0
 // and a denormal.
-SimplexMesh awkward_triangles();
+Mesh awkward_triangles();
 
 }  // namespace paloverde::test

@@ -23,7 +23,7 @@ inline double worst_of_all(const Summary& summary, const std::string& metric) { 
 #ifdef PALOVERDE_SOURCE_DIR
 // The bundled example: a 6 x 6 x 6 cube of tets, tangled inside. Untangling keeps the boundary;
 // the shape phase then slides it.
-inline SimplexMesh tangled_cube() {
+inline Mesh tangled_cube() {
     return read_mesh(std::filesystem::path(PALOVERDE_SOURCE_DIR) / "examples/data/tangled_cube.vtk").mesh;
 }
 #endif
@@ -31,7 +31,7 @@ inline SimplexMesh tangled_cube() {
 // The run `slide` left `improved` valid, no worse than `input`, with every boundary vertex on the
 // input's boundary triangulation to 1e-9 of the bounding-box diagonal, corners where they were,
 // and the mesh's fixed flags its own again.
-inline void check_on_the_input_boundary(const SimplexMesh& input, const SimplexMesh& improved, const Summary& slide) {
+inline void check_on_the_input_boundary(const Mesh& input, const Mesh& improved, const Summary& slide) {
     const BoundarySurface surface(input);
     const double tolerance = 1e-9 * surface.bounding_box_diagonal();
     BOOST_TEST(slide.valid());
@@ -52,7 +52,7 @@ inline void check_on_the_input_boundary(const SimplexMesh& input, const SimplexM
 // An axis-aligned box mesh slid on its boundary: a face vertex keeps the coordinate of its face's
 // plane, an edge vertex the two of its edge, a corner all three, to 1e-9 of the diagonal. Returns
 // how many boundary vertices moved, by role (BoundaryRole as index).
-inline std::array<int, 4> check_box_sides(const SimplexMesh& input, const SimplexMesh& improved) {
+inline std::array<int, 4> check_box_sides(const Mesh& input, const Mesh& improved) {
     const BoundarySurface surface(input);
     const double tolerance = 1e-9 * surface.bounding_box_diagonal();
     const auto x = improved.coordinates();
@@ -83,7 +83,7 @@ inline std::array<int, 4> check_box_sides(const SimplexMesh& input, const Simple
 // The tangled cube slid (`slide`, leaving `improved`) against the boundary-fixed run `fixed`:
 // on its boundary, faces flat, edges straight, corners in place, the volume kept, the worst
 // element of all no lower; face and edge vertices moved.
-inline void check_cube_slid(const SimplexMesh& input, const SimplexMesh& improved, const Summary& fixed,
+inline void check_cube_slid(const Mesh& input, const Mesh& improved, const Summary& fixed,
                             const Summary& slide) {
     check_on_the_input_boundary(input, improved, slide);
     BOOST_TEST(slide.boundary->sliding == 210);  // 150 on the faces, 60 on the edges

@@ -15,7 +15,7 @@
 
 namespace paloverde::test {
 
-inline SimplexMesh shared_mesh(const std::string& name, OrientationMode orientation = OrientationMode::Auto) {
+inline Mesh shared_mesh(const std::string& name, OrientationMode orientation = OrientationMode::Auto) {
     ReadOptions read;
     read.orientation = orientation;
     return read_mesh(shared_data(name), read).mesh;
@@ -24,21 +24,21 @@ inline SimplexMesh shared_mesh(const std::string& name, OrientationMode orientat
 // The same mesh with corners i and j of every element swapped, as a tool with the other
 // orientation convention would write it (not marked flipped: what such a file holds), its
 // coordinates times `scale`.
-inline SimplexMesh mirrored(const SimplexMesh& mesh, int i = 2, int j = 3, double scale = 1.0) {
+inline Mesh mirrored(const Mesh& mesh, int i = 2, int j = 3, double scale = 1.0) {
     std::vector<VertexId> connectivity(mesh.connectivity().begin(), mesh.connectivity().end());
     const auto k = static_cast<std::size_t>(mesh.corners());
     for (std::size_t first = 0; first < connectivity.size(); first += k)
         std::swap(connectivity[first + static_cast<std::size_t>(i)], connectivity[first + static_cast<std::size_t>(j)]);
     std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
     for (double& x : xyz) x *= scale;
-    SimplexMesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
+    Mesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
     out.set_fixed(std::vector<std::uint8_t>(mesh.fixed().begin(), mesh.fixed().end()));
     return out;
 }
 
 // A shared mesh with `fraction` of its interior vertices moved by up to `amount` local edge
 // lengths; requires that it came out tangled.
-inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fraction, int seed, double amount = 1.0) {
+inline Mesh perturbed_shared_mesh(const std::string& name, double fraction, int seed, double amount = 1.0) {
     auto mesh = shared_mesh(name);
     PerturbOptions perturb;
     perturb.amount = amount;
@@ -51,9 +51,9 @@ inline SimplexMesh perturbed_shared_mesh(const std::string& name, double fractio
 
 // Two tets: the second inverted with every vertex fixed, the first with a free, badly placed
 // vertex that can still be improved.
-inline SimplexMesh frozen_inverted_tet() {
-    SimplexMesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
-                     {0, 1, 2, 3, 0, 2, 1, 4});
+inline Mesh frozen_inverted_tet() {
+    Mesh mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.1, 0.1, 0.05, 0, 0, 1},
+              {0, 1, 2, 3, 0, 2, 1, 4});
     mesh.set_fixed({1, 1, 1, 0, 1});
     return mesh;
 }
@@ -74,7 +74,7 @@ inline void check_never_worse(const Summary& summary) {
 }
 
 // Fixed vertices are exactly where they were.
-inline void check_fixed_unchanged(const SimplexMesh& mesh, const std::vector<double>& before) {
+inline void check_fixed_unchanged(const Mesh& mesh, const std::vector<double>& before) {
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (mesh.fixed()[v])
             for (int c = 0; c < 3; ++c) BOOST_TEST(mesh.coordinates()[3 * v + c] == before[3 * v + c]);

@@ -10,7 +10,7 @@
 namespace pv = paloverde;
 
 namespace {
-pv::SimplexMesh tangled() { return pv::read_mesh(pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk")).mesh; }
+pv::Mesh tangled() { return pv::read_mesh(pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk")).mesh; }
 const pv::QualityReport& report(const pv::QueueResult& r, std::size_t i) { return std::get<pv::QualityReport>(r.steps[i].outcome); }
 }  // namespace
 

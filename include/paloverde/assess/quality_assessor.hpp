@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "paloverde/metrics/quality_metric.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
@@ -62,8 +62,8 @@ public:
     explicit QualityAssessor(const std::vector<std::string>& metric_names, int histogram_bins = 10);
 
     // Metrics that do not support the mesh's element kind are left out of the report.
-    QualityReport assess(const SimplexMesh& mesh) const { return assess(mesh, mesh.coordinates()); }
-    QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates) const;
+    QualityReport assess(const Mesh& mesh) const { return assess(mesh, mesh.coordinates()); }
+    QualityReport assess(const Mesh& mesh, std::span<const double> coordinates) const;
     // The report of the whole mesh the part belongs to. A distributed part's is collective, the
     // same on every rank, and equal to the serial report except that worst_element is -1.
     QualityReport assess(const MeshPart& part) const;
@@ -71,7 +71,7 @@ public:
 private:
     // Elements with counted[e] (all when empty) and vertices with owned[v] enter the report;
     // sums go through the reducer.
-    QualityReport assess(const SimplexMesh& mesh, std::span<const double> coordinates,
+    QualityReport assess(const Mesh& mesh, std::span<const double> coordinates,
                          std::span<const std::uint8_t> counted, std::span<const std::uint8_t> owned,
                          const Reducer& reducer, const Vec3& plane_normal) const;
 

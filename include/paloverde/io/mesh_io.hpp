@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -50,7 +50,7 @@ struct WriteOptions {
 };
 
 struct MeshFile {
-    SimplexMesh mesh;
+    Mesh mesh;
     std::vector<Field> point_fields;  // as read, including `fixed` if present
     std::vector<Field> cell_fields;   // one tuple per cell of `mesh` (mesh.num_cells())
     bool fixed_from_file = false;     // whether a `fixed` point field set the fixed flags
@@ -66,10 +66,10 @@ MeshFile read_mesh(const std::filesystem::path& path, const ReadOptions& options
 
 // Writes to a temporary file beside `path` and renames it over `path` only once complete, so a
 // failure never leaves a partial file or destroys an existing one. A mesh whose elements were
-// flipped on reading (SimplexMesh::elements_flipped()) is written in its file's order. The cells
+// flipped on reading (Mesh::elements_flipped()) is written in its file's order. The cells
 // are written (a simplex mesh's elements are its cells); cell fields have one tuple per cell.
 void write_mesh(const std::filesystem::path& path,
-                const SimplexMesh& mesh,
+                const Mesh& mesh,
                 const WriteOptions& options = {},
                 std::span<const Field> point_fields = {},
                 std::span<const Field> cell_fields = {});

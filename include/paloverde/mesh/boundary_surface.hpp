@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "paloverde/core/types.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -49,7 +49,7 @@ struct BoundaryFacets {
     double diagonal = 0.0;  // of the whole mesh's bounding box
     // A mesh's own boundary, its vertices named by their index. Throws MeshError for a surface
     // (non-planar triangle) mesh.
-    static BoundaryFacets of(const SimplexMesh& mesh);
+    static BoundaryFacets of(const Mesh& mesh);
 };
 
 enum class BoundaryRole : std::uint8_t { Interior, Surface, Curve, Corner };
@@ -58,7 +58,7 @@ class BoundarySurface {
 public:
     // From the mesh's current coordinates (the input's boundary, before any vertex moves).
     // Tetrahedra, or planar triangles; throws MeshError for a surface (non-planar triangle) mesh.
-    explicit BoundarySurface(const SimplexMesh& mesh, const SurfaceOptions& options = {});
+    explicit BoundarySurface(const Mesh& mesh, const SurfaceOptions& options = {});
     // From a boundary triangulation; `vertex_ids` names each vertex of the caller's mesh in the
     // boundary's numbering (a vertex not among boundary.ids is interior). Throws MeshError.
     BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,

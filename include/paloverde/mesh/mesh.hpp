@@ -1,30 +1,176 @@
 #pragma once
-// The abstract mesh interface, in Mesquite's spirit: any application mesh can be smoothed by
-// exposing it through this interface. Access is by batches (spans of ids), so a solver copies a
-// whole mesh in or out with a handful of virtual calls, never one per vertex.
-#include <cstddef>
+// The native mesh, stored as flat arrays so that solvers stream over coordinates and connectivity
+// without indirection. Its elements are simplices of one kind (triangles or tetrahedra): the
+// mesh's own, or, for a mesh with quadrilaterals, hexahedra, wedges or pyramids (cells), the
+// corner simplices of its cells (cell_types.hpp), each with the map that rates it against the
+// ideal cell's corner. Solvers, metrics and exact predicates see only simplices; readers,
+// writers, the boundary and the reports see the cells.
+#include <cstdint>
 #include <span>
+#include <vector>
 
 #include "paloverde/core/types.hpp"
+#include "paloverde/mesh/cell_types.hpp"
+#include "paloverde/mesh/mesh_interface.hpp"
 
 namespace paloverde {
 
-class Mesh {
+class Mesh final : public MeshInterface {
 public:
-    virtual ~Mesh() = default;
+    Mesh() = default;
+    // Validates the arrays (sizes, finite coordinates, indices in range, no repeated corner in an
+    // element) and throws MeshError naming the first offending vertex or element. Vertices start
+    // free; global ids start as 0..n-1.
+    Mesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity);
 
-    virtual ElementKind element_kind() const = 0;
-    virtual std::size_t vertex_count() const = 0;
-    virtual std::size_t element_count() const = 0;
+    // A mesh of cells of one dimension (any mix of the types of that dimension), validated like
+    // the constructor's arrays, naming the offending cell. Triangles or tetrahedra alone give the
+    // plain simplex mesh (no cells); otherwise each cell's corners become elements, cell by cell
+    // in the order of its frames. `keep_cells`: keep them as cells even when all are triangles or
+    // all tetrahedra (a part of a mixed mesh is rated and reported as the whole mesh is).
+    static Mesh from_cells(std::vector<double> coordinates, std::span<const CellType> types,
+                           std::vector<VertexId> cell_connectivity, bool keep_cells = false);
 
-    // Coordinates of the given vertices, 3 doubles each (z = 0 for planar 2D meshes).
-    virtual void get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const = 0;
-    virtual void set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) = 0;
-    // Corner vertex ids of the given elements, corner_count(element_kind()) each.
-    virtual void get_connectivity(std::span<const ElementId> elements,
-                                  std::span<VertexId> corners) const = 0;
-    // 1 where the vertex must not move.
-    virtual void get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> fixed) const = 0;
+    // Copies any MeshInterface through its batch interface.
+    static Mesh copy_of(const MeshInterface& mesh);
+
+    ElementKind kind() const noexcept { return kind_; }
+    int corners() const noexcept { return corner_count(kind_); }
+    VertexId num_vertices() const noexcept { return static_cast<VertexId>(coordinates_.size() / 3); }
+    ElementId num_elements() const noexcept {
+        return static_cast<ElementId>(connectivity_.size() / corner_count(kind_));
+    }
+
+    // 3 doubles per vertex.
+    std::span<const double> coordinates() const noexcept { return coordinates_; }
+    std::span<double> coordinates() noexcept { return coordinates_; }
+    Vec3 point(VertexId v) const noexcept {
+        return {coordinates_[3 * v], coordinates_[3 * v + 1], coordinates_[3 * v + 2]};
+    }
+    // corners() ids per element.
+    std::span<const VertexId> connectivity() const noexcept { return connectivity_; }
+    std::span<const VertexId> element(ElementId e) const noexcept {
+        return std::span<const VertexId>(connectivity_).subspan(static_cast<std::size_t>(e) * corners(),
+                                                                 corners());
+    }
+
+    // Cells: empty (has_cells() false) for a mesh of simplices, where each element is its own cell.
+    bool has_cells() const noexcept { return !cell_types_.empty(); }
+    ElementId num_cells() const noexcept {
+        return has_cells() ? static_cast<ElementId>(cell_types_.size()) : num_elements();
+    }
+    CellType cell_type(ElementId c) const noexcept { return has_cells() ? cell_types_[c] : simplex_cell(kind_); }
+    std::span<const VertexId> cell(ElementId c) const noexcept {
+        if (!has_cells()) return element(c);
+        return std::span<const VertexId>(cell_connectivity_)
+            .subspan(static_cast<std::size_t>(cell_offsets_[c]), static_cast<std::size_t>(cell_offsets_[c + 1] - cell_offsets_[c]));
+    }
+    std::span<const CellType> cell_types() const noexcept { return cell_types_; }
+    std::span<const std::int64_t> cell_offsets() const noexcept { return cell_offsets_; }
+    std::span<const VertexId> cell_connectivity() const noexcept { return cell_connectivity_; }
+    // Per element: the cell it is a corner of, and its corner map (corner_map()); empty without cells.
+    std::span<const ElementId> element_cells() const noexcept { return element_cell_; }
+    std::span<const std::uint8_t> corner_maps() const noexcept { return corner_map_; }
+    ElementId cell_of(ElementId e) const noexcept { return has_cells() ? element_cell_[e] : e; }
+    // Reduces per-element values to per-cell ones by the minimum (a cell is as good as its worst
+    // corner); without cells, a copy.
+    std::vector<double> cell_minimum(std::span<const double> per_element) const;
+    // Renumbers or reorders: the cells' vertices by new_id (new_id[old]), the elements' cell and
+    // map by old_element (new element i was old_element[i]). For renumbered().
+    void carry_cells_from(const Mesh& source, std::span<const VertexId> new_id,
+                          std::span<const ElementId> old_element);
+
+    // Vertex -> incident elements, compressed rows.
+    std::span<const ElementId> elements_of(VertexId v) const noexcept {
+        return std::span<const ElementId>(vertex_elements_)
+            .subspan(vertex_element_offsets_[v], vertex_element_offsets_[v + 1] - vertex_element_offsets_[v]);
+    }
+    std::span<const std::int64_t> vertex_element_offsets() const noexcept { return vertex_element_offsets_; }
+    std::span<const ElementId> vertex_elements() const noexcept { return vertex_elements_; }
+
+    // 1 for vertices that must not move.
+    std::span<const std::uint8_t> fixed() const noexcept { return fixed_; }
+    // Where a vertex may move, decided here for every solver and assessment: in 3 directions (a
+    // free vertex) or in none (a fixed one). Sliding boundary vertices will take 2 on a surface,
+    // 1 on a feature curve (issue 17): solvers ask can_move(), not the fixed flag.
+    int degrees_of_freedom(VertexId v) const noexcept { return fixed_[v] ? 0 : 3; }
+    bool can_move(VertexId v) const noexcept { return degrees_of_freedom(v) > 0; }
+    // Element e has a vertex that can move: the only elements a vertex mover changes (movable).
+    bool element_can_move(ElementId e) const noexcept {
+        for (VertexId v : element(e))
+            if (can_move(v)) return true;
+        return false;
+    }
+    void set_fixed(std::vector<std::uint8_t> fixed);
+    // Fixes exactly the vertices on the boundary (faces of one cell in 3D, edges of one in 2D).
+    void fix_boundary();
+    VertexId num_free_vertices() const noexcept;
+
+    std::span<const GlobalId> global_ids() const noexcept { return global_ids_; }
+    void set_global_ids(std::vector<GlobalId> ids);
+
+    // Triangle meshes: whether all vertices lie in one plane, and that plane's unit normal, which
+    // defines a triangle's orientation (its signed area). Tetrahedral meshes: always planar=false.
+    bool is_planar() const noexcept { return planar_; }
+    const Vec3& plane_normal() const noexcept { return plane_normal_; }
+
+    // Swaps the last two corners of every element, which reverses each one's orientation (a mesh
+    // with cells mirrors each cell, CellInfo::mirror, and takes its corners anew in place). A planar
+    // triangle mesh's normal turns with its triangles (as if found anew), so their orientation
+    // about it is unchanged. Adjacency, fixed flags and ids stay as they are.
+    void flip_elements();
+    // Whether the elements are held flipped relative to the file they came from (orient() flipped
+    // them because the file uses the mirror convention): writers swap the corners back, so that an
+    // output keeps the convention of its input. Copies keep the mark.
+    bool elements_flipped() const noexcept { return elements_flipped_; }
+    void set_elements_flipped(bool flipped) noexcept { elements_flipped_ = flipped; }
+
+    // MeshInterface.
+    ElementKind element_kind() const override { return kind_; }
+    std::size_t vertex_count() const override { return static_cast<std::size_t>(num_vertices()); }
+    std::size_t element_count() const override { return static_cast<std::size_t>(num_elements()); }
+    void get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const override;
+    void set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) override;
+    void get_connectivity(std::span<const ElementId> elements, std::span<VertexId> corners) const override;
+    void get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> fixed) const override;
+
+private:
+    void build_adjacency();
+    void find_plane();
+
+    ElementKind kind_ = ElementKind::Tetrahedron;
+    std::vector<double> coordinates_;
+    std::vector<VertexId> connectivity_;
+    std::vector<std::int64_t> vertex_element_offsets_{0};
+    std::vector<ElementId> vertex_elements_;
+    std::vector<std::uint8_t> fixed_;
+    std::vector<GlobalId> global_ids_;
+    bool planar_ = false;
+    Vec3 plane_normal_{0.0, 0.0, 1.0};
+    bool elements_flipped_ = false;
+    std::vector<CellType> cell_types_;
+    std::vector<std::int64_t> cell_offsets_;
+    std::vector<VertexId> cell_connectivity_;
+    std::vector<ElementId> element_cell_;
+    std::vector<std::uint8_t> corner_map_;
 };
+
+// Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which
+// 2^e times the largest coordinate magnitude lies in [1, 2) (0 for all-zero coordinates), and
+// multiplying every coordinate by 2^e. Volumes of coordinates near 1e300 or 1e-300 overflow or
+// underflow; solvers and the assessor work at unit scale instead.
+int unit_scale_exponent(std::span<const double> xyz);
+void scale_coordinates(std::span<double> xyz, int exponent);
+
+// Throws MeshError naming two elements (cells, for a mesh with cells) with the same set of
+// vertices, if there are any.
+void check_no_duplicate_elements(const Mesh& mesh);
+
+// Vertices on the boundary: on a face that belongs to one tetrahedron, or an edge that belongs
+// to one triangle. Returns one flag per vertex.
+std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const VertexId> connectivity,
+                                            VertexId num_vertices);
+// The same for a mesh's cells (its elements when it has none).
+std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh);
 
 }  // namespace paloverde

@@ -1,12 +1,12 @@
 #pragma once
-// Exposes an OpenMesh triangle mesh through paloverde::Mesh, so an OpenMesh application can
+// Exposes an OpenMesh triangle mesh through paloverde::MeshInterface, so an OpenMesh application can
 // assess and smooth its mesh in place. Vertices on the boundary, or locked in OpenMesh's status
 // flags, are fixed. Works with any OpenMesh TriMesh whose points have 2 or 3 coordinates.
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <span>
 #include <stdexcept>
 
-#include "paloverde/mesh/mesh.hpp"
+#include "paloverde/mesh/mesh_interface.hpp"
 
 namespace paloverde {
 
@@ -21,7 +21,7 @@ struct OpenMeshDoubleTraits : public OpenMesh::DefaultTraits {
 using OpenMeshTriangles = OpenMesh::TriMesh_ArrayKernelT<OpenMeshDoubleTraits>;
 
 template <class TriMesh>
-class OpenMeshAdapter final : public Mesh {
+class OpenMeshAdapter final : public MeshInterface {
 public:
     // The adapter refers to `mesh`; it must outlive the adapter. Deleted elements are not
     // supported: call garbage_collection() first.

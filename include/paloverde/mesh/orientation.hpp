@@ -8,21 +8,21 @@
 #include <vector>
 
 #include "paloverde/core/exact_sum.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
 // +1 positively oriented, 0 degenerate (flat), -1 inverted. Triangles are oriented by the mesh's
 // plane normal; in a non-planar surface mesh they are +1 unless degenerate.
-int element_orientation(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId element);
+int element_orientation(const Mesh& mesh, std::span<const double> coordinates, ElementId element);
 
 // Cells, for a mesh with cells: inverted when any corner is, degenerate when none is and one is flat.
 struct OrientationCounts {
     ElementId inverted = 0;
     ElementId degenerate = 0;
 };
-OrientationCounts count_orientations(const SimplexMesh& mesh, std::span<const double> coordinates);
-inline OrientationCounts count_orientations(const SimplexMesh& mesh) {
+OrientationCounts count_orientations(const Mesh& mesh, std::span<const double> coordinates);
+inline OrientationCounts count_orientations(const Mesh& mesh) {
     return count_orientations(mesh, mesh.coordinates());
 }
 
@@ -50,7 +50,7 @@ struct SignedMeasure {
 // Over the elements with counted[e] != 0, or all when `counted` is empty. Triangles are measured
 // as element_orientation() orients them: projected on the coordinate plane most aligned with
 // `plane_normal`, flipped if the normal points down that axis.
-SignedMeasure signed_measure(const SimplexMesh& mesh, std::span<const double> xyz, int scale_exponent,
+SignedMeasure signed_measure(const Mesh& mesh, std::span<const double> xyz, int scale_exponent,
                              const Vec3& plane_normal, std::span<const std::uint8_t> counted = {});
 
 struct OrientationDecision {
@@ -66,9 +66,9 @@ struct OrientationDecision {
 OrientationDecision decide_orientation(OrientationMode mode, bool oriented, const SignedMeasure& measure);
 
 // Decides for a whole mesh as read from a file and, when the decision is to flip, flips its
-// elements and marks them flipped (SimplexMesh::elements_flipped()), so writers restore the
+// elements and marks them flipped (Mesh::elements_flipped()), so writers restore the
 // file's order. A planar triangle mesh is measured about its own plane normal, which is already
 // the area-weighted one: its total is never negative, so `auto` keeps it.
-OrientationDecision orient(SimplexMesh& mesh, OrientationMode mode);
+OrientationDecision orient(Mesh& mesh, OrientationMode mode);
 
 }  // namespace paloverde

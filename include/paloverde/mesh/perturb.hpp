@@ -3,7 +3,7 @@
 // multiple of their local edge length.
 #include <cstdint>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -17,6 +17,6 @@ struct PerturbOptions {
 };
 
 // Returns the number of vertices moved.
-VertexId perturb(SimplexMesh& mesh, const PerturbOptions& options);
+VertexId perturb(Mesh& mesh, const PerturbOptions& options);
 
 }  // namespace paloverde

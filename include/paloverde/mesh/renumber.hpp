@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -16,24 +16,24 @@ struct Renumbering {
 
 // Vertices in reverse Cuthill-McKee order; elements sorted by `last_group` (elements flagged 1
 // go after all others) and then by their smallest new vertex id.
-Renumbering locality_order(const SimplexMesh& mesh, std::span<const std::uint8_t> last_group = {});
+Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_group = {});
 
 // The mesh with vertices and elements in the new order (fixed flags and global ids follow).
-SimplexMesh renumbered(const SimplexMesh& mesh, const Renumbering& order);
+Mesh renumbered(const Mesh& mesh, const Renumbering& order);
 
 // The vertex-to-vertex graph (compressed rows, sorted neighbours, no self loops).
 struct VertexGraph {
     std::vector<std::int64_t> offsets;
     std::vector<VertexId> neighbours;
 };
-VertexGraph vertex_graph(const SimplexMesh& mesh);
+VertexGraph vertex_graph(const Mesh& mesh);
 // With `cell_edges`, a mesh with cells lists only its cells' edges (no face or body diagonal of
 // a hexahedron): the neighbours whose distance is the local edge length.
-VertexGraph vertex_graph(const SimplexMesh& mesh, bool cell_edges);
+VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges);
 
 // The canonical element order, the same however a mesh is numbered or split: each element's
 // position when all are sorted by their sorted vertex keys (`vertex_key` per vertex: canonical or
 // global ids).
-std::vector<GlobalId> canonical_element_positions(const SimplexMesh& mesh, std::span<const GlobalId> vertex_key);
+std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<const GlobalId> vertex_key);
 
 }  // namespace paloverde

@@ -14,7 +14,7 @@
 
 namespace paloverde {
 
-class SimplexMesh;
+class Mesh;
 
 // What a metric needs to know about the mesh it rates: how triangles are oriented and the
 // size that scale-free volumes are measured against.
@@ -31,8 +31,8 @@ struct MetricScale {
     // reference_volume. Not owned: the array must outlive the metric's use of it.
     std::span<const double> element_reference_volume;
 
-    static MetricScale of(const SimplexMesh& mesh);
-    static MetricScale of(const SimplexMesh& mesh, std::span<const double> coordinates);
+    static MetricScale of(const Mesh& mesh);
+    static MetricScale of(const Mesh& mesh, std::span<const double> coordinates);
 };
 
 class QualityMetric {
@@ -49,7 +49,7 @@ public:
 
     void set_scale(const MetricScale& scale) { scale_ = scale; }
     const MetricScale& scale() const { return scale_; }
-    void prepare(const SimplexMesh& mesh) { scale_ = MetricScale::of(mesh); }
+    void prepare(const Mesh& mesh) { scale_ = MetricScale::of(mesh); }
 
     // One element; `corners` holds corner_count(kind) points of 3 doubles.
     virtual double value(ElementKind kind, const double* corners) const = 0;
@@ -59,12 +59,12 @@ public:
     // Element e of `mesh` at the vertex positions `coordinates`, rated as the batch calls rate it
     // (a cell's corner through its corner map); with `gradient` (3 doubles per corner, in the
     // element's corner order) its gradient too. For local patches.
-    double element_value(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId e,
+    double element_value(const Mesh& mesh, std::span<const double> coordinates, ElementId e,
                          double* gradient = nullptr) const;
 
     // Qualities of elements [first, last) of `mesh` at the vertex positions `coordinates` (the
     // mesh's own or trial positions of the same layout): quality[e - first].
-    virtual void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+    virtual void evaluate(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
                           ElementId last, double* quality) const = 0;
     // Where accumulate_gradient() adds its sums over elements [first, last):
     //   gradient[3(v - base) + c]   += weight[e - first] * d q_e / d x_v,c
@@ -78,7 +78,7 @@ public:
         double* curvature = nullptr;
         VertexId base = 0;
     };
-    virtual void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+    virtual void accumulate_gradient(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
                                      ElementId last, const GradientTarget& target) const = 0;
 
 protected:
@@ -91,9 +91,9 @@ protected:
 // virtual call per batch. The scale (set_scale) holds the mesh's reference volume.
 class ElementMetric : public QualityMetric {
 public:
-    void evaluate(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first, ElementId last,
+    void evaluate(const Mesh& mesh, std::span<const double> coordinates, ElementId first, ElementId last,
                   double* quality) const final;
-    void accumulate_gradient(const SimplexMesh& mesh, std::span<const double> coordinates, ElementId first,
+    void accumulate_gradient(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
                              ElementId last, const GradientTarget& target) const final;
 };
 

@@ -21,7 +21,7 @@
 
 #include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
@@ -65,7 +65,7 @@ class DistributedMesh {
 public:
     // Collective over `comm`. Rank 0 passes the whole mesh (fixed flags set), the other ranks
     // nullptr. Throws (on every rank) when the mesh has fewer vertices than there are ranks.
-    static DistributedMesh scatter(MPI_Comm comm, const SimplexMesh* whole, const DistributeOptions& options = {});
+    static DistributedMesh scatter(MPI_Comm comm, const Mesh* whole, const DistributeOptions& options = {});
 
     // Collective: reads pre-partitioned pieces, one per rank: a .pvtu and the .vtu files it lists,
     // or Mesquite-style per-rank files OUT_<rank>.vtk for a path OUT.vtk. Each piece holds the
@@ -80,17 +80,17 @@ public:
     // another piece counts, so ParaView shows each element once, colored by rank.
     void write_pieces(const std::filesystem::path& path) const;
     // Serial: cuts `whole` into `parts` pieces as scatter() would, and writes them.
-    static void write_partitioned(const SimplexMesh& whole, int parts, const std::filesystem::path& path);
+    static void write_partitioned(const Mesh& whole, int parts, const std::filesystem::path& path);
 
     // Collective: rank 0 passes the mesh it gave to scatter(), whose coordinates become the
     // owners' current ones; the other ranks pass nullptr.
-    void gather_coordinates(SimplexMesh* whole) const;
+    void gather_coordinates(Mesh* whole) const;
     // Collective: rank 0 gets the whole mesh built from the parts (for runs from pieces, where no
     // rank has it), the other ranks an empty mesh. Vertices come in global id order, elements (or
     // cells) in their canonical order, with the current coordinates and the fixed flags. Rank 0
     // holds the whole mesh and, while it builds it, the gathered values of either the vertices (40
     // bytes each) or the elements (8 bytes per corner, plus 8; a cell's plus 16).
-    SimplexMesh gather_whole() const;
+    Mesh gather_whole() const;
 
     // Collective: the whole mesh's boundary at the current coordinates, in global ids, on every
     // rank (a part's own boundary also has the faces where it was cut from the others'). Refused
@@ -105,7 +105,7 @@ public:
 
     MPI_Comm comm = MPI_COMM_NULL;
     int rank = 0, ranks = 1;
-    SimplexMesh mesh;                     // this rank's elements and the vertices they touch
+    Mesh mesh;                     // this rank's elements and the vertices they touch
     std::vector<int> vertex_owner;        // per local vertex
     std::vector<GlobalId> element_order;  // per local element: its canonical position
     std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank

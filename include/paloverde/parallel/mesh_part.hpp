@@ -7,7 +7,7 @@
 //
 // A view, cheap to copy: it refers to the mesh (and the DistributedMesh) it was made from, which
 // must outlive it. Made implicitly from either, so `solver.improve(mesh)` reads as it should.
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
@@ -17,10 +17,10 @@ class DistributedMesh;  // distributed_mesh.hpp, which brings in MPI
 
 class MeshPart {
 public:
-    MeshPart(SimplexMesh& whole);     // the whole mesh, serially
+    MeshPart(Mesh& whole);     // the whole mesh, serially
     MeshPart(DistributedMesh& part);  // this rank's part; what the part does with it is collective
 
-    SimplexMesh& mesh() const { return *mesh_; }
+    Mesh& mesh() const { return *mesh_; }
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
     // This process owns vertex v: computes its gradient and moves it (if it can move); other
@@ -32,7 +32,7 @@ public:
     DistributedMesh* distributed() const { return distributed_; }
 
 private:
-    SimplexMesh* mesh_;
+    Mesh* mesh_;
     const Reducer* reducer_;
     const Halo* halo_;
     DistributedMesh* distributed_ = nullptr;

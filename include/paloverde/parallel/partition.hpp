@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -13,7 +13,7 @@ namespace paloverde {
 // minimized, with METIS_OPTION_MINCONN so that each part has few neighbouring parts, and a fixed
 // seed so that the same mesh always splits the same way. Returns the part of each vertex.
 // Throws OptionError when parts < 1 or parts > the number of vertices.
-std::vector<int> partition_vertices(const SimplexMesh& mesh, int parts);
+std::vector<int> partition_vertices(const Mesh& mesh, int parts);
 
 // Greedy edge coloring of the process graph in breadth-first order from part 0: each edge gets
 // the smallest color not yet used at either end. `edges` lists each pair (a < b) once; returns
@@ -31,6 +31,6 @@ struct PartitionStatistics {
     std::int64_t largest_part_elements = 0;  // elements (cells) held, owned and ghost, by the largest part
 };
 // A mesh with cells is split into whole cells, as DistributedMesh splits it.
-PartitionStatistics partition_statistics(const SimplexMesh& mesh, std::span<const int> part, int parts);
+PartitionStatistics partition_statistics(const Mesh& mesh, std::span<const int> part, int parts);
 
 }  // namespace paloverde

@@ -71,7 +71,7 @@ private:
     // What a sweep needs of the mesh: the elements whose statistics this process counts, the
     // reductions and ghost updates (no-ops serially), the colors of the vertices it moves.
     struct Domain {
-        const SimplexMesh& mesh;
+        const Mesh& mesh;
         std::vector<ElementId> counted_movable;
         const Reducer& reducer;
         const Halo& halo;

@@ -6,7 +6,7 @@
 #include <span>
 #include <vector>
 
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde {
 
@@ -24,7 +24,7 @@ struct VertexColoring {
     std::vector<std::vector<VertexId>> classes() const;
 };
 
-VertexColoring color_vertices(const SimplexMesh& mesh, ColoringOrder order = ColoringOrder::SmallestLast);
+VertexColoring color_vertices(const Mesh& mesh, ColoringOrder order = ColoringOrder::SmallestLast);
 
 // Collective: a coloring of the whole distributed mesh (Jones & Plassmann: in rounds, each free
 // vertex whose uncolored neighbours all have lower priority takes the smallest color its
@@ -34,6 +34,6 @@ VertexColoring color_vertices(const DistributedMesh& part);
 
 // Whether every free vertex has a color in [0, count), every fixed vertex -1, and no element
 // holds two free vertices of the same color.
-bool is_proper_coloring(const SimplexMesh& mesh, const VertexColoring& coloring);
+bool is_proper_coloring(const Mesh& mesh, const VertexColoring& coloring);
 
 }  // namespace paloverde

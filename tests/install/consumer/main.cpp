@@ -5,9 +5,9 @@
 
 int main() {
     // Four tets around vertex 4, which starts off-centre; the outer vertices are the boundary.
-    paloverde::SimplexMesh mesh(paloverde::ElementKind::Tetrahedron,
-                                {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.05, 0.05, 0.05, 1, 1, 1},
-                                {0, 1, 2, 4, 0, 3, 1, 4, 0, 2, 3, 4, 1, 5, 2, 3});
+    paloverde::Mesh mesh(paloverde::ElementKind::Tetrahedron,
+                         {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0.05, 0.05, 0.05, 1, 1, 1},
+                         {0, 1, 2, 4, 0, 3, 1, 4, 0, 2, 3, 4, 1, 5, 2, 3});
     mesh.set_fixed({1, 1, 1, 1, 0, 1});
     const auto summary = paloverde::GlobalSolver().improve(mesh);
     std::cout << summary.brief_report() << "\n";

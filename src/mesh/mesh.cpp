@@ -1,4 +1,4 @@
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 #include <algorithm>
 #include <array>
@@ -11,7 +11,7 @@
 
 namespace paloverde {
 
-SimplexMesh::SimplexMesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity)
+Mesh::Mesh(ElementKind kind, std::vector<double> coordinates, std::vector<VertexId> connectivity)
     : kind_(kind), coordinates_(std::move(coordinates)), connectivity_(std::move(connectivity)) {
     const int k = corners();
     if (coordinates_.size() % 3 != 0) throw MeshError("coordinate array length is not a multiple of 3");
@@ -44,9 +44,9 @@ SimplexMesh::SimplexMesh(ElementKind kind, std::vector<double> coordinates, std:
     find_plane();
 }
 
-SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<const CellType> types,
-                                    std::vector<VertexId> cells, bool keep_cells) {
-    if (types.empty()) return SimplexMesh(ElementKind::Tetrahedron, std::move(coordinates), std::move(cells));
+Mesh Mesh::from_cells(std::vector<double> coordinates, std::span<const CellType> types,
+                      std::vector<VertexId> cells, bool keep_cells) {
+    if (types.empty()) return Mesh(ElementKind::Tetrahedron, std::move(coordinates), std::move(cells));
     const CellInfo& first = cell_info(types[0]);
     std::vector<std::int64_t> offsets(types.size() + 1, 0);
     bool simplices = true;
@@ -61,7 +61,7 @@ SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<c
     if (static_cast<std::size_t>(offsets.back()) != cells.size())
         throw MeshError("cell connectivity holds " + std::to_string(cells.size()) + " ids for cells of " +
                         std::to_string(offsets.back()) + " corners");
-    if (simplices && !keep_cells) return SimplexMesh(first.simplex, std::move(coordinates), std::move(cells));
+    if (simplices && !keep_cells) return Mesh(first.simplex, std::move(coordinates), std::move(cells));
     const auto n = static_cast<std::int64_t>(coordinates.size() / 3);
     std::size_t corners_total = 0;
     for (std::size_t c = 0; c < types.size(); ++c) {
@@ -96,7 +96,7 @@ SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<c
             corner_map.push_back(corner_map_id(types[c], static_cast<int>(f)));
         }
     }
-    SimplexMesh mesh(first.simplex, std::move(coordinates), std::move(corners));
+    Mesh mesh(first.simplex, std::move(coordinates), std::move(corners));
     mesh.cell_types_.assign(types.begin(), types.end());
     mesh.cell_offsets_ = std::move(offsets);
     mesh.cell_connectivity_ = std::move(cells);
@@ -105,7 +105,7 @@ SimplexMesh SimplexMesh::from_cells(std::vector<double> coordinates, std::span<c
     return mesh;
 }
 
-std::vector<double> SimplexMesh::cell_minimum(std::span<const double> per_element) const {
+std::vector<double> Mesh::cell_minimum(std::span<const double> per_element) const {
     if (!has_cells()) return {per_element.begin(), per_element.end()};
     std::vector<double> out(cell_types_.size(), INFINITY);
     for (std::size_t e = 0; e < per_element.size(); ++e) {
@@ -115,8 +115,8 @@ std::vector<double> SimplexMesh::cell_minimum(std::span<const double> per_elemen
     return out;
 }
 
-void SimplexMesh::carry_cells_from(const SimplexMesh& source, std::span<const VertexId> new_id,
-                                   std::span<const ElementId> old_element) {
+void Mesh::carry_cells_from(const Mesh& source, std::span<const VertexId> new_id,
+                            std::span<const ElementId> old_element) {
     cell_types_ = source.cell_types_;
     cell_offsets_ = source.cell_offsets_;
     cell_connectivity_.resize(source.cell_connectivity_.size());
@@ -133,7 +133,7 @@ void SimplexMesh::carry_cells_from(const SimplexMesh& source, std::span<const Ve
     }
 }
 
-SimplexMesh SimplexMesh::copy_of(const Mesh& source) {
+Mesh Mesh::copy_of(const MeshInterface& source) {
     const auto n = static_cast<VertexId>(source.vertex_count());
     const auto m = static_cast<ElementId>(source.element_count());
     std::vector<VertexId> vertices(static_cast<std::size_t>(n));
@@ -146,12 +146,12 @@ SimplexMesh SimplexMesh::copy_of(const Mesh& source) {
     source.get_connectivity(elements, connectivity);
     std::vector<std::uint8_t> fixed(vertices.size());
     source.get_fixed(vertices, fixed);
-    SimplexMesh mesh(source.element_kind(), std::move(xyz), std::move(connectivity));
+    Mesh mesh(source.element_kind(), std::move(xyz), std::move(connectivity));
     mesh.set_fixed(std::move(fixed));
     return mesh;
 }
 
-void SimplexMesh::build_adjacency() {
+void Mesh::build_adjacency() {
     const VertexId n = num_vertices();
     const int k = corners();
     vertex_element_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
@@ -163,7 +163,7 @@ void SimplexMesh::build_adjacency() {
         vertex_elements_[next[connectivity_[i]]++] = static_cast<ElementId>(i / k);
 }
 
-void SimplexMesh::find_plane() {
+void Mesh::find_plane() {
     planar_ = false;
     plane_normal_ = {0.0, 0.0, 1.0};
     if (kind_ != ElementKind::Triangle || num_elements() == 0) return;
@@ -220,7 +220,7 @@ void SimplexMesh::find_plane() {
     plane_normal_ = normal;
 }
 
-void SimplexMesh::flip_elements() {
+void Mesh::flip_elements() {
     const auto k = static_cast<std::size_t>(corners());
     if (has_cells()) {
         for (std::size_t c = 0; c < cell_types_.size(); ++c) {
@@ -247,45 +247,45 @@ void SimplexMesh::flip_elements() {
         for (double& c : plane_normal_) c = -c;
 }
 
-void SimplexMesh::set_fixed(std::vector<std::uint8_t> fixed) {
+void Mesh::set_fixed(std::vector<std::uint8_t> fixed) {
     if (fixed.size() != static_cast<std::size_t>(num_vertices()))
         throw MeshError("fixed flags: " + std::to_string(fixed.size()) + " given for " +
                         std::to_string(num_vertices()) + " vertices");
     fixed_ = std::move(fixed);
 }
 
-void SimplexMesh::fix_boundary() { fixed_ = boundary_vertices(*this); }
+void Mesh::fix_boundary() { fixed_ = boundary_vertices(*this); }
 
-VertexId SimplexMesh::num_free_vertices() const noexcept {
+VertexId Mesh::num_free_vertices() const noexcept {
     VertexId count = 0;
     for (VertexId v = 0; v < num_vertices(); ++v) count += can_move(v);
     return count;
 }
 
-void SimplexMesh::set_global_ids(std::vector<GlobalId> ids) {
+void Mesh::set_global_ids(std::vector<GlobalId> ids) {
     if (ids.size() != static_cast<std::size_t>(num_vertices()))
         throw MeshError("global ids: " + std::to_string(ids.size()) + " given for " + std::to_string(num_vertices()) +
                         " vertices");
     global_ids_ = std::move(ids);
 }
 
-void SimplexMesh::get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const {
+void Mesh::get_coordinates(std::span<const VertexId> vertices, std::span<double> xyz) const {
     for (std::size_t i = 0; i < vertices.size(); ++i)
         for (int c = 0; c < 3; ++c) xyz[3 * i + c] = coordinates_[3 * static_cast<std::size_t>(vertices[i]) + c];
 }
 
-void SimplexMesh::set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) {
+void Mesh::set_coordinates(std::span<const VertexId> vertices, std::span<const double> xyz) {
     for (std::size_t i = 0; i < vertices.size(); ++i)
         for (int c = 0; c < 3; ++c) coordinates_[3 * static_cast<std::size_t>(vertices[i]) + c] = xyz[3 * i + c];
 }
 
-void SimplexMesh::get_connectivity(std::span<const ElementId> elements, std::span<VertexId> out) const {
+void Mesh::get_connectivity(std::span<const ElementId> elements, std::span<VertexId> out) const {
     const int k = corners();
     for (std::size_t i = 0; i < elements.size(); ++i)
         for (int c = 0; c < k; ++c) out[i * k + c] = connectivity_[static_cast<std::size_t>(elements[i]) * k + c];
 }
 
-void SimplexMesh::get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> out) const {
+void Mesh::get_fixed(std::span<const VertexId> vertices, std::span<std::uint8_t> out) const {
     for (std::size_t i = 0; i < vertices.size(); ++i) out[i] = fixed_[static_cast<std::size_t>(vertices[i])];
 }
 
@@ -300,7 +300,7 @@ void scale_coordinates(std::span<double> xyz, int exponent) {
     for (double& x : xyz) x = std::ldexp(x, exponent);
 }
 
-void check_no_duplicate_elements(const SimplexMesh& mesh) {
+void check_no_duplicate_elements(const Mesh& mesh) {
     struct Key {
         std::array<VertexId, kMaxCellCorners> corners;
         ElementId element;
@@ -371,7 +371,7 @@ std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const Ve
     return boundary;
 }
 
-std::vector<std::uint8_t> boundary_vertices(const SimplexMesh& mesh) {
+std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh) {
     if (!mesh.has_cells()) return boundary_vertices(mesh.kind(), mesh.connectivity(), mesh.num_vertices());
     // Each face as its sorted vertices (-1 after the last); a face seen once is on the boundary.
     std::vector<std::array<VertexId, 4>> faces;

@@ -4,18 +4,18 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/openmesh_adapter.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/mesh/simplex_mesh.hpp"
+#include "paloverde/mesh/mesh.hpp"
 
 namespace pv = paloverde;
 
 namespace {
 // Two tets sharing the face (1,2,3), both positively oriented.
-pv::SimplexMesh two_tets() {
-    return pv::SimplexMesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1},
-                           {0, 1, 2, 3, 1, 4, 2, 3});
+pv::Mesh two_tets() {
+    return pv::Mesh(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 1, 1},
+                    {0, 1, 2, 3, 1, 4, 2, 3});
 }
 // A 3x3 grid of vertices in the plane z = 2, 8 triangles; vertex 4 is the only interior one.
-pv::SimplexMesh grid(double flip = 1.0) {
+pv::Mesh grid(double flip = 1.0) {
     std::vector<double> xyz;
     for (int j = 0; j < 3; ++j)
         for (int i = 0; i < 3; ++i) xyz.insert(xyz.end(), {double(i), flip * double(j), 2.0});
@@ -25,14 +25,14 @@ pv::SimplexMesh grid(double flip = 1.0) {
             const int a = 3 * j + i;
             tris.insert(tris.end(), {a, a + 1, a + 4, a, a + 4, a + 3});
         }
-    return pv::SimplexMesh(pv::ElementKind::Triangle, xyz, tris);
+    return pv::Mesh(pv::ElementKind::Triangle, xyz, tris);
 }
 bool message_has(const std::exception& e, const std::string& word) {
     return std::string(e.what()).find(word) != std::string::npos;
 }
 }  // namespace
 
-BOOST_AUTO_TEST_SUITE(simplex_mesh)
+BOOST_AUTO_TEST_SUITE(mesh_type)
 
 BOOST_AUTO_TEST_CASE(adjacency_lists_every_incident_element) {
     const auto mesh = two_tets();
@@ -82,14 +82,14 @@ BOOST_AUTO_TEST_CASE(exact_orientation_sees_a_flat_tet_as_degenerate) {
 
 BOOST_AUTO_TEST_CASE(invalid_arrays_are_rejected_naming_the_culprit) {
     using pv::ElementKind;
-    BOOST_CHECK_EXCEPTION(pv::SimplexMesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 7}),
+    BOOST_CHECK_EXCEPTION(pv::Mesh(ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 7}),
                           pv::MeshError, [](const auto& e) { return message_has(e, "element 0") && message_has(e, "vertex 7"); });
-    BOOST_CHECK_EXCEPTION(pv::SimplexMesh(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 1}), pv::MeshError,
+    BOOST_CHECK_EXCEPTION(pv::Mesh(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 1}), pv::MeshError,
                           [](const auto& e) { return message_has(e, "repeats vertex 1"); });
-    BOOST_CHECK_EXCEPTION(pv::SimplexMesh(ElementKind::Triangle, {0, 0, 0, 1, NAN, 0, 0, 1, 0}, {0, 1, 2}), pv::MeshError,
+    BOOST_CHECK_EXCEPTION(pv::Mesh(ElementKind::Triangle, {0, 0, 0, 1, NAN, 0, 0, 1, 0}, {0, 1, 2}), pv::MeshError,
                           [](const auto& e) { return message_has(e, "vertex 1"); });
-    BOOST_CHECK_THROW(pv::SimplexMesh(ElementKind::Triangle, {0, 0, 0, 1}, {}), pv::MeshError);
-    const pv::SimplexMesh dup(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 2, 0, 1});
+    BOOST_CHECK_THROW(pv::Mesh(ElementKind::Triangle, {0, 0, 0, 1}, {}), pv::MeshError);
+    const pv::Mesh dup(ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2, 2, 0, 1});
     BOOST_CHECK_EXCEPTION(pv::check_no_duplicate_elements(dup), pv::MeshError,
                           [](const auto& e) { return message_has(e, "elements 0 and 1"); });
     auto mesh = two_tets();
@@ -108,7 +108,7 @@ BOOST_AUTO_TEST_CASE(openmesh_triangles_copy_in_and_out_through_the_batch_interf
             om.add_face(v[a], v[a + 4], v[a + 3]);
         }
     pv::OpenMeshAdapter adapter(om);
-    auto copy = pv::SimplexMesh::copy_of(adapter);
+    auto copy = pv::Mesh::copy_of(adapter);
     BOOST_TEST(copy.num_vertices() == 9);
     BOOST_TEST(copy.num_elements() == 8);
     BOOST_TEST(copy.num_free_vertices() == 1);  // the centre; OpenMesh knows the boundary
