@@ -109,13 +109,14 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
     }
 }
 
-// Every element's quality, in chunks over the threads (each element's value is its own).
-void evaluate_all(const QualityMetric& metric, const Mesh& mesh, std::span<const double> xyz, std::vector<double>& q) {
-    const ElementId m = mesh.num_elements();
-    constexpr ElementId kChunk = 4096;
-#pragma omp parallel for schedule(static) if (m >= kParallelElements)
-    for (ElementId first = 0; first < m; first += kChunk)
-        metric.evaluate(mesh, xyz, first, std::min(m, first + kChunk), q.data() + first);
+// The element passes go chunk by chunk over the threads, and every metric rates a chunk before
+// the next: the chunk's corners, scattered over memory in a mesh's file order, are fetched once
+// and then read from the cache (one pass per metric over the whole mesh fetched them each time).
+constexpr ElementId kChunk = 4096;
+template <class RateChunk>
+void for_each_chunk(ElementId elements, RateChunk rate_chunk) {
+#pragma omp parallel for schedule(static) if (elements >= kParallelElements)
+    for (ElementId first = 0; first < elements; first += kChunk) rate_chunk(first, std::min(elements, first + kChunk));
 }
 
 }  // namespace
@@ -169,16 +170,25 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (is_owned(v)) ++vertices, free_vertices += mesh.can_move(v);
 
-    // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen; and
-    // its exact orientation.
+    // Per element: 1 = counted here and movable (a free vertex), 2 = counted here and frozen; its
+    // exact orientation; and its unsigned volume, whose mean over the counted elements is the
+    // metrics' scale.
     std::vector<std::uint8_t> group(m, 0);
     std::vector<std::int8_t> orientation(m, 1);
-#pragma omp parallel for schedule(static) if (mesh.num_elements() >= kParallelElements)
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        if (!is_counted(static_cast<std::size_t>(e))) continue;
-        group[e] = mesh.element_can_move(e) ? 1 : 2;
-        orientation[e] = static_cast<std::int8_t>(element_orientation(mesh, xyz, e));
-    }
+    std::vector<double> q(m);
+    MetricScale scale;
+    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    scale.plane_normal = plane_normal;
+    const auto unit_volume = make_metric("scaled_volume");
+    unit_volume->set_scale(scale);
+    for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
+        unit_volume->evaluate(mesh, xyz, first, last, q.data() + first);
+        for (ElementId e = first; e < last; ++e) {
+            if (!is_counted(static_cast<std::size_t>(e))) continue;
+            group[e] = mesh.element_can_move(e) ? 1 : 2;
+            orientation[e] = static_cast<std::int8_t>(element_orientation(mesh, xyz, e));
+        }
+    });
     // A mesh with cells is reported by cell: a cell is movable when any corner is, inverted when
     // any corner is, degenerate when none is and one is flat, and as good as its worst corner. A
     // cell's corners are counted together (by the process that counts the cell).
@@ -230,14 +240,7 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     totals.emplace_back().add(static_cast<double>(std::count_if(group.begin(), group.end(), [](std::uint8_t g) { return g != 0; })));
 
     // The metric scale: the mean absolute element volume, summed exactly.
-    MetricScale scale;
-    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
-    scale.plane_normal = plane_normal;
-    std::vector<double> q(m);
     {
-        auto unit = make_metric("scaled_volume");
-        unit->set_scale(scale);
-        evaluate_all(*unit, mesh, xyz, q);
         ExactSum volume;
 #pragma omp parallel if (mesh.num_elements() >= kParallelElements)
         {
@@ -262,11 +265,25 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     const double volume = totals[8].value(), rated = totals[7].value();
     if (volume > 0.0 && std::isfinite(volume) && rated > 0) scale.reference_volume = volume / rated;
 
+    std::vector<std::unique_ptr<QualityMetric>> metrics;
+    std::vector<std::string_view> names;
     for (const auto& name : names_) {
         auto metric = make_metric(name);
         if (!metric->supports(mesh.kind()) || (cells && !metric->supports_cells())) continue;
         metric->set_scale(scale);
-        evaluate_all(*metric, mesh, xyz, q);
+        metrics.push_back(std::move(metric));
+        names.push_back(name);
+    }
+    std::vector<std::vector<double>> qualities(metrics.size());
+    if (!qualities.empty()) qualities.front() = std::move(q);
+    for (std::size_t i = 1; i < qualities.size(); ++i) qualities[i].resize(m);
+    for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
+        for (std::size_t i = 0; i < metrics.size(); ++i)
+            metrics[i]->evaluate(mesh, xyz, first, last, qualities[i].data() + first);
+    });
+    for (std::size_t i = 0; i < metrics.size(); ++i) {
+        const std::vector<double>& q = qualities[i];
+        const std::string name(names[i]);
         const std::vector<double> per_cell = mesh.has_cells() ? mesh.cell_minimum(q) : std::vector<double>{};
         const std::vector<double>& unit_q = mesh.has_cells() ? per_cell : q;
         MetricReport r;

@@ -322,22 +322,37 @@ void check_no_duplicate_elements(const Mesh& mesh) {
         std::array<VertexId, kMaxCellCorners> corners;
         ElementId element;
     };
-    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_cells()));
+    // Cells with the same vertices have the same smallest one: each cell is listed at its smallest
+    // vertex (rows counted first) and only these short rows are sorted, which orders the keys as
+    // one sort of them all would, so the pair named is the same.
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    std::vector<std::int64_t> row(n + 1, 0);
     for (ElementId e = 0; e < mesh.num_cells(); ++e) {
-        Key& key = keys[static_cast<std::size_t>(e)];
-        key.corners.fill(-1);
         const auto cell = mesh.cell(e);
+        ++row[static_cast<std::size_t>(*std::min_element(cell.begin(), cell.end())) + 1];
+    }
+    std::partial_sum(row.begin(), row.end(), row.begin());
+    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_cells()));
+    std::vector<std::int64_t> next(row.begin(), row.end() - 1);
+    for (ElementId e = 0; e < mesh.num_cells(); ++e) {
+        const auto cell = mesh.cell(e);
+        const auto smallest = static_cast<std::size_t>(*std::min_element(cell.begin(), cell.end()));
+        Key& key = keys[static_cast<std::size_t>(next[smallest]++)];
+        key.corners.fill(-1);
         std::copy(cell.begin(), cell.end(), key.corners.begin());
         std::sort(key.corners.begin(), key.corners.begin() + static_cast<std::ptrdiff_t>(cell.size()));
         key.element = e;
     }
-    std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-        return a.corners != b.corners ? a.corners < b.corners : a.element < b.element;
-    });
-    for (std::size_t i = 1; i < keys.size(); ++i)
-        if (keys[i].corners == keys[i - 1].corners)
-            throw MeshError(std::string(mesh.has_cells() ? "cells " : "elements ") + std::to_string(keys[i - 1].element) + " and " +
-                            std::to_string(keys[i].element) + " have the same vertices (duplicate element)");
+    for (std::size_t v = 0; v < n; ++v) {
+        const auto first = keys.begin() + row[v], last = keys.begin() + row[v + 1];
+        std::sort(first, last, [](const Key& a, const Key& b) {
+            return a.corners != b.corners ? a.corners < b.corners : a.element < b.element;
+        });
+        for (auto i = first; i != last && i + 1 != last; ++i)
+            if (i[1].corners == i[0].corners)
+                throw MeshError(std::string(mesh.has_cells() ? "cells " : "elements ") + std::to_string(i[0].element) +
+                                " and " + std::to_string(i[1].element) + " have the same vertices (duplicate element)");
+    }
 }
 
 std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const VertexId> connectivity,

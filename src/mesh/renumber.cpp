@@ -10,32 +10,49 @@ VertexGraph vertex_graph(const Mesh& mesh) { return vertex_graph(mesh, false); }
 
 VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
     cell_edges = cell_edges && mesh.has_cells();
-    VertexGraph graph;
-    const VertexId n = mesh.num_vertices();
-    graph.offsets.assign(static_cast<std::size_t>(n) + 1, 0);
-    // One pass: each vertex's distinct neighbours, sorted, appended in vertex order. By Euler's
-    // formula a mesh has about as many edges as vertices and elements together (plus half its
-    // boundary faces), and each edge is listed twice.
-    graph.neighbours.reserve(2 * (static_cast<std::size_t>(n) + static_cast<std::size_t>(mesh.num_elements())) +
-                             static_cast<std::size_t>(n) / 2);
-    // seen[w] == v + 1 once w is listed for v: each neighbour is kept once, and only the short
-    // list of distinct ones is sorted.
-    std::vector<VertexId> seen(static_cast<std::size_t>(n), 0);
-    for (VertexId v = 0; v < n; ++v) {
-        const auto begin = graph.neighbours.size();
-        for (ElementId e : mesh.elements_of(v)) {
-            const auto corner = mesh.element(e);
-            for (VertexId w : corner) {
-                // A cell's edges join a corner's vertex to its frame's others (cell_types.hpp).
-                if (cell_edges && corner[0] != v && w != corner[0]) continue;
-                if (w != v && seen[w] != v + 1) {
-                    seen[w] = v + 1;
-                    graph.neighbours.push_back(w);
-                }
-            }
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    const auto k = static_cast<std::size_t>(mesh.corners());
+    const auto connectivity = mesh.connectivity();
+    // Every element's edges, each at its lower end, in passes over the elements in order (rows
+    // counted first): reading the elements around each vertex instead would miss the cache at
+    // nearly every element. A cell's edges join a corner's vertex to its frame's others
+    // (cell_types.hpp).
+    auto for_each_edge = [&](auto visit) {
+        for (std::size_t at = 0; at < connectivity.size(); at += k) {
+            const VertexId* c = connectivity.data() + at;
+            for (std::size_t i = 0; i < (cell_edges ? 1 : k); ++i)
+                for (std::size_t j = i + 1; j < k; ++j) visit(std::min(c[i], c[j]), std::max(c[i], c[j]));
         }
-        std::sort(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(begin), graph.neighbours.end());
-        graph.offsets[static_cast<std::size_t>(v) + 1] = static_cast<std::int64_t>(graph.neighbours.size());
+    };
+    std::vector<std::int64_t> row(n + 1, 0);
+    for_each_edge([&](VertexId low, VertexId) { ++row[static_cast<std::size_t>(low) + 1]; });
+    std::partial_sum(row.begin(), row.end(), row.begin());
+    std::vector<VertexId> higher(static_cast<std::size_t>(row[n]));
+    {
+        std::vector<std::int64_t> next(row.begin(), row.end() - 1);
+        for_each_edge([&](VertexId low, VertexId high) { higher[static_cast<std::size_t>(next[static_cast<std::size_t>(low)]++)] = high; });
+    }
+    // Each row sorted, without repeats, in place: a vertex's higher neighbours. Its lower ones are
+    // the vertices in whose rows it appears.
+    std::vector<std::int64_t> higher_end(n), lower(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+        const auto first = higher.begin() + row[v];
+        std::sort(first, higher.begin() + row[v + 1]);
+        const auto last = std::unique(first, higher.begin() + row[v + 1]);
+        higher_end[v] = last - higher.begin();
+        for (auto w = first; w != last; ++w) ++lower[static_cast<std::size_t>(*w)];
+    }
+    // Each vertex's list, sorted: its lower neighbours in increasing order, then its higher ones.
+    VertexGraph graph;
+    graph.offsets.assign(n + 1, 0);
+    for (std::size_t v = 0; v < n; ++v) graph.offsets[v + 1] = graph.offsets[v] + lower[v] + (higher_end[v] - row[v]);
+    graph.neighbours.resize(static_cast<std::size_t>(graph.offsets[n]));
+    std::vector<std::int64_t> next_lower(graph.offsets.begin(), graph.offsets.end() - 1);
+    for (std::size_t v = 0; v < n; ++v) {
+        const auto first = higher.begin() + row[v], last = higher.begin() + higher_end[v];
+        std::copy(first, last, graph.neighbours.begin() + graph.offsets[v] + lower[v]);
+        for (auto w = first; w != last; ++w)
+            graph.neighbours[static_cast<std::size_t>(next_lower[static_cast<std::size_t>(*w)]++)] = static_cast<VertexId>(v);
     }
     return graph;
 }
@@ -117,17 +134,20 @@ Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_
     std::vector<VertexId> new_id(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) new_id[result.old_vertex[i]] = i;
 
+    // Elements by (group, lowest new vertex id, old id): a counting sort, as the keys are small.
     const ElementId m = mesh.num_elements();
-    std::vector<std::pair<std::int64_t, ElementId>> keys(static_cast<std::size_t>(m));
+    std::vector<std::int64_t> key(static_cast<std::size_t>(m));
+    std::vector<std::int64_t> first_of(2 * (static_cast<std::size_t>(n) + 1) + 1, 0);
     for (ElementId e = 0; e < m; ++e) {
         VertexId lowest = n;
         for (VertexId v : mesh.element(e)) lowest = std::min(lowest, new_id[v]);
         const std::int64_t group = !last_group.empty() && last_group[e] ? 1 : 0;
-        keys[e] = {group * (static_cast<std::int64_t>(n) + 1) + lowest, e};
+        key[e] = group * (static_cast<std::int64_t>(n) + 1) + lowest;
+        ++first_of[static_cast<std::size_t>(key[e]) + 1];
     }
-    std::sort(keys.begin(), keys.end());
+    std::partial_sum(first_of.begin(), first_of.end(), first_of.begin());
     result.old_element.resize(static_cast<std::size_t>(m));
-    for (ElementId i = 0; i < m; ++i) result.old_element[i] = keys[i].second;
+    for (ElementId e = 0; e < m; ++e) result.old_element[first_of[static_cast<std::size_t>(key[e])]++] = e;
     return result;
 }
 
@@ -159,23 +179,32 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
 std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<const GlobalId> vertex_key) {
     const ElementId m = mesh.num_elements();
     const int k = mesh.corners();
-    std::vector<std::array<GlobalId, 4>> keys(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
-        auto& key = keys[e];
-        key.fill(-1);
-        for (int i = 0; i < k; ++i) key[i] = vertex_key[mesh.element(e)[i]];
-        std::sort(key.begin(), key.begin() + k);
-    }
-    std::vector<ElementId> sorted(static_cast<std::size_t>(m));
-    std::iota(sorted.begin(), sorted.end(), ElementId{0});
-    // Two corners of different cells may share their vertices: their maps tell them apart.
     const auto maps = mesh.corner_maps();
-    std::sort(sorted.begin(), sorted.end(), [&](ElementId a, ElementId b) {
-        if (keys[a] != keys[b] || maps.empty()) return keys[a] < keys[b];
-        return maps[a] < maps[b];
-    });
+    // Sorted in one array with their keys (an order of ids that looks its keys up would miss the
+    // cache at every comparison). Two corners of different cells may share their vertices: their
+    // maps tell them apart; no two elements have the same key and map.
+    struct Keyed {
+        std::array<GlobalId, 4> key;
+        std::uint8_t map;
+        ElementId element;
+        bool operator<(const Keyed& o) const {
+            for (int i = 0; i < 4; ++i)
+                if (key[i] != o.key[i]) return key[i] < o.key[i];
+            return map < o.map;
+        }
+    };
+    std::vector<Keyed> sorted(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        Keyed& entry = sorted[e];
+        entry.key.fill(-1);
+        for (int i = 0; i < k; ++i) entry.key[i] = vertex_key[mesh.element(e)[i]];
+        std::sort(entry.key.begin(), entry.key.begin() + k);
+        entry.map = maps.empty() ? 0 : maps[e];
+        entry.element = e;
+    }
+    std::sort(sorted.begin(), sorted.end());
     std::vector<GlobalId> position(static_cast<std::size_t>(m));
-    for (ElementId i = 0; i < m; ++i) position[sorted[i]] = i;
+    for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
     return position;
 }
 

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "core/prefetch.hpp"
 #include "kernels.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
@@ -84,6 +85,8 @@ void rate_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, E
     const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
     double x[3 * K];
     for (ElementId e = first; e < last; ++e) {
+        if (e + detail::kPrefetchAhead < last)
+            detail::prefetch_corners(conn + static_cast<std::size_t>(e + detail::kPrefetchAhead) * K, K, coords);
         gather<K>(conn + static_cast<std::size_t>(e) * K, coords, maps, e, x);
         quality[e - first] = rate(std::integral_constant<int, K>{}, e, x, nullptr);
     }
@@ -227,7 +230,11 @@ private:
     // block hold a degenerate element at the origin, which rates 0 without trouble.
     // A cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits).
     void gather_block(const VertexId* conn, const double* coords, const std::uint8_t* maps, ElementId first, int count,
-                      TetBlock& x, double* reference_volume) const {
+                      TetBlock& x, double* reference_volume, ElementId last) const {
+        // While this block is rated, the next one's corners come in.
+        if (const ElementId next = first + count; next < last)
+            detail::prefetch_corners(conn + 4 * static_cast<std::size_t>(next),
+                                     4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
         gather_tets(conn + 4 * static_cast<std::size_t>(first), coords, count, x);
         if (maps)
             for (int j = 0; j < count; ++j)
@@ -249,7 +256,7 @@ private:
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
             kernel_.tet_block(path_, x, reference_volume, q, nullptr);
             std::copy(q, q + count, quality + (b - first));
         }
@@ -265,7 +272,7 @@ private:
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume);
+            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
             kernel_.tet_block(path_, x, reference_volume, q, &g);
             for (int j = 0; j < count; ++j) {
                 const ElementId e = b + j;

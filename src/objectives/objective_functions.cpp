@@ -56,15 +56,29 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
         double gap = 0.5 * (mean - qmin);
         if (!(gap >= 0.1 * size)) gap = 0.1 * size;
         // sum_i gap / (q_i - qmin + gap): how many elements weigh about as much as the worst.
-        auto active = [&](double d) { return total([&](double v) { return d / (v - qmin + d); }); };
+        auto term = [&](double d, double v) { return d / (v - qmin + d); };
+        // Whether that exceeds `limit`, as its exact sum says: a plain sum of the same terms (in
+        // (0, 1]) settles it where it lies farther from the limit than its rounding can reach (n u
+        // of it, doubled for the partial sums of threads and processes, and a few ulps for the
+        // exact sum's own rounding); only a close call pays for the exact sum.
+        auto more_active_than = [&](double d, double limit) {
+            double plain = 0.0;
+#pragma omp parallel for reduction(+ : plain) schedule(static) if (q.size() > detail::kParallelThreshold)
+            for (std::size_t i = 0; i < q.size(); ++i) plain += term(d, q[i]);
+            plain = reducer.total(plain);
+            const double reach = 2.0 * n * 0x1p-53 * plain + 0x1p-50 * limit;
+            if (plain - limit > reach) return true;
+            if (limit - plain > reach) return false;
+            return total([&](double v) { return term(d, v); }) > limit;
+        };
         const double active_limit = automatic_active(n);
-        if (active(gap) > active_limit) {
-            // active() rises with the gap; a relative precision of 1e-3 is plenty, so bisect
+        if (more_active_than(gap, active_limit)) {
+            // The count rises with the gap; a relative precision of 1e-3 is plenty, so bisect
             // geometrically between a negligible gap and this one.
             double lo = gap * 1e-15, hi = gap;
             while (hi > lo * (1.0 + 1e-3)) {
                 const double mid = std::sqrt(lo * hi);
-                (active(mid) > active_limit ? hi : lo) = mid;
+                (more_active_than(mid, active_limit) ? hi : lo) = mid;
             }
             gap = std::max(hi, floor);
         }

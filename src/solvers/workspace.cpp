@@ -95,18 +95,21 @@ Workspace::~Workspace() {
 
 std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                          GlobalId global_elements) {
-    // Movable elements first, each group in canonical order.
+    // Movable elements first, each group in canonical order: the elements in canonical order
+    // (placed by their positions when these number them from 0, as serially; else sorted), then
+    // split stably.
     const ElementId m = mesh_.num_elements();
     std::vector<ElementId> order(static_cast<std::size_t>(m));
     std::iota(order.begin(), order.end(), ElementId{0});
     {
-        std::vector<std::uint8_t> movable(static_cast<std::size_t>(m));
-        for (ElementId e = 0; e < m; ++e) movable[e] = mesh_.element_can_move(e);
-        std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) {
-            if (movable[a] != movable[b]) return movable[a] > movable[b];
-            return element_order[a] < element_order[b];
-        });
-        movable_ = static_cast<ElementId>(std::count(movable.begin(), movable.end(), 1));
+        const bool numbered = std::all_of(element_order.begin(), element_order.end(),
+                                          [m](GlobalId position) { return position >= 0 && position < m; });
+        if (numbered)
+            for (ElementId e = 0; e < m; ++e) order[static_cast<std::size_t>(element_order[e])] = e;
+        else
+            std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
+        const auto frozen = std::stable_partition(order.begin(), order.end(), [&](ElementId e) { return mesh_.element_can_move(e); });
+        movable_ = static_cast<ElementId>(frozen - order.begin());
     }
     mesh_ = reordered_elements(mesh_, order);
     element_order = permuted(element_order, order);
@@ -117,8 +120,10 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
             if (counted[e]) counted_.push_back(e);
     global_movable_ = reducer_->total(static_cast<double>(counted.empty() ? movable_ : counted_.size()));
 
-    // The metric scale: the mean absolute element volume over the whole mesh, summed exactly.
-    scale_ = MetricScale::of(mesh_);
+    // The metric scale: the mean absolute element volume over the whole mesh, summed exactly
+    // (the reference volume is this sum's, so MetricScale::of's rounded one need not be made).
+    scale_.oriented_triangles = mesh_.kind() == ElementKind::Tetrahedron || mesh_.is_planar();
+    scale_.plane_normal = mesh_.plane_normal();
     {
         const std::vector<double> volume = absolute_volumes();
         ExactSum sum;

@@ -1,9 +1,11 @@
 // The orientation convention of an input, told by the total signed volume: mirrored copies of
 // tangled shared meshes, a tangle where most elements are inverted, a total of zero, triangles.
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <random>
 #include <utility>
 #include <vector>
 
@@ -146,6 +148,43 @@ BOOST_AUTO_TEST_CASE(triangles_follow_their_plane_normal) {
     const auto none = pv::orient(bent, OrientationMode::Auto);
     BOOST_TEST(!none.oriented);
     BOOST_TEST(!none.flipped);
+}
+
+// The floating-point filter in front of the exact predicate answers only where it is sure: tets
+// flat to within an ulp or two, and tets far from unit scale (where products underflow or
+// overflow), get the exact predicate's sign.
+BOOST_AUTO_TEST_CASE(element_orientation_is_the_exact_sign_near_flat_and_far_from_unit_scale) {
+    using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+    // Coordinates on a grid of 2^-20 and plane weights in eighths: corner 3 lies exactly on the
+    // plane of the others until nudged.
+    std::mt19937_64 random(7);
+    std::uniform_int_distribution<int> grid(-(1 << 20), 1 << 20), eighths(-8, 8);
+    auto unit = [&](auto& random) { return std::ldexp(grid(random), -20); };
+    std::vector<double> xyz;
+    std::vector<VertexId> tets;
+    for (int t = 0; t < 2000; ++t) {
+        // Corner 3 on the plane of the others, then nudged by an ulp or a few, or not at all.
+        double p[4][3];
+        for (int i = 0; i < 3; ++i)
+            for (double& c : p[i]) c = unit(random);
+        const double a = eighths(random) / 8.0, b = eighths(random) / 8.0;
+        for (int c = 0; c < 3; ++c) p[3][c] = p[0][c] + a * (p[1][c] - p[0][c]) + b * (p[2][c] - p[0][c]);
+        for (int nudge = t % 5; nudge > 0; --nudge) p[3][2] = std::nextafter(p[3][2], nudge % 2 ? 2.0 : -2.0);
+        const double scale = std::ldexp(1.0, (t % 7 - 3) * 300);  // 2^-900 .. 2^900
+        for (const auto& corner : p)
+            for (double c : corner) xyz.push_back(c * scale);
+        for (int i = 0; i < 4; ++i) tets.push_back(static_cast<VertexId>(4 * t + i));
+    }
+    const pv::Mesh mesh(ElementKind::Tetrahedron, xyz, tets);
+    auto point = [&](VertexId v) { return Kernel::Point_3(xyz[3 * v], xyz[3 * v + 1], xyz[3 * v + 2]); };
+    int flat = 0;
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto c = mesh.element(e);
+        const int exact = static_cast<int>(CGAL::orientation(point(c[0]), point(c[1]), point(c[2]), point(c[3])));
+        flat += exact == 0;
+        BOOST_TEST(pv::element_orientation(mesh, mesh.coordinates(), e) == exact, "tet " << e);
+    }
+    BOOST_TEST(flat > 0);  // some stayed exactly flat: the filter had to pass them on
 }
 
 BOOST_AUTO_TEST_SUITE_END()
