@@ -136,25 +136,7 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
 // vertices, sorted together. A face of one cell is on the boundary; one of three or more is
 // refused. (A triangle of a tetrahedron and of a pyramid or wedge are the same face.)
 std::vector<std::uint8_t> manifold_cell_boundary(const Mesh& mesh, const std::string& path) {
-    struct Face {
-        std::array<VertexId, 4> vertices;  // sorted, then -1
-        ElementId cell;
-        bool operator<(const Face& o) const { return vertices != o.vertices ? vertices < o.vertices : cell < o.cell; }
-    };
-    std::vector<Face> faces;
-    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
-        const auto cell = mesh.cell(c);
-        for (const auto& local : cell_info(mesh.cell_type(c)).faces) {
-            Face face{{-1, -1, -1, -1}, c};
-            int size = 0;
-            while (size < 4 && local[size] >= 0) face.vertices[size] = cell[local[size]], ++size;
-            auto& v = face.vertices;
-            for (int i = 1; i < size; ++i)  // insertion sort of 2 to 4 ids
-                for (int j = i; j > 0 && v[j - 1] > v[j]; --j) std::swap(v[j - 1], v[j]);
-            faces.push_back(face);
-        }
-    }
-    std::sort(faces.begin(), faces.end());
+    const std::vector<CellFace> faces = sorted_cell_faces(mesh);
     std::vector<std::uint8_t> boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
     for (std::size_t i = 0; i < faces.size();) {
         std::size_t j = i + 1;

@@ -388,28 +388,34 @@ std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const Ve
     return boundary;
 }
 
-std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh) {
-    if (!mesh.has_cells()) return boundary_vertices(mesh.kind(), mesh.connectivity(), mesh.num_vertices());
-    // Each face as its sorted vertices (-1 after the last); a face seen once is on the boundary.
-    std::vector<std::array<VertexId, 4>> faces;
+std::vector<CellFace> sorted_cell_faces(const Mesh& mesh) {
+    std::vector<CellFace> faces;
     for (ElementId c = 0; c < mesh.num_cells(); ++c) {
         const auto cell = mesh.cell(c);
         for (const auto& local : cell_info(mesh.cell_type(c)).faces) {
-            std::array<VertexId, 4> face{-1, -1, -1, -1};
+            CellFace face{{-1, -1, -1, -1}, c};
+            auto& v = face.vertices;
             int size = 0;
-            while (size < 4 && local[size] >= 0) face[size] = cell[local[size]], ++size;
-            for (int i = 1; i < size; ++i)  // insertion sort of 3 or 4 ids
-                for (int j = i; j > 0 && face[j - 1] > face[j]; --j) std::swap(face[j - 1], face[j]);
+            while (size < 4 && local[size] >= 0) v[size] = cell[local[size]], ++size;
+            for (int i = 1; i < size; ++i)  // insertion sort of 2 to 4 ids
+                for (int j = i; j > 0 && v[j - 1] > v[j]; --j) std::swap(v[j - 1], v[j]);
             faces.push_back(face);
         }
     }
     std::sort(faces.begin(), faces.end());
+    return faces;
+}
+
+std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh) {
+    if (!mesh.has_cells()) return boundary_vertices(mesh.kind(), mesh.connectivity(), mesh.num_vertices());
+    // A face of one cell is on the boundary.
+    const std::vector<CellFace> faces = sorted_cell_faces(mesh);
     std::vector<std::uint8_t> boundary(static_cast<std::size_t>(mesh.num_vertices()), 0);
     for (std::size_t i = 0; i < faces.size();) {
         std::size_t j = i + 1;
-        while (j < faces.size() && faces[j] == faces[i]) ++j;
+        while (j < faces.size() && faces[j].vertices == faces[i].vertices) ++j;
         if (j - i == 1)
-            for (VertexId v : faces[i])
+            for (VertexId v : faces[i].vertices)
                 if (v >= 0) boundary[v] = 1;
         i = j;
     }

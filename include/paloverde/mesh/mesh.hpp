@@ -5,6 +5,7 @@
 // corner simplices of its cells (cell_types.hpp), each with the map that rates it against the
 // ideal cell's corner. Solvers, metrics and exact predicates see only simplices; readers,
 // writers, the boundary and the reports see the cells.
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -184,5 +185,14 @@ std::vector<std::uint8_t> boundary_vertices(ElementKind kind, std::span<const Ve
                                             VertexId num_vertices);
 // The same for a mesh's cells (its elements when it has none).
 std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh);
+
+// A face of a cell (an edge in 2D): its vertices sorted, -1 after the last, and the cell.
+struct CellFace {
+    std::array<VertexId, 4> vertices;
+    ElementId cell;
+    bool operator<(const CellFace& o) const { return vertices != o.vertices ? vertices < o.vertices : cell < o.cell; }
+};
+// Every face of every cell of a mesh with cells, sorted: the cells sharing a face lie together.
+std::vector<CellFace> sorted_cell_faces(const Mesh& mesh);
 
 }  // namespace paloverde
