@@ -2,11 +2,13 @@
 """The global solver against the local smoother on the same meshes, one thread each: final worst
 and mean quality, the solver's seconds, when each first reached its own final worst quality, and
 when the global solver passed the local smoother's. With --old, the global solver as it was
-before issue 16's focus and adaptive mu (--set gain_tolerance=0, focus_band=1) runs too. Prints a
+before issue 16's focus and adaptive mu (--set gain_tolerance=0, focus_band=1) runs too; with
+--previous, as it was before the Newton finish and the narrower focus (finish=none,
+focus_band=0.05). Prints a
 markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
 python3-matplotlib), writes one plot per mesh of the best worst quality against seconds.
 
-    python3 examples/solver_race.py MESH [MESH ...] [--old] [--plot PREFIX] [--set KEY=VALUE ...]
+    python3 examples/solver_race.py MESH [MESH ...] [--old] [--previous] [--plot PREFIX] [--set KEY=VALUE ...]
                                     [--paloverde build/bin/paloverde] [--threads 1]
 
 --set passes options to the default global solver (queue[0].improve.KEY=VALUE), for sensitivity
@@ -24,12 +26,16 @@ parser.add_argument("meshes", nargs="+")
 parser.add_argument("--paloverde", default="build/bin/paloverde")
 parser.add_argument("--threads", default="1")
 parser.add_argument("--old", action="store_true", help="also run the global solver with the old defaults")
+parser.add_argument("--previous", action="store_true", help="also run the global solver without the finish, focus 0.05")
 parser.add_argument("--plot", default=None, help="prefix of the PNG files written (one per mesh)")
 parser.add_argument("--set", action="append", default=[], help="an option of the default global solver")
 args = parser.parse_args()
 
 OLD = ["--set", "queue[0].improve.gain_tolerance=0", "--set", "queue[0].improve.focus_band=1"]
 methods = [("global", ["--method", "global"] + [a for kv in args.set for a in ("--set", "queue[0].improve." + kv)])]
+PREVIOUS = ["--set", "queue[0].improve.finish=none", "--set", "queue[0].improve.focus_band=0.05"]
+if args.previous:
+    methods.append(("previous global", ["--method", "global"] + PREVIOUS))
 if args.old:
     methods.append(("old global", ["--method", "global"] + OLD))
 methods.append(("local", ["--method", "local"]))
@@ -72,7 +78,7 @@ with tempfile.TemporaryDirectory() as scratch:
             history = [r for step_ in s["steps"] for r in step_["summary"]["history"]]
             curves[name] = history
             before = step["before"]["metrics"][s["metric"]]
-            print("| %s | %d | %.4f / %.4f | %s | %.5f | %.4f | %.2f | %s | %s | %d | %s |" % (
+            print("| %s | %d | %.4f / %.4f | %s | %.6f | %.4f | %.2f | %s | %s | %d | %s |" % (
                 os.path.basename(mesh), step["before"]["elements"], s["worst_before"], before["mean"], name,
                 s["worst_after"], s["mean_after"], step["seconds"], fmt(reached(history, s["worst_after"])),
                 fmt(reached(history, local_worst)), s["iterations"], step["message"]), flush=True)

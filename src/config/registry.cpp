@@ -263,11 +263,16 @@ Tables::Tables() {
         .real("focus_band", &GlobalSolverOptions::focus_band,
               "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
               "their neighbours, chosen anew as the worst climbs and widened where it stalls, in (0, 1]; 1: the "
-              "whole mesh every iteration (direction newton: always the whole mesh).")
+              "whole mesh every iteration (direction newton: always the whole mesh; the newton finish focuses too).")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
-              "direction newton: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
+              "direction newton and the newton finish: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,
-                 "direction newton: at most this many conjugate-gradient iterations (Hessian products) per step, >= 1.")
+                 "direction newton and the newton finish: at most this many conjugate-gradient iterations (Hessian products) per step, >= 1.")
+        .choice("finish", &GlobalSolverOptions::finish,
+                {{"none", GlobalSolverOptions::Finish::None}, {"newton", GlobalSolverOptions::Finish::Newton}},
+                "Shape phase (conjugate_gradient and steepest_ascent, log_barrier; not while the boundary slides): newton: "
+                "where it stalls, truncated Newton steps go on from its best iterate, on a focus with a fresh barrier, "
+                "until they stall too (judged per gradient pass); none: stop there.")
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
         .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")

@@ -63,10 +63,15 @@ struct PhaseResult {
     std::string message;
 };
 
-// Where solve() stands, for checkpoints: the phase and, while untangling, the round.
+// Where solve() stands, for checkpoints: the phase and, while untangling, the round; `finish`:
+// the Newton finish of the shape phase, which goes on counting from the `iterations_before` of the
+// phase before it; `newton_follows`: a shape phase the finish will follow.
 struct Stage {
     bool untangling = false;
     int round = 0;
+    bool finish = false;
+    bool newton_follows = false;
+    int iterations_before = 0;
 };
 
 // Whole-mesh figures of the movable elements' qualities, the same on every process.
@@ -151,7 +156,9 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("gain_tolerance", o.gain_tolerance)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     if (o.focus_band < 1.0) t("focus_band", o.focus_band);
-    if (o.direction == GlobalSolverOptions::Direction::Newton)
+    const bool finish = o.finish == GlobalSolverOptions::Finish::Newton;
+    if (finish) t("finish", "newton");
+    if (o.direction == GlobalSolverOptions::Direction::Newton || finish)
         t("newton_tolerance", o.newton_tolerance)("newton_cg_iterations", o.newton_cg_iterations);
     return t.text();
 }
@@ -273,6 +280,9 @@ private:
     // Per iteration: the best worst quality, the objective's progress measure, the inverted
     // count, and how many times mu has shrunk.
     std::vector<double> best_history_, measure_history_, bad_history_, stage_history_;
+    std::vector<double> passes_history_;  // gradient passes so far (a Newton step takes one per product)
+    // The histories start over from their last entries (a wider focus).
+    void restart_histories();
     // The log-barrier's mu; 0 for the other objectives.
     double barrier_mu() const {
         const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
@@ -337,6 +347,11 @@ void Phase::refocus() {
     focus_on_moving();
 }
 
+void Phase::restart_histories() {
+    for (auto* history : {&best_history_, &measure_history_, &bad_history_, &stage_history_, &passes_history_})
+        *history = {history->back()};
+}
+
 void Phase::focus_on_moving() {
     work_.unfocus();
     const Mesh& whole = work_.mesh();
@@ -378,7 +393,7 @@ void Phase::damp_like_owners(std::vector<VertexId>& damped) {
 void Phase::record(const Stats& s, double objective, double step, double gain) {
     IterationRecord r;
     r.iteration = summary_.iterations;
-    r.phase = untangling_ ? "untangle" : "shape";
+    r.phase = untangling_ ? "untangle" : stage_.finish ? "finish" : "shape";
     r.worst_quality = s.worst;
     r.best_worst_quality = best_worst_;
     r.mean_quality = s.mean;
@@ -514,6 +529,7 @@ bool Phase::sound(const Stats& s, double objective) const {
 void Phase::save_checkpoint(int iteration) {
     detail::SolverState state;
     state.numbers = {{"untangling", untangling_ ? 1.0 : 0.0},
+                     {"finish", stage_.finish ? 1.0 : 0.0},
                      {"round", stage_.round},
                      {"budget", stop_.max_iterations},
                      {"iteration", iteration},
@@ -533,7 +549,8 @@ void Phase::save_checkpoint(int iteration) {
                    {"best_history", best_history_},
                    {"measure_history", measure_history_},
                    {"bad_history", bad_history_},
-                   {"stage_history", stage_history_}};
+                   {"stage_history", stage_history_},
+                   {"passes_history", passes_history_}};
     state.vertex_fields = {{"x", x_},
                            {"best_x", best_x_},
                            {"direction", direction_},
@@ -571,6 +588,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     measure_history_ = state.list("measure_history");
     bad_history_ = state.list("bad_history");
     stage_history_ = state.list("stage_history");
+    passes_history_ = state.list("passes_history");
     if (focusing_) {
         const auto& moving = state.vertex_field("moving", n);
         moving_.assign(n, 0);
@@ -597,7 +615,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     best_x_ = x_;
     damping_.assign(n3 / 3, 1.0);
     // Only the preconditioner and Newton need the curvature (8 bytes per element, 48 per vertex).
-    const bool newton = !untangling_ && options_.direction == GlobalSolverOptions::Direction::Newton;
+    const bool newton = !untangling_ && (options_.direction == GlobalSolverOptions::Direction::Newton || stage_.finish);
     const bool precondition = (untangling_ && options_.precondition_untangling) || newton;
     curvature_weight_.clear();
     curvature_.assign(precondition ? 2 * n3 : 0, 0.0);
@@ -605,16 +623,17 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
     mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
-    // Newton's directions come out worse on a focus (fandisk-100k: 0.0895 against 0.2302 on the
-    // whole mesh after 500 iterations): it keeps the whole mesh.
-    focusing_ = !untangling_ && !newton && options_.focus_band < 1.0;
+    // Newton's directions from the start come out worse on a focus (fandisk-100k: 0.0895 against
+    // 0.2302 on the whole mesh after 500 iterations): they keep the whole mesh. The finish, from
+    // where conjugate gradients stalled, focuses like them.
+    focusing_ = !untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0;
     band_ = options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();
     size_element_arrays();
 
     // The objective and its weights at the current iterate, for the history and the next step.
     double objective = 0.0;
-    int first_iteration = 1;
+    int first_iteration = stage_.iterations_before + 1;
     if (resume) {
         first_iteration = restore(*resume, objective);
     } else {
@@ -634,6 +653,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         measure_history_ = {objective_.progress_measure()};
         bad_history_ = {static_cast<double>(s.bad)};
         stage_history_ = {0.0};
+        passes_history_ = {static_cast<double>(summary_.gradient_passes)};
         objective = objective_value(q_);
         objective_.weights(q_, weight_);
         record(s, objective, 0.0, 0.0);
@@ -794,6 +814,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         measure_history_.push_back(objective_.progress_measure());
         bad_history_.push_back(static_cast<double>(s.bad));
         stage_history_.push_back(stage_history_.back() + ((!accepted || solved) ? 1.0 : 0.0));
+        passes_history_.push_back(static_cast<double>(summary_.gradient_passes));
 
         if (untangling_ && s.bad == 0 && untangled()) {
             best_x_ = x_;
@@ -805,8 +826,15 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // at one mu is often freed by the next: house2 with long stages, fandisk-100k), or over
         // three windows without (a mu held by gains elsewhere while the worst stands still:
         // fandisk-1M, 289 iterations against 238 for the same result).
-        const detail::StallWindow progress(stop_, best_worst_);
-        TerminationCriterion three = stop_;
+        // The finish's steps take a gradient pass per Hessian product: it needs as much progress
+        // per pass as conjugate gradients (one pass per step) need per step.
+        TerminationCriterion judged = stop_;
+        const auto window = static_cast<std::size_t>(stop_.progress_window);
+        if (stage_.finish && passes_history_.size() > window)
+            judged.min_progress *= (passes_history_.back() - passes_history_[passes_history_.size() - 1 - window]) /
+                                   static_cast<double>(window);
+        const detail::StallWindow progress(judged, best_worst_);
+        TerminationCriterion three = judged;
         three.progress_window = 3 * stop_.progress_window;
         const bool long_stall = detail::StallWindow(three, best_worst_).rose_too_little(best_history_);
         const bool stalled = failures_ >= options_.max_failed_searches ||
@@ -814,16 +842,17 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                               progress.did_not_fall(bad_history_) && (progress.rose(stage_history_) || long_stall));
         // A focus that stalls may be held by the elements just outside it: a wider one, as long
         // as the last widening paid (each costs a stall window on more elements).
-        const bool widen = stalled && focusing_ && band_ < 1.0 && best_worst_ > widened_at_ + progress.tolerance();
+        // Not before the Newton finish, which starts on a fresh focus, nor in it: there the wider
+        // focus cost more than it gained (fandisk-100k: with barrier_initial_active 10% higher
+        // the widened conjugate gradients crept 160 iterations from 0.2270 to 0.2271 first).
+        const bool widen = stalled && focusing_ && !stage_.finish && !stage_.newton_follows && band_ < 1.0 &&
+                           best_worst_ > widened_at_ + progress.tolerance();
         if (widen) {
             band_ = std::min(1.0, 2.0 * band_);
             widened_at_ = best_worst_;
             failures_ = 0;
             restart_ = true;
-            best_history_ = {best_history_.back()};
-            measure_history_ = {measure_history_.back()};
-            bad_history_ = {bad_history_.back()};
-            stage_history_ = {stage_history_.back()};
+            restart_histories();
         } else if (failures_ >= options_.max_failed_searches) {
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         } else if (stalled) {
@@ -1002,9 +1031,24 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         auto objective = make_objective(options.objective, options.objective_options);
         std::optional<SlidingVertices> sliding_vertices;
         if (sliding) sliding_vertices.emplace(work, *sliding);
-        result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0}, summary, observer,
-                       start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
-                     .run(resume ? &*resume : nullptr);
+        // Where conjugate gradients stall, the barrier's subproblems have become too ill-conditioned
+        // for first-order steps; Newton steps go on from the best iterate (docs/global_solver.md).
+        const bool finish = options.finish == GlobalSolverOptions::Finish::Newton && options.objective == "log_barrier" &&
+                            options.direction != GlobalSolverOptions::Direction::Newton && !sliding;
+        // A run resumed from a checkpoint of the finish goes straight back to it.
+        const bool resume_finish = resume && resume->numbers.contains("finish") && resume->number("finish") != 0.0;
+        if (!resume_finish)
+            result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0, false, finish},
+                           summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
+                         .run(resume ? &*resume : nullptr);
+        const bool stalled = result.reason == TerminationReason::Converged || result.reason == TerminationReason::NoImprovingStep;
+        const int shape_iterations = summary.iterations - summary.untangle_iterations;
+        if (resume_finish || (finish && stalled && shape_iterations < options.termination.max_iterations)) {
+            auto fresh = make_objective(options.objective, options.objective_options);
+            result = Phase(work, xyz, *metric, *fresh, options.termination, options, Stage{false, 0, true, false, shape_iterations},
+                           summary, observer, start, checkpointer)
+                         .run(resume_finish ? &*resume : nullptr);
+        }
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
     }

@@ -8,6 +8,15 @@
 
 namespace paloverde::detail {
 
+template <class Coordinate>
+void NewtonDirection::for_each_free(Coordinate coordinate) const {
+    const auto free = work_.free_vertices();
+#pragma omp parallel for schedule(static) if (free.size() > kParallelThreshold)
+    for (std::size_t k = 0; k < free.size(); ++k)
+        for (std::size_t i = 3 * static_cast<std::size_t>(free[k]); i < 3 * static_cast<std::size_t>(free[k]) + 3; ++i)
+            coordinate(i);
+}
+
 double NewtonDirection::element_sum(std::span<const double> values) {
     const auto counted = work_.counted(values, counted_);
     double largest = 0.0;
@@ -27,56 +36,61 @@ void NewtonDirection::product(const QualityMetric& metric, const ObjectiveFuncti
                               std::span<const double> q, std::span<const double> c, double c_total,
                               std::span<const double> gradient) {
     const auto owned = work_.owned();
-    const std::size_t n = owned.size();
+    const auto free = work_.free_vertices();
     const std::size_t m = q.size();
     double largest = 0.0;
-    for (std::size_t v = 0; v < n; ++v)
+    for (const VertexId v : free)
         if (owned[v]) largest = std::max(largest, std::hypot(p_[3 * v], p_[3 * v + 1], p_[3 * v + 2]));
     largest = work_.reducer().max(largest);
-    std::fill(ap_.begin(), ap_.end(), 0.0);
+    for_each_free([&](std::size_t i) { ap_[i] = 0.0; });
     if (!(largest > 0.0)) return;
     const double floor = objective.domain_floor();
     double h = 1e-6 * work_.reference_length() / largest;
     for (int attempt = 0;; ++attempt, h *= 0.01) {
-#pragma omp parallel for schedule(static) if (n > kParallelThreshold)
-        for (std::size_t i = 0; i < 3 * n; ++i) xp_[i] = x[i] + h * p_[i];
+        // xp_ equals x away from the free vertices (prepare).
+        for_each_free([&](std::size_t i) { xp_[i] = x[i] + h * p_[i]; });
         work_.evaluate(metric, xp_, qp_);
         double outside = 0.0;
         for (std::size_t i = 0; i < m; ++i)
             if (!(qp_[i] > floor)) outside = 1.0;
         if (work_.reducer().max(outside) == 0.0) break;
-        if (attempt == 3) return;  // no curvature to be had along p: the caller sees p.Ap = 0
+        if (attempt == 3) {  // no curvature to be had along p: the caller sees p.Ap = 0
+            for_each_free([&](std::size_t i) { xp_[i] = x[i]; });
+            return;
+        }
     }
     for (std::size_t i = 0; i < m; ++i) w_[i] = c[i] * ((qp_[i] - q[i]) / h);
     const double s = c_total > 0.0 ? element_sum(w_) / c_total : 0.0;
     objective.weights(qp_, w_);
     work_.gradient(metric, xp_, w_, ap_);
-#pragma omp parallel for schedule(static) if (n > kParallelThreshold)
-    for (std::size_t i = 0; i < 3 * n; ++i) ap_[i] = (gradient[i] - ap_[i]) / h - s * u_[i] + lambda_[i / 3] * p_[i];
+    for_each_free([&](std::size_t i) {
+        ap_[i] = (gradient[i] - ap_[i]) / h - s * u_[i] + lambda_[i / 3] * p_[i];
+        xp_[i] = x[i];
+    });
 }
 
 void NewtonDirection::precondition(std::span<const double> curvature) {
     const auto owned = work_.owned();
-    const Mesh& mesh = work_.mesh();
-#pragma omp parallel for schedule(static) if (owned.size() > kParallelThreshold)
-    for (std::size_t v = 0; v < owned.size(); ++v) {
-        if (owned[v] && mesh.can_move(static_cast<VertexId>(v))) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
+    const auto free = work_.free_vertices();
+#pragma omp parallel for schedule(static) if (free.size() > kParallelThreshold)
+    for (std::size_t k = 0; k < free.size(); ++k) {
+        const auto v = static_cast<std::size_t>(free[k]);
+        if (owned[v]) solve_block(&curvature[6 * v], lambda_[v], &r_[3 * v], &z_[3 * v]);
         else z_[3 * v] = z_[3 * v + 1] = z_[3 * v + 2] = 0.0;
     }
 }
 
 double NewtonDirection::prepare(const QualityMetric& metric, std::span<const double> x, std::size_t elements,
                                 std::span<const double> curvature_weight) {
+    // Vertex fields are read and written at the free vertices only (a focus is a fraction of
+    // the mesh); elsewhere they stay zero, and xp_ stays x.
     const std::size_t n = work_.owned().size();
+    for (auto* field : {&r_, &z_, &p_, &ap_, &u_}) field->assign(3 * n, 0.0);
     lambda_.assign(n, 0.0);
-    z_.assign(3 * n, 0.0);
-    p_.assign(3 * n, 0.0);
-    ap_.assign(3 * n, 0.0);
-    xp_.resize(3 * n);
+    xp_.assign(x.begin(), x.end());
     qp_.resize(elements);
     w_.resize(elements);
     // u = sum c_i g_i: how t moves along a direction.
-    u_.assign(3 * n, 0.0);
     work_.gradient(metric, x, curvature_weight, u_);
     return element_sum(curvature_weight);
 }
@@ -96,46 +110,46 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
                                   std::span<const double> gradient, double damping, double tolerance, int max_products,
                                   std::span<double> direction) {
     const auto owned = work_.owned();
-    const Mesh& mesh = work_.mesh();
-    const std::size_t n = owned.size();
+    const auto free = work_.free_vertices();
     const double c_total = prepare(metric, x, q.size(), curvature_weight);
-    r_.assign(gradient.begin(), gradient.end());
-    std::fill(direction.begin(), direction.end(), 0.0);
-
-    const auto [trace_sum, free_count] = owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
-        if (!mesh.can_move(static_cast<VertexId>(v))) return;
-        acc[0].add(curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]);
+    for (const VertexId v : free)
+        for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i) {
+            r_[i] = gradient[i];
+            direction[i] = 0.0;
+        }
+    auto trace = [&](VertexId v) { return curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]; };
+    const auto [trace_sum, free_count] = free_owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
+        acc[0].add(trace(static_cast<VertexId>(v)));
         acc[1].add(1.0);
     });
     NewtonStep step;
     if (!(trace_sum > 0.0)) return step;
     const double mean_trace = trace_sum / free_count;
-    for (std::size_t v = 0; v < n; ++v)
-        if (owned[v] && mesh.can_move(static_cast<VertexId>(v)))
-            lambda_[v] = damping * (curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]) / 3.0 + 1e-8 * mean_trace;
+    for (const VertexId v : free)
+        if (owned[v]) lambda_[v] = damping * trace(v) / 3.0 + 1e-8 * mean_trace;
 
     precondition(curvature);
     p_ = z_;
-    double rz = owned_dot(work_, r_, z_);
+    double rz = free_owned_dot(work_, r_, z_);
     const double rz_first = rz;
     if (!(rz > 0.0)) return step;
     for (int k = 0; k < max_products; ++k) {
         work_.halo().update(p_, 3);  // the one exchange per product
         product(metric, objective, x, q, curvature_weight, c_total, gradient);
         ++step.products;
-        const double pap = owned_dot(work_, p_, ap_);
+        const double pap = free_owned_dot(work_, p_, ap_);
         if (!(pap > 0.0)) {
             // Steihaug: along non-positive curvature the model has no maximum; keep what CG has,
             // or the preconditioned gradient when it has nothing yet.
             step.negative_curvature = true;
             if (k == 0)
-                for (std::size_t v = 0; v < n; ++v)
+                for (const VertexId v : free)
                     if (owned[v])
                         for (int c = 0; c < 3; ++c) direction[3 * v + c] = z_[3 * v + c];
             break;
         }
         const double alpha = rz / pap;
-        for (std::size_t v = 0; v < n; ++v) {
+        for (const VertexId v : free) {
             if (!owned[v]) continue;
             for (int c = 0; c < 3; ++c) {
                 direction[3 * v + c] += alpha * p_[3 * v + c];
@@ -143,13 +157,15 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
             }
         }
         precondition(curvature);
-        const double rz_next = owned_dot(work_, r_, z_);
+        const double rz_next = free_owned_dot(work_, r_, z_);
         if (!(rz_next > tolerance * tolerance * rz_first)) break;
         const double beta = rz_next / rz;
         rz = rz_next;
-        for (std::size_t i = 0; i < 3 * n; ++i) p_[i] = z_[i] + beta * p_[i];
+        for (const VertexId v : free)
+            for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i)
+                p_[i] = z_[i] + beta * p_[i];
     }
-    step.decrement = owned_dot(work_, gradient, direction);
+    step.decrement = free_owned_dot(work_, gradient, direction);
     return step;
 }
 

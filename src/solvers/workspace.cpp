@@ -313,18 +313,34 @@ void Workspace::copy_back(std::span<const double> xyz) const {
     }
 }
 
-double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
+namespace {
+
+// Bounded sums of a[v] . b[v] over the owned vertices vertex(i), i < count, over all processes.
+template <class Vertex>
+double dot_over(const Workspace& work, std::size_t count, Vertex vertex, std::span<const double> a,
+                std::span<const double> b) {
     const auto owned = work.owned();
     auto term = [&](std::size_t v) { return a[3 * v] * b[3 * v] + a[3 * v + 1] * b[3 * v + 1] + a[3 * v + 2] * b[3 * v + 2]; };
     double largest = 0.0;
-    for (std::size_t v = 0; v < owned.size(); ++v)
-        if (owned[v]) largest = std::max(largest, std::abs(term(v)));
+    for (std::size_t i = 0; i < count; ++i)
+        if (const auto v = static_cast<std::size_t>(vertex(i)); owned[v]) largest = std::max(largest, std::abs(term(v)));
     largest = work.reducer().max(largest);
-    auto sums = bounded_sums<1>(owned.size(), {largest}, [&](std::size_t v, auto& acc) {
-        if (owned[v]) acc[0].add(term(v));
+    auto sums = bounded_sums<1>(count, {largest}, [&](std::size_t i, auto& acc) {
+        if (const auto v = static_cast<std::size_t>(vertex(i)); owned[v]) acc[0].add(term(v));
     });
     work.reducer().sum(sums);
     return sums[0].value();
+}
+
+}  // namespace
+
+double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
+    return dot_over(work, work.owned().size(), [](std::size_t v) { return v; }, a, b);
+}
+
+double free_owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b) {
+    const auto free = work.free_vertices();
+    return dot_over(work, free.size(), [&](std::size_t i) { return free[i]; }, a, b);
 }
 
 bool untangled(const Workspace& work, std::span<const double> xyz) {

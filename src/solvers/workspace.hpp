@@ -174,6 +174,9 @@ std::array<double, K> free_owned_sums(const Workspace& work, Term term) {
 // processes: bounded sums (core/exact_sums.hpp) under the largest term, the same bits for any
 // number of threads and processes, with additions only (faster than owned_sums' ExactSum).
 double owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b);
+// The same over the free vertices only (Workspace::free_vertices): the same bits for fields that
+// vanish at the vertices that cannot move, at the cost of the focus rather than the mesh.
+double free_owned_dot(const Workspace& work, std::span<const double> a, std::span<const double> b);
 
 // Every movable element is positively oriented (decided exactly), over all processes.
 bool untangled(const Workspace& work, std::span<const double> xyz);

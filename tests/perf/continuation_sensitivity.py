@@ -32,8 +32,8 @@ runs = [("defaults", []),
         ("steps_per_mu 6", ["--set", "queue[0].improve.steps_per_mu=6"]),
         ("gain_tolerance 0.09", ["--set", "queue[0].improve.gain_tolerance=0.09"]),
         ("gain_tolerance 0.11", ["--set", "queue[0].improve.gain_tolerance=0.11"]),
-        ("focus_band 0.045", ["--set", "queue[0].improve.focus_band=0.045"]),
-        ("focus_band 0.055", ["--set", "queue[0].improve.focus_band=0.055"]),
+        ("focus_band 0.027", ["--set", "queue[0].improve.focus_band=0.027"]),
+        ("focus_band 0.033", ["--set", "queue[0].improve.focus_band=0.033"]),
         ("barrier_initial_active -10%", ["--set", barrier % ("barrier_initial_active", 0.9 * args.active)]),
         ("barrier_initial_active +10%", ["--set", barrier % ("barrier_initial_active", 1.1 * args.active)])]
 

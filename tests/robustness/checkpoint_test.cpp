@@ -77,7 +77,8 @@ BOOST_AUTO_TEST_SUITE(checkpoint)
 
 // A shape run on tire, uninterrupted, then writing checkpoints every 10 iterations (it must end
 // the same), then resumed from copies of the checkpoint taken at iterations `first` and `second`.
-void check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const char* name, int first, int second) {
+// Returns the uninterrupted run's summary.
+pv::Summary check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const char* name, int first, int second) {
     const StopRequestCleared cleared;
     const pv::test::ScratchDir dir(name);
     const auto input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
@@ -94,6 +95,7 @@ void check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const 
     std::size_t files = 0;
     for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++files;
     BOOST_TEST(files == 3u);
+    return reference.summary;
 }
 
 BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
@@ -108,6 +110,18 @@ BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uni
     options.direction = pv::GlobalSolverOptions::Direction::Newton;
     options.termination.max_iterations = 40;
     check_global_shape_run_resumes(options, "checkpoint_global_newton", 13, 34);
+}
+
+// The Newton finish, resumed from a checkpoint of the conjugate gradients before it and from one
+// taken inside it (min_progress 1e-3: tire's conjugate gradients stall at iteration 81).
+BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_newton_finish_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.termination.min_progress = 1e-3;
+    options.termination.max_iterations = 90;
+    const auto reference = check_global_shape_run_resumes(options, "checkpoint_global_finish", 72, 87);
+    BOOST_TEST_REQUIRE(reference.history.size() > 87u);
+    BOOST_TEST(reference.history[72].phase == "shape");
+    BOOST_TEST(reference.history[87].phase == "finish");
 }
 
 // A focused run saves which vertices its focus moves: resumed, it goes on with the same focus.

@@ -54,11 +54,17 @@ struct GlobalSolverOptions {
     // of elements far above the worst weigh almost nothing in the barrier, and skipping them
     // makes an iteration cost what the focus costs, not the whole mesh. 1: the whole mesh (and
     // always with Newton directions, which measured worse on a focus).
-    double focus_band = 0.05;
+    double focus_band = 0.03;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;
     int newton_cg_iterations = 100;
+    // When the shape phase's conjugate gradients stall: Newton finishes from their best iterate,
+    // on a focus, with a fresh barrier (newton_tolerance and newton_cg_iterations as above), until
+    // it stalls too or the budget runs out. Only with log_barrier (its curvature), not while the
+    // boundary slides (the surface's constraint is not in its Hessian).
+    enum class Finish { None, Newton };
+    Finish finish = Finish::Newton;
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the boundary
