@@ -113,6 +113,8 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
 // the next: the chunk's corners, scattered over memory in a mesh's file order, are fetched once
 // and then read from the cache (one pass per metric over the whole mesh fetched them each time).
 constexpr ElementId kChunk = 4096;
+// Within a chunk, the metrics take turns on smaller pieces, whose corners stay in the first-level cache.
+constexpr ElementId kSubChunk = 256;
 template <class RateChunk>
 void for_each_chunk(ElementId elements, RateChunk rate_chunk) {
 #pragma omp parallel for schedule(static) if (elements >= kParallelElements)
@@ -278,8 +280,11 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     if (!qualities.empty()) qualities.front() = std::move(q);
     for (std::size_t i = 1; i < qualities.size(); ++i) qualities[i].resize(m);
     for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
-        for (std::size_t i = 0; i < metrics.size(); ++i)
-            metrics[i]->evaluate(mesh, xyz, first, last, qualities[i].data() + first);
+        for (ElementId from = first; from < last; from += kSubChunk) {
+            const ElementId to = std::min(last, from + kSubChunk);
+            for (std::size_t i = 0; i < metrics.size(); ++i)
+                metrics[i]->evaluate(mesh, xyz, from, to, qualities[i].data() + from);
+        }
     });
     for (std::size_t i = 0; i < metrics.size(); ++i) {
         const std::vector<double>& q = qualities[i];

@@ -166,7 +166,7 @@ public:
 
     void evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                   double* quality) const override {
-        if constexpr (kHasBlocks) {
+        if constexpr (kHasBlocks || kHasValueBlocks) {
             if (blocks_pay(mesh, first, last)) return evaluate_blocks(mesh, xyz, first, last, quality);
         }
         MetricScale local = scale_;
@@ -195,6 +195,10 @@ public:
 private:
     static constexpr bool kHasBlocks = requires(const Kernel k, const TetBlock& x, TetBlock* g) {
         k.tet_block(BlockPath::baseline, x, nullptr, nullptr, g);
+    };
+    // Kernels with a block kernel for their values only (the quality report's metrics).
+    static constexpr bool kHasValueBlocks = requires(const Kernel k, const TetBlock& x) {
+        k.tet_values_block(BlockPath::baseline, x, nullptr, nullptr);
     };
 
     // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
@@ -257,7 +261,8 @@ private:
         for (ElementId b = first; b < last; b += kTetBlock) {
             const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
             gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
-            kernel_.tet_block(path_, x, reference_volume, q, nullptr);
+            if constexpr (kHasBlocks) kernel_.tet_block(path_, x, reference_volume, q, nullptr);
+            else kernel_.tet_values_block(path_, x, reference_volume, q);
             std::copy(q, q + count, quality + (b - first));
         }
     }
