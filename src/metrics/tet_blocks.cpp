@@ -7,6 +7,7 @@
 
 #include "tet_blocks.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 
@@ -45,6 +46,11 @@ struct Sqrt256 {
 
 [[gnu::always_inline]] inline void corners_of(const TetBlock& x, int j, P* c) {
     for (int i = 0; i < 4; ++i) c[i] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
+}
+[[gnu::always_inline]] inline std::array<P, 4> corners_of(const TetBlock& x, int j) {
+    std::array<P, 4> c;
+    corners_of(x, j, c.data());
+    return c;
 }
 
 // Element j's signed volume and squared edge sum; with Gradient, the volume's gradient too.
@@ -195,9 +201,7 @@ template <class Sqrt>
 [[gnu::always_inline]] inline void inverse_condition(const TetBlock& x, double* quality) {
     alignas(64) double det[kTetBlock], n[kTetBlock], c[kTetBlock];
     for (int j = 0; j < kTetBlock; ++j) {
-        P corner[4];
-        corners_of(x, j, corner);
-        const InverseCondition::Frame f(corner);
+        const InverseCondition::Frame f(corners_of(x, j).data());
         det[j] = f.det();
         n[j] = f.norm_squared();
         c[j] = f.adjugate_norm_squared();
@@ -216,8 +220,7 @@ template <class Sqrt>
 [[gnu::always_inline]] inline void edge_ratio(const TetBlock& x, double* quality) {
     alignas(64) double volume[kTetBlock], shortest[kTetBlock], longest[kTetBlock];
     for (int j = 0; j < kTetBlock; ++j) {
-        P c[4];
-        corners_of(x, j, c);
+        const std::array<P, 4> c = corners_of(x, j);
         double low = INFINITY, high = 0.0;
         for (const auto& [p, q] : kTetEdges) {
             const P d = c[q] - c[p];
@@ -228,7 +231,7 @@ template <class Sqrt>
         shortest[j] = low;
         longest[j] = high;
         P dvolume[4];
-        volume[j] = TetGeometry::tet_volume(c, dvolume);
+        volume[j] = TetGeometry::tet_volume(c.data(), dvolume);
     }
     Sqrt::run(shortest, shortest);
     Sqrt::run(longest, longest);
