@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "core/exact_sums.hpp"
+#include "metrics/evaluate_together.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/orientation.hpp"
@@ -126,8 +127,6 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
 // the next: the chunk's corners, scattered over memory in a mesh's file order, are fetched once
 // and then read from the cache (one pass per metric over the whole mesh fetched them each time).
 constexpr ElementId kChunk = 4096;
-// Within a chunk, the metrics take turns on smaller pieces, whose corners stay in the first-level cache.
-constexpr ElementId kSubChunk = 256;
 template <class RateChunk>
 void for_each_chunk(ElementId elements, RateChunk rate_chunk) {
 #pragma omp parallel for schedule(static) if (elements >= kParallelElements)
@@ -292,12 +291,12 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     std::vector<std::vector<double>> qualities(metrics.size());
     if (!qualities.empty()) qualities.front() = std::move(q);
     for (std::size_t i = 1; i < qualities.size(); ++i) qualities[i].resize(m);
+    std::vector<const QualityMetric*> together;
+    for (const auto& metric : metrics) together.push_back(metric.get());
     for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
-        for (ElementId from = first; from < last; from += kSubChunk) {
-            const ElementId to = std::min(last, from + kSubChunk);
-            for (std::size_t i = 0; i < metrics.size(); ++i)
-                metrics[i]->evaluate(mesh, xyz, from, to, qualities[i].data() + from);
-        }
+        std::vector<double*> out;
+        for (auto& q : qualities) out.push_back(q.data() + first);
+        metrics::evaluate_together(together, mesh, xyz, first, last, out);
     });
     for (std::size_t i = 0; i < metrics.size(); ++i) {
         const std::vector<double>& q = qualities[i];

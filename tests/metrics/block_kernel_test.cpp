@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "metrics/evaluate_together.hpp"
 #include "metrics/tet_blocks.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/mesh.hpp"
@@ -219,6 +220,44 @@ BOOST_AUTO_TEST_CASE(value_block_kernels_equal_the_scalar_kernels) {
         for (pv::ElementId e = first; e < last; ++e)
             mismatches += !same(quality[e - first], metric->value(pv::ElementKind::Tetrahedron, corners_of(mesh, e).data()));
         BOOST_TEST_CONTEXT(name) { BOOST_TEST(mismatches == 0u); }
+    }
+}
+
+// The report's pass, one gather per block for all metrics, against each metric's own batch call:
+// tetrahedra, cells (whose corners are mapped), triangles (no blocks), with a per-element scale.
+BOOST_AUTO_TEST_CASE(metrics_rated_together_equal_each_metric_rated_alone) {
+    for (const char* file : {"tetwild/octopus-vol.mesh", "mesquite/mixed/mixed-hex-pyr-tet.vtk",
+                             "mesquite/hexes/hex_5_tangled.vtk", "mesquite/tris/bad_circle_tri.vtk"}) {
+        const auto mesh = pv::read_mesh(pv::test::shared_data(file)).mesh;
+        const pv::ElementId m = mesh.num_elements();
+        std::vector<double> local_volume(static_cast<std::size_t>(m));
+        for (pv::ElementId e = 0; e < m; ++e) local_volume[e] = 0.001 * (1.0 + e % 13);
+        for (const bool per_element_scale : {false, true}) {
+            pv::MetricScale scale = pv::MetricScale::of(mesh);
+            if (per_element_scale) scale.element_reference_volume = local_volume;
+            std::vector<std::unique_ptr<pv::QualityMetric>> metrics;
+            for (const auto& name : pv::metric_names())
+                if (auto metric = pv::make_metric(name); metric->supports(mesh.kind())) metrics.push_back(std::move(metric));
+            metrics.push_back(pv::make_untangle_energy(kEpsilon, kTheta));
+            std::vector<const pv::QualityMetric*> rated;
+            for (auto& metric : metrics) {
+                metric->set_scale(scale);
+                rated.push_back(metric.get());
+            }
+            const pv::ElementId first = m > 40 ? 3 : 0, last = m > 40 ? m - 2 : m;  // blocks off the multiples of 16
+            const auto count = static_cast<std::size_t>(last - first);
+            std::vector<std::vector<double>> together(metrics.size(), std::vector<double>(count));
+            std::vector<double*> out;
+            for (auto& q : together) out.push_back(q.data());
+            pm::evaluate_together(rated, mesh, mesh.coordinates(), first, last, out);
+            for (std::size_t i = 0; i < metrics.size(); ++i) {
+                std::vector<double> alone(count);
+                metrics[i]->evaluate(mesh, mesh.coordinates(), first, last, alone.data());
+                BOOST_TEST_CONTEXT(file << ", " << metrics[i]->name() << (per_element_scale ? ", per-element scale" : "")) {
+                    BOOST_TEST(std::memcmp(alone.data(), together[i].data(), count * sizeof(double)) == 0);
+                }
+            }
+        }
     }
 }
 
