@@ -1,12 +1,15 @@
 #include "paloverde/assess/quality_assessor.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/exact_sums.hpp"
+#include "metrics/evaluate_together.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/orientation.hpp"
@@ -32,23 +35,28 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
         double low = std::numeric_limits<double>::infinity(), high = -std::numeric_limits<double>::infinity();
         long count = 0;
         ElementId worst = -1;
+        void add(double qe, std::ptrdiff_t e) {
+            ++count;
+            if (qe < low) low = qe, worst = static_cast<ElementId>(e);
+            high = std::max(high, qe);
+        }
     };
     Range range[3];
     const auto n = static_cast<std::ptrdiff_t>(q.size());
 #pragma omp parallel if (n >= kParallelElements)
     {
-        Range mine[3];
+        // Named, not an array indexed by the group: the compiler keeps them in registers.
+        Range all, movable, frozen;
 #pragma omp for schedule(static) nowait
         for (std::ptrdiff_t e = 0; e < n; ++e) {
             const int g = group[static_cast<std::size_t>(e)];
             if (!g) continue;
             const double qe = q[static_cast<std::size_t>(e)];
-            for (int k : {0, g}) {
-                ++mine[k].count;
-                if (qe < mine[k].low) mine[k].low = qe, mine[k].worst = static_cast<ElementId>(e);
-                mine[k].high = std::max(mine[k].high, qe);
-            }
+            all.add(qe, e);
+            if (g == 1) movable.add(qe, e);
+            else frozen.add(qe, e);
         }
+        const Range mine[3] = {all, movable, frozen};
 #pragma omp critical(paloverde_assess_range)
         for (int k = 0; k < 3; ++k) {
             Range& r = range[k];
@@ -68,28 +76,34 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
         width[k] = (s[k]->max - s[k]->min) / bins;
     }
     // Pass 2, by thread: exact sums and integer counts, added together (exactly: in any order).
+    // The terms are bounded by this process's range, so they sum exactly in pieces on two grids,
+    // and only those far below the bound (or not finite) take the slower digit-by-digit sum.
     const auto b = static_cast<std::size_t>(bins);
+    const double bound = std::max(std::abs(range[0].low), std::abs(range[0].high));
     std::vector<std::int64_t> counts(3 * b, 0);
     std::vector<ExactSum> sums(4 + 3 * b);  // sum and squares of movable, then of frozen; the histograms
 #pragma omp parallel if (n >= kParallelElements)
     {
         std::vector<std::int64_t> my_counts(3 * b, 0);
-        std::vector<ExactSum> my_sums(4);
+        std::array<detail::BoundedSum, 4> my_sums{detail::BoundedSum(bound), detail::BoundedSum(bound * bound),
+                                                  detail::BoundedSum(bound), detail::BoundedSum(bound * bound)};
+        const auto bin_of = [&](int k, double qe) {
+            const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
+            return static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1));
+        };
 #pragma omp for schedule(static) nowait
         for (std::ptrdiff_t e = 0; e < n; ++e) {
             const int g = group[static_cast<std::size_t>(e)];
             if (!g) continue;
             const double qe = q[static_cast<std::size_t>(e)];
-            my_sums[2 * static_cast<std::size_t>(g - 1)].add(qe);
-            my_sums[2 * static_cast<std::size_t>(g - 1) + 1].add(qe * qe);
-            for (int k : {0, g}) {
-                const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
-                ++my_counts[static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1))];
-            }
+            my_sums[2 * static_cast<std::size_t>(g - 1)].add_exact(qe);
+            my_sums[2 * static_cast<std::size_t>(g - 1) + 1].add_exact(qe * qe);
+            ++my_counts[bin_of(0, qe)];
+            ++my_counts[bin_of(g, qe)];
         }
 #pragma omp critical(paloverde_assess_sums)
         {
-            for (std::size_t i = 0; i < 4; ++i) sums[i] += my_sums[i];
+            for (std::size_t i = 0; i < 4; ++i) my_sums[i].add_to(sums[i]);
             for (std::size_t i = 0; i < counts.size(); ++i) counts[i] += my_counts[i];
         }
     }
@@ -277,9 +291,12 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     std::vector<std::vector<double>> qualities(metrics.size());
     if (!qualities.empty()) qualities.front() = std::move(q);
     for (std::size_t i = 1; i < qualities.size(); ++i) qualities[i].resize(m);
+    std::vector<const QualityMetric*> together;
+    for (const auto& metric : metrics) together.push_back(metric.get());
     for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
-        for (std::size_t i = 0; i < metrics.size(); ++i)
-            metrics[i]->evaluate(mesh, xyz, first, last, qualities[i].data() + first);
+        std::vector<double*> out;
+        for (auto& q : qualities) out.push_back(q.data() + first);
+        metrics::evaluate_together(together, mesh, xyz, first, last, out);
     });
     for (std::size_t i = 0; i < metrics.size(); ++i) {
         const std::vector<double>& q = qualities[i];

@@ -62,6 +62,20 @@ public:
         partial_[1] += (pivot_[1] + rest) - pivot_[1];
         if (++count_ == kFlush) flush();
     }
+    // As add(), but exact: a term with bits below the finer grid (one far smaller than the bound)
+    // goes whole to the ExactSum. The pieces are exact, so the result is exactly the terms' sum.
+    void add_exact(double x) {
+        const double high = (pivot_[0] + x) - pivot_[0];
+        const double rest = x - high;  // exact
+        const double low = (pivot_[1] + rest) - pivot_[1];
+        if (!(std::abs(x) <= bound_) || low != rest) {
+            exact_.add(x);
+            return;
+        }
+        partial_[0] += high;
+        partial_[1] += low;
+        if (++count_ == kFlush) flush();
+    }
     // Adds x[0], ..., x[count - 1] (count <= kFlush): the same as add() on each, in SIMD
     // instructions (bounded_sum.cpp): AVX2 where the processor has it, else SSE2, which tests
     // can ask for.

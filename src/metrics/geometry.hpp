@@ -17,6 +17,8 @@ inline P operator*(double s, P a) { return {s * a.x, s * a.y, s * a.z}; }
 inline double dot(P a, P b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 inline P cross(P a, P b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
 inline double norm(P a) { return std::sqrt(dot(a, a)); }
+// c ? a : b, coordinate by coordinate: a select the vectorizer takes, where a whole struct's is a branch.
+inline P select(bool c, P a, P b) { return {c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z}; }
 inline P load(const double* x, int corner) { return {x[3 * corner], x[3 * corner + 1], x[3 * corner + 2]}; }
 inline void store(double* g, int corner, P v) {
     g[3 * corner] = v.x;

@@ -3,7 +3,8 @@
 // write the gradient with respect to the corners (3 doubles per corner). Inlined into the batch
 // loops of KernelMetric, so a pass over the mesh makes no call per element. The metrics the
 // solvers use most also have tet_block(), the same formula over a block of tetrahedra
-// (tet_blocks.hpp), which the batch passes prefer.
+// (tet_blocks.hpp), which the batch passes prefer; the quality report's other metrics have
+// tet_values_block(), the same without gradients, which value-only passes prefer.
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -67,20 +68,31 @@ struct AspectRatio {
 // the cube root is floored at a tiny fraction of the element's size to stay finite there.
 struct MeanRatio {
     static constexpr std::string_view name = "mean_ratio";
+    // The formula in the three steps the block kernel takes apart (its square and cube roots go
+    // through loops of their own): the floored 3|V| from the root of the edge sum, then the
+    // quality from the cube root of that.
+    static double floored_volume(double volume, double edge_sum, double edge_root) {
+        return std::max(3.0 * std::abs(volume), 1e-30 * edge_sum * edge_root);
+    }
+    static double rated(double volume, double edge_sum, double root) {
+        return sign_of(volume) * 12.0 * root * root / edge_sum;
+    }
     double tet(const double* x, double* g, const MetricScale&) const {
         const TetGeometry t(x);
         if (!(t.edge_sum > 0.0)) {
             if (g) std::fill(g, g + 12, 0.0);
             return 0.0;
         }
-        const double three_v = std::max(3.0 * std::abs(t.volume), 1e-30 * t.edge_sum * std::sqrt(t.edge_sum));
-        const double root = std::cbrt(three_v);
-        const double q = sign_of(t.volume) * 12.0 * root * root / t.edge_sum;
+        const double root = std::cbrt(floored_volume(t.volume, t.edge_sum, std::sqrt(t.edge_sum)));
+        const double q = rated(t.volume, t.edge_sum, root);
         if (g) {
             const double dq_dv = 12.0 * 2.0 / root / t.edge_sum;  // d/dV of 12 (3|V|)^(2/3) / L
             for (int i = 0; i < 4; ++i) store(g, i, dq_dv * t.dvolume[i] - (q / t.edge_sum) * t.dedge_sum[i]);
         }
         return q;
+    }
+    void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
+        metrics::tet_values_block(path, TetValueMetric::mean_ratio, x, nullptr, q);
     }
     double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
 };
@@ -89,15 +101,28 @@ struct MeanRatio {
 // regular tet): 3 det S / (|S|_F |adj S|_F), signed by det S.
 struct InverseCondition {
     static constexpr std::string_view name = "inverse_condition";
+    static constexpr double r3 = std::numbers::sqrt3, r6 = 2.449489742783178098;
+    // S's columns and their pairwise cross products (adj S's rows), shared with the block kernel.
+    struct Frame {
+        P s1, s2, s3, c23, c31, c12;
+        explicit Frame(const P* corner) {
+            const P a = corner[0];
+            const P e1 = corner[1] - a, e2 = corner[2] - a, e3 = corner[3] - a;
+            s1 = e1, s2 = (1.0 / r3) * (2.0 * e2 - e1), s3 = (1.0 / r6) * (3.0 * e3 - e1 - e2);
+            c23 = cross(s2, s3), c31 = cross(s3, s1), c12 = cross(s1, s2);
+        }
+        double det() const { return dot(s1, c23); }
+        double norm_squared() const { return dot(s1, s1) + dot(s2, s2) + dot(s3, s3); }
+        double adjugate_norm_squared() const { return dot(c23, c23) + dot(c31, c31) + dot(c12, c12); }
+    };
     double tet(const double* x, double* g, const MetricScale&) const {
-        const P a = load(x, 0);
-        const P e1 = load(x, 1) - a, e2 = load(x, 2) - a, e3 = load(x, 3) - a;
-        constexpr double r3 = std::numbers::sqrt3, r6 = 2.449489742783178098;
-        const P s1 = e1, s2 = (1.0 / r3) * (2.0 * e2 - e1), s3 = (1.0 / r6) * (3.0 * e3 - e1 - e2);
-        const P c23 = cross(s2, s3), c31 = cross(s3, s1), c12 = cross(s1, s2);
-        const double det = dot(s1, c23);
-        const double n = std::sqrt(dot(s1, s1) + dot(s2, s2) + dot(s3, s3));
-        const double c = std::sqrt(dot(c23, c23) + dot(c31, c31) + dot(c12, c12));
+        P corner[4];
+        for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
+        const Frame f(corner);
+        const P &s1 = f.s1, &s2 = f.s2, &s3 = f.s3, &c23 = f.c23, &c31 = f.c31, &c12 = f.c12;
+        const double det = f.det();
+        const double n = std::sqrt(f.norm_squared());
+        const double c = std::sqrt(f.adjugate_norm_squared());
         if (!(n * c > 0.0)) {
             if (g) std::fill(g, g + 12, 0.0);
             return 0.0;
@@ -124,6 +149,9 @@ struct InverseCondition {
             store(g, 0, -(ge1 + ge2 + ge3));
         }
         return q;
+    }
+    void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
+        metrics::tet_values_block(path, TetValueMetric::inverse_condition, x, nullptr, q);
     }
     double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
 };
@@ -160,6 +188,9 @@ struct EdgeRatio {
     double tet(const double* x, double* g, const MetricScale&) const {
         return ratio<4>(x, g, sign_of(tet_signed_volume(x)), kTetEdges);  // the sign only: no gradients
     }
+    void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
+        metrics::tet_values_block(path, TetValueMetric::edge_ratio, x, nullptr, q);
+    }
     double tri(const double* x, double* g, const MetricScale& s) const {
         return ratio<3>(x, g, sign_of(TriGeometry(x, s).area), kTriEdges);
     }
@@ -175,6 +206,9 @@ struct ScaledVolume {
         if (g)
             for (int i = 0; i < 4; ++i) store(g, i, inv * t.dvolume[i]);
         return t.volume * inv;
+    }
+    void tet_values_block(BlockPath path, const TetBlock& x, const double* reference_volume, double* q) const {
+        metrics::tet_values_block(path, TetValueMetric::scaled_volume, x, reference_volume, q);
     }
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);
@@ -385,27 +419,41 @@ struct MinDihedralAngle {
     static constexpr bool assessment_only = true;
     static constexpr ElementKind only_kind = ElementKind::Tetrahedron;
     static constexpr double ideal = 70.528779365509308631;  // acos(1/3) in degrees
+    // dvolume[k] is the inward normal of the face opposite corner k; the dihedral angle at the
+    // edge those faces share has cosine -n_k . n_l / (|n_k| |n_l|). The smallest angle has the
+    // largest cosine: one atan2 for it rather than one per edge. (A face of no area makes the
+    // volume 0, and with it the result.) The pair's normals go to u and w, chosen by selects
+    // rather than by index so that the block kernel's loop, which shares this, vectorizes.
+    static void widest_pair(const P* dvolume, const double* length, P& u, P& w) {
+        u = dvolume[0], w = dvolume[1];
+        double largest = -INFINITY;
+        // The pairs k < l of faces in the order of kTetEdges' pairs of corners; one flat loop,
+        // which the compiler unrolls before it vectorizes the block's loop around it.
+#pragma GCC unroll 6
+        for (const auto& [k, l] : kTetEdges) {
+            const double cosine = -dot(dvolume[k], dvolume[l]) / (length[k] * length[l]);
+            const bool wider = cosine > largest;
+            largest = wider ? cosine : largest;
+            u = select(wider, dvolume[k], u);
+            w = select(wider, dvolume[l], w);
+        }
+    }
+    static double degrees(double volume, double angle) { return sign_of(volume) * angle * (180.0 / std::numbers::pi); }
     double tet(const double* x, double* g, const MetricScale&) const {
         // The volume and its gradient only (not the edge sums a full TetGeometry adds).
         P corner[4], dvolume[4];
         for (int i = 0; i < 4; ++i) corner[i] = load(x, i);
         const double volume = TetGeometry::tet_volume(corner, dvolume);
-        // dvolume[k] is the inward normal of the face opposite corner k; the dihedral angle at
-        // the edge those faces share has cosine -n_k . n_l / (|n_k| |n_l|). The smallest angle has
-        // the largest cosine: one atan2 for it rather than one per edge. (A face of no area makes
-        // the volume 0, and with it the result.)
         double length[4];
         for (int k = 0; k < 4; ++k) length[k] = norm(dvolume[k]);
-        int a = 0, b = 1;
-        double largest = -INFINITY;
-        for (int k = 0; k < 4; ++k)
-            for (int l = k + 1; l < 4; ++l) {
-                const double cosine = -dot(dvolume[k], dvolume[l]) / (length[k] * length[l]);
-                if (cosine > largest) largest = cosine, a = k, b = l;
-            }
-        const double smallest = std::atan2(norm(cross(dvolume[a], dvolume[b])), -dot(dvolume[a], dvolume[b]));
+        P u, w;
+        widest_pair(dvolume, length, u, w);
+        const double smallest = std::atan2(norm(cross(u, w)), -dot(u, w));
         if (g) std::fill(g, g + 12, 0.0);
-        return sign_of(volume) * smallest * (180.0 / std::numbers::pi);
+        return degrees(volume, smallest);
+    }
+    void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
+        metrics::tet_values_block(path, TetValueMetric::min_dihedral, x, nullptr, q);
     }
     double tri(const double*, double*, const MetricScale&) const { return 0.0; }
 };

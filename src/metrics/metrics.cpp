@@ -1,8 +1,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 #include "core/prefetch.hpp"
+#include "evaluate_together.hpp"
 #include "kernels.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
@@ -132,10 +134,51 @@ void accumulate_gradient_each(const Mesh& mesh, std::span<const double> xyz, Ele
     }
 }
 
+// Gathers the corners of the tetrahedra [first, last) kTetBlock at a time and calls
+// rate(corners, b, count) for the block of elements b, ..., b + count - 1. Padding lanes of a
+// last, partial block hold a degenerate element at the origin, which rates 0 without trouble. A
+// cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits). While a block
+// is rated, the next one's corners come in.
+template <class Rate>
+void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, Rate&& rate) {
+    const VertexId* conn = mesh.connectivity().data();
+    const double* coords = xyz.data();
+    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    TetBlock x;
+    for (ElementId b = first; b < last; b += kTetBlock) {
+        const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
+        if (const ElementId next = b + count; next < last)
+            detail::prefetch_corners(conn + 4 * static_cast<std::size_t>(next),
+                                     4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
+        gather_tets(conn + 4 * static_cast<std::size_t>(b), coords, count, x);
+        if (maps)
+            for (int j = 0; j < count; ++j)
+                if (const std::uint8_t m = maps[b + j]) {
+                    double corner[12];
+                    for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
+                    map_corner<4>(corner_map(m), corner);
+                    for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
+                }
+        rate(std::as_const(x), b, count);
+    }
+}
+
+// A metric that rates a block of tetrahedra gathered by someone else: evaluate_together() gathers
+// each block once for all the metrics it rates.
+class BlockRater {
+public:
+    virtual bool rates_blocks() const = 0;
+    // quality[j] for the block's elements first, ..., first + count - 1.
+    virtual void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const = 0;
+
+protected:
+    ~BlockRater() = default;
+};
+
 // Gathers each element's corners into a small buffer, calls the inlined kernel, and scatters the
 // weighted gradient: one virtual call per batch, none per element.
 template <class Kernel>
-class KernelMetric final : public QualityMetric {
+class KernelMetric final : public QualityMetric, public BlockRater {
 public:
     explicit KernelMetric(Kernel kernel = {}) : kernel_(kernel) {}
 
@@ -166,7 +209,7 @@ public:
 
     void evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                   double* quality) const override {
-        if constexpr (kHasBlocks) {
+        if constexpr (kHasBlocks || kHasValueBlocks) {
             if (blocks_pay(mesh, first, last)) return evaluate_blocks(mesh, xyz, first, last, quality);
         }
         MetricScale local = scale_;
@@ -195,6 +238,10 @@ public:
 private:
     static constexpr bool kHasBlocks = requires(const Kernel k, const TetBlock& x, TetBlock* g) {
         k.tet_block(BlockPath::baseline, x, nullptr, nullptr, g);
+    };
+    // Kernels with a block kernel for their values only (the quality report's metrics).
+    static constexpr bool kHasValueBlocks = requires(const Kernel k, const TetBlock& x) {
+        k.tet_values_block(BlockPath::baseline, x, nullptr, nullptr);
     };
 
     // Blocks for tetrahedra, when the range fills one: the local smoother rates one element at a
@@ -225,41 +272,28 @@ private:
         return local;
     }
 
-    // Block passes over tetrahedra: gather the corners of kTetBlock elements (and their reference
-    // volumes), rate them in one vectorized call, and scatter. Padding lanes of a last, partial
-    // block hold a degenerate element at the origin, which rates 0 without trouble.
-    // A cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits).
-    void gather_block(const VertexId* conn, const double* coords, const std::uint8_t* maps, ElementId first, int count,
-                      TetBlock& x, double* reference_volume, ElementId last) const {
-        // While this block is rated, the next one's corners come in.
-        if (const ElementId next = first + count; next < last)
-            detail::prefetch_corners(conn + 4 * static_cast<std::size_t>(next),
-                                     4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
-        gather_tets(conn + 4 * static_cast<std::size_t>(first), coords, count, x);
-        if (maps)
-            for (int j = 0; j < count; ++j)
-                if (const std::uint8_t m = maps[first + j]) {
-                    double corner[12];
-                    for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
-                    map_corner<4>(corner_map(m), corner);
-                    for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
-                }
+    // Block passes over tetrahedra: the corners of kTetBlock elements (for_each_block) and their
+    // reference volumes rated in one vectorized call, and the gradients scattered.
+    void reference_volumes(ElementId first, int count, double* reference_volume) const {
         for (int j = 0; j < count; ++j) reference_volume[j] = reference_volume_of(first + j);
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
 
+    bool rates_blocks() const override { return kHasBlocks || kHasValueBlocks; }
+    void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const override {
+        alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
+        reference_volumes(first, count, reference_volume);
+        if constexpr (kHasBlocks) kernel_.tet_block(path_, x, reference_volume, q, nullptr);
+        else if constexpr (kHasValueBlocks) kernel_.tet_values_block(path_, x, reference_volume, q);
+        else throw Error("metric '" + std::string(Kernel::name) + "' has no block kernel");
+        std::copy(q, q + count, quality);
+    }
+
     void evaluate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                          double* quality) const {
-        const VertexId* conn = mesh.connectivity().data();
-        const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
-        TetBlock x;
-        alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
-        for (ElementId b = first; b < last; b += kTetBlock) {
-            const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
-            kernel_.tet_block(path_, x, reference_volume, q, nullptr);
-            std::copy(q, q + count, quality + (b - first));
-        }
+        for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
+            rate_block(x, b, count, quality + (b - first));
+        });
     }
 
     // Adds to the target in the order accumulate_each does: bit for bit the same sums.
@@ -268,11 +302,10 @@ private:
                            const GradientTarget& target) const {
         const VertexId* conn = mesh.connectivity().data();
         const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
-        TetBlock x, g;
+        TetBlock g;
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
-        for (ElementId b = first; b < last; b += kTetBlock) {
-            const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
-            gather_block(conn, xyz.data(), maps, b, count, x, reference_volume, last);
+        for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
+            reference_volumes(b, count, reference_volume);
             kernel_.tet_block(path_, x, reference_volume, q, &g);
             for (int j = 0; j < count; ++j) {
                 const ElementId e = b + j;
@@ -286,7 +319,7 @@ private:
                 for (int i = 0; i < 4; ++i)
                     add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, gradient + 3 * i);
             }
-        }
+        });
     }
 
     Kernel kernel_;
@@ -294,6 +327,22 @@ private:
 };
 
 }  // namespace
+
+void evaluate_together(std::span<const QualityMetric* const> metrics, const Mesh& mesh, std::span<const double> xyz,
+                       ElementId first, ElementId last, std::span<double* const> quality) {
+    std::vector<const BlockRater*> raters(metrics.size(), nullptr);
+    if (mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock)
+        for (std::size_t i = 0; i < metrics.size(); ++i)
+            if (const auto* r = dynamic_cast<const BlockRater*>(metrics[i]); r && r->rates_blocks()) raters[i] = r;
+    for (std::size_t i = 0; i < metrics.size(); ++i)
+        if (!raters[i]) metrics[i]->evaluate(mesh, xyz, first, last, quality[i]);
+    if (std::none_of(raters.begin(), raters.end(), [](const BlockRater* r) { return r != nullptr; })) return;
+    for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
+        for (std::size_t i = 0; i < metrics.size(); ++i)
+            if (raters[i]) raters[i]->rate_block(x, b, count, quality[i] + (b - first));
+    });
+}
+
 }  // namespace metrics
 
 MetricScale MetricScale::of(const Mesh& mesh) { return of(mesh, mesh.coordinates()); }

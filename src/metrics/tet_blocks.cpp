@@ -7,6 +7,7 @@
 
 #include "tet_blocks.hpp"
 
+#include <array>
 #include <cmath>
 #include <cstddef>
 
@@ -45,6 +46,11 @@ struct Sqrt256 {
 
 [[gnu::always_inline]] inline void corners_of(const TetBlock& x, int j, P* c) {
     for (int i = 0; i < 4; ++i) c[i] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
+}
+[[gnu::always_inline]] inline std::array<P, 4> corners_of(const TetBlock& x, int j) {
+    std::array<P, 4> c;
+    corners_of(x, j, c.data());
+    return c;
 }
 
 // Element j's signed volume and squared edge sum; with Gradient, the volume's gradient too.
@@ -178,7 +184,115 @@ template <class Sqrt>
     else energy_loop<Sqrt, false>(x, reference_volume, epsilon, theta, quality, nullptr);
 }
 
+// The report's value-only kernels, on the pieces of kernels.hpp they share with the scalar ones.
+template <class Sqrt>
+[[gnu::always_inline]] inline void mean_ratio(const TetBlock& x, double* quality) {
+    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], root[kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) measure<false>(x, j, volume, edge_sum, nullptr);
+    Sqrt::run(edge_sum, root);
+    for (int j = 0; j < kTetBlock; ++j) root[j] = MeanRatio::floored_volume(volume[j], edge_sum[j], root[j]);
+    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
+    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
+    for (int j = 0; j < kTetBlock; ++j)
+        quality[j] = edge_sum[j] > 0.0 ? MeanRatio::rated(volume[j], edge_sum[j], root[j]) : 0.0;
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void inverse_condition(const TetBlock& x, double* quality) {
+    alignas(64) double det[kTetBlock], n[kTetBlock], c[kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) {
+        const InverseCondition::Frame f(corners_of(x, j).data());
+        det[j] = f.det();
+        n[j] = f.norm_squared();
+        c[j] = f.adjugate_norm_squared();
+    }
+    Sqrt::run(n, n);
+    Sqrt::run(c, c);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double nc = n[j] * c[j];
+        quality[j] = nc > 0.0 ? 3.0 * det[j] / nc : 0.0;
+    }
+}
+
+// The shortest and longest edges from the squared lengths, rooted after: the square root rounds
+// monotonically, so the root of the least square is the least root, as the scalar kernel finds it.
+template <class Sqrt>
+[[gnu::always_inline]] inline void edge_ratio(const TetBlock& x, double* quality) {
+    alignas(64) double volume[kTetBlock], shortest[kTetBlock], longest[kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) {
+        const std::array<P, 4> c = corners_of(x, j);
+        double low = INFINITY, high = 0.0;
+        for (const auto& [p, q] : kTetEdges) {
+            const P d = c[q] - c[p];
+            const double l = dot(d, d);
+            low = l < low ? l : low;
+            high = l > high ? l : high;
+        }
+        shortest[j] = low;
+        longest[j] = high;
+        P dvolume[4];
+        volume[j] = TetGeometry::tet_volume(c.data(), dvolume);
+    }
+    Sqrt::run(shortest, shortest);
+    Sqrt::run(longest, longest);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double orientation = sign_of(volume[j]);
+        quality[j] = !(longest[j] > 0.0) || orientation == 0.0 ? 0.0 : orientation * (shortest[j] / longest[j]);
+    }
+}
+
+[[gnu::always_inline]] inline void scaled_volume(const TetBlock& x, const double* reference_volume, double* quality) {
+    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) measure<false>(x, j, volume, edge_sum, nullptr);
+    for (int j = 0; j < kTetBlock; ++j) quality[j] = volume[j] / reference_volume[j];
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void min_dihedral(const TetBlock& x, double* quality) {
+    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], length[4][kTetBlock], sine[kTetBlock],
+        cosine[kTetBlock];
+    TetBlock dvolume;
+    for (int j = 0; j < kTetBlock; ++j) {
+        measure<true>(x, j, volume, edge_sum, &dvolume);
+        for (int k = 0; k < 4; ++k) {
+            const P n{dvolume.at[3 * k][j], dvolume.at[3 * k + 1][j], dvolume.at[3 * k + 2][j]};
+            length[k][j] = dot(n, n);
+        }
+    }
+    for (auto& l : length) Sqrt::run(l, l);
+    for (int j = 0; j < kTetBlock; ++j) {
+        P n[4], u, w;
+        double l[4];
+        for (int k = 0; k < 4; ++k) {
+            n[k] = {dvolume.at[3 * k][j], dvolume.at[3 * k + 1][j], dvolume.at[3 * k + 2][j]};
+            l[k] = length[k][j];
+        }
+        MinDihedralAngle::widest_pair(n, l, u, w);
+        const P normal = cross(u, w);
+        sine[j] = dot(normal, normal);
+        cosine[j] = -dot(u, w);
+    }
+    Sqrt::run(sine, sine);
+    // atan2 has no vector version that rounds like the scalar one: a scalar loop.
+    for (int j = 0; j < kTetBlock; ++j) quality[j] = MinDihedralAngle::degrees(volume[j], std::atan2(sine[j], cosine[j]));
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void values(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
+                                          double* quality) {
+    switch (metric) {
+        case TetValueMetric::mean_ratio: return mean_ratio<Sqrt>(x, quality);
+        case TetValueMetric::inverse_condition: return inverse_condition<Sqrt>(x, quality);
+        case TetValueMetric::edge_ratio: return edge_ratio<Sqrt>(x, quality);
+        case TetValueMetric::scaled_volume: return scaled_volume(x, reference_volume, quality);
+        case TetValueMetric::min_dihedral: return min_dihedral<Sqrt>(x, quality);
+    }
+}
+
 void aspect_baseline(const TetBlock& x, double* quality, TetBlock* gradient) { aspect<Sqrt128>(x, quality, gradient); }
+void values_baseline(TetValueMetric metric, const TetBlock& x, const double* reference_volume, double* quality) {
+    values<Sqrt128>(metric, x, reference_volume, quality);
+}
 void hybrid_baseline(const TetBlock& x, const double* reference_volume, double alpha, double* quality,
                      TetBlock* gradient) {
     hybrid<Sqrt128>(x, reference_volume, alpha, quality, gradient);
@@ -192,6 +306,10 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
 [[gnu::target("avx2")]] void energy_avx2(const TetBlock& x, const double* reference_volume, double epsilon,
                                          double theta, double* quality, TetBlock* gradient) {
     energy<Sqrt256>(x, reference_volume, epsilon, theta, quality, gradient);
+}
+[[gnu::target("avx2")]] void values_avx2(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
+                                         double* quality) {
+    values<Sqrt256>(metric, x, reference_volume, quality);
 }
 [[gnu::target("avx2")]] void aspect_avx2(const TetBlock& x, double* quality, TetBlock* gradient) {
     aspect<Sqrt256>(x, quality, gradient);
@@ -259,6 +377,14 @@ void tet_energy_block(BlockPath path, const TetBlock& corners, const double* ref
     if (path == BlockPath::avx2) return energy_avx2(corners, reference_volume, epsilon, theta, quality, gradient);
 #endif
     energy_baseline(corners, reference_volume, epsilon, theta, quality, gradient);
+}
+
+void tet_values_block(BlockPath path, TetValueMetric metric, const TetBlock& corners, const double* reference_volume,
+                      double* quality) {
+#ifdef PALOVERDE_X86
+    if (path == BlockPath::avx2) return values_avx2(metric, corners, reference_volume, quality);
+#endif
+    values_baseline(metric, corners, reference_volume, quality);
 }
 
 }  // namespace paloverde::metrics

@@ -5,8 +5,11 @@
 
 #include <cmath>
 #include <cstring>
+#include <random>
+#include <utility>
 #include <vector>
 
+#include "metrics/evaluate_together.hpp"
 #include "metrics/tet_blocks.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/mesh.hpp"
@@ -82,6 +85,85 @@ void check_blocks(const std::string& name, const std::vector<std::vector<double>
     }
 }
 
+// The value-only block kernels of the report's metrics against the metric's scalar value().
+void check_value_blocks(const std::vector<std::vector<double>>& elements, double reference_volume) {
+    const std::pair<const char*, pm::TetValueMetric> kernels[] = {
+        {"mean_ratio", pm::TetValueMetric::mean_ratio},       {"inverse_condition", pm::TetValueMetric::inverse_condition},
+        {"edge_ratio", pm::TetValueMetric::edge_ratio},       {"scaled_volume", pm::TetValueMetric::scaled_volume},
+        {"min_dihedral_deg", pm::TetValueMetric::min_dihedral}};
+    for (const auto& [name, kernel] : kernels) {
+        auto metric = pv::make_metric(name);
+        pv::MetricScale scale;
+        scale.reference_volume = reference_volume;
+        metric->set_scale(scale);
+        for (pm::BlockPath path : paths()) {
+            std::size_t mismatches = 0, first_mismatch = 0;
+            double got = 0.0, wanted = 0.0;
+            for (std::size_t first = 0; first < elements.size(); first += pm::kTetBlock) {
+                pm::TetBlock x{};
+                double q[pm::kTetBlock], reference[pm::kTetBlock];
+                const std::size_t count = std::min<std::size_t>(pm::kTetBlock, elements.size() - first);
+                for (std::size_t j = 0; j < count; ++j)
+                    for (int k = 0; k < 12; ++k) x.at[k][j] = elements[first + j][k];
+                for (double& r : reference) r = reference_volume;
+                pm::tet_values_block(path, kernel, x, reference, q);
+                for (std::size_t j = 0; j < count; ++j) {
+                    const double expected = metric->value(pv::ElementKind::Tetrahedron, elements[first + j].data());
+                    if (!same(q[j], expected) && mismatches++ == 0)
+                        first_mismatch = first + j, got = q[j], wanted = expected;
+                }
+            }
+            BOOST_TEST_CONTEXT(name << ", path " << static_cast<int>(path) << ", first mismatch at element "
+                                    << first_mismatch << ": " << got << " for " << wanted) {
+                BOOST_TEST(mismatches == 0u);
+            }
+        }
+    }
+}
+
+// Random tetrahedra and their inverted (two corners swapped), flattened, needle-like and
+// cap-like versions, each also at the scales 1e-100 and 1e100; the regular one and its ties.
+std::vector<std::vector<double>> random_and_degenerate_elements() {
+    std::mt19937_64 random(16);
+    std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+    std::vector<std::vector<double>> base;
+    const std::vector<double> regular{0, 0, 0, 1, 0, 0, 0.5, std::sqrt(3.0) / 2, 0, 0.5, std::sqrt(3.0) / 6, std::sqrt(2.0 / 3.0)};
+    base.push_back(regular);
+    for (int n = 0; n < 2000; ++n) {
+        std::vector<double> e(12);
+        for (double& v : e) v = coordinate(random);
+        base.push_back(e);
+        std::vector<double> flat = e;  // the fourth corner in the plane of the others
+        const double s = 0.5 + 0.5 * coordinate(random), t = 0.5 * (1.0 - s);
+        for (int d = 0; d < 3; ++d) flat[9 + d] = s * e[d] + t * e[3 + d] + (1.0 - s - t) * e[6 + d];
+        base.push_back(flat);
+        std::vector<double> needle = e, cap = e, repeated = e;
+        for (int d = 0; d < 3; ++d) {
+            needle[3 + d] = e[d] + 1e-9 * (needle[3 + d] - e[d]);  // one very short edge
+            cap[9 + d] = 0.5 * (e[3 + d] + e[6 + d]) + 1e-7 * (e[9 + d] - e[d]);  // the fourth corner nearly on an edge
+            repeated[6 + d] = e[3 + d];  // two corners at one point
+        }
+        for (const auto& v : {needle, cap, repeated}) base.push_back(v);
+    }
+    std::vector<std::vector<double>> out;
+    for (const auto& e : base)
+        for (const double scale : {1.0, 1e-100, 1e100}) {
+            std::vector<double> scaled = e;
+            for (double& v : scaled) v *= scale;
+            std::vector<double> inverted = scaled;
+            std::swap_ranges(inverted.begin(), inverted.begin() + 3, inverted.begin() + 3);
+            out.push_back(scaled);
+            out.push_back(inverted);
+        }
+    out.push_back(std::vector<double>(12, 0.25));  // all corners at one point
+    std::vector<double> infinite = regular, nan = regular;
+    infinite[3] = INFINITY;
+    nan[7] = NAN;
+    out.push_back(infinite);
+    out.push_back(nan);
+    return out;
+}
+
 std::vector<std::vector<double>> mesh_elements(const pv::Mesh& mesh) {
     std::vector<std::vector<double>> out;
     for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) out.push_back(corners_of(mesh, e));
@@ -119,6 +201,64 @@ BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degen
     check_blocks("aspect_ratio", elements, 0.1);
     check_blocks("untangle_hybrid", elements, 0.1);
     check_blocks("untangle_energy", elements, 0.1);
+}
+
+BOOST_AUTO_TEST_CASE(value_block_kernels_equal_the_scalar_kernels) {
+    const auto elements = random_and_degenerate_elements();
+    check_value_blocks(elements, 0.1);
+    check_value_blocks(elements, 1e-100);  // the scaled volume's quotient beyond the double range
+    const auto mesh = pv::read_mesh(pv::test::shared_data("tetwild/octopus-vol.mesh")).mesh;
+    check_value_blocks(mesh_elements(mesh), pv::MetricScale::of(mesh).reference_volume);
+    // The batch call takes those kernels, on an odd range (blocks off the multiples of 16).
+    for (const std::string name : {"mean_ratio", "inverse_condition", "edge_ratio", "scaled_volume", "min_dihedral_deg"}) {
+        auto metric = pv::make_metric(name);
+        metric->set_scale(pv::MetricScale::of(mesh));
+        const pv::ElementId first = 3, last = mesh.num_elements() - 2;
+        std::vector<double> quality(static_cast<std::size_t>(last - first));
+        metric->evaluate(mesh, mesh.coordinates(), first, last, quality.data());
+        std::size_t mismatches = 0;
+        for (pv::ElementId e = first; e < last; ++e)
+            mismatches += !same(quality[e - first], metric->value(pv::ElementKind::Tetrahedron, corners_of(mesh, e).data()));
+        BOOST_TEST_CONTEXT(name) { BOOST_TEST(mismatches == 0u); }
+    }
+}
+
+// The report's pass, one gather per block for all metrics, against each metric's own batch call:
+// tetrahedra, cells (whose corners are mapped), triangles (no blocks), with a per-element scale.
+BOOST_AUTO_TEST_CASE(metrics_rated_together_equal_each_metric_rated_alone) {
+    for (const char* file : {"tetwild/octopus-vol.mesh", "mesquite/mixed/mixed-hex-pyr-tet.vtk",
+                             "mesquite/hexes/hex_5_tangled.vtk", "mesquite/tris/bad_circle_tri.vtk"}) {
+        const auto mesh = pv::read_mesh(pv::test::shared_data(file)).mesh;
+        const pv::ElementId m = mesh.num_elements();
+        std::vector<double> local_volume(static_cast<std::size_t>(m));
+        for (pv::ElementId e = 0; e < m; ++e) local_volume[e] = 0.001 * (1.0 + e % 13);
+        for (const bool per_element_scale : {false, true}) {
+            pv::MetricScale scale = pv::MetricScale::of(mesh);
+            if (per_element_scale) scale.element_reference_volume = local_volume;
+            std::vector<std::unique_ptr<pv::QualityMetric>> metrics;
+            for (const auto& name : pv::metric_names())
+                if (auto metric = pv::make_metric(name); metric->supports(mesh.kind())) metrics.push_back(std::move(metric));
+            metrics.push_back(pv::make_untangle_energy(kEpsilon, kTheta));
+            std::vector<const pv::QualityMetric*> rated;
+            for (auto& metric : metrics) {
+                metric->set_scale(scale);
+                rated.push_back(metric.get());
+            }
+            const pv::ElementId first = m > 40 ? 3 : 0, last = m > 40 ? m - 2 : m;  // blocks off the multiples of 16
+            const auto count = static_cast<std::size_t>(last - first);
+            std::vector<std::vector<double>> together(metrics.size(), std::vector<double>(count));
+            std::vector<double*> out;
+            for (auto& q : together) out.push_back(q.data());
+            pm::evaluate_together(rated, mesh, mesh.coordinates(), first, last, out);
+            for (std::size_t i = 0; i < metrics.size(); ++i) {
+                std::vector<double> alone(count);
+                metrics[i]->evaluate(mesh, mesh.coordinates(), first, last, alone.data());
+                BOOST_TEST_CONTEXT(file << ", " << metrics[i]->name() << (per_element_scale ? ", per-element scale" : "")) {
+                    BOOST_TEST(std::memcmp(alone.data(), together[i].data(), count * sizeof(double)) == 0);
+                }
+            }
+        }
+    }
 }
 
 // The batch calls (which take the block path for tetrahedra) against the one-element calls:

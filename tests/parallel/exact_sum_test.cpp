@@ -115,6 +115,44 @@ BOOST_AUTO_TEST_CASE(bounded_sums_do_not_depend_on_order_or_split) {
     BOOST_TEST(threaded[0].value() == whole);
 }
 
+// add_exact() must give exactly ExactSum's sum, digit for digit, whatever the terms' sizes: near
+// the bound, far below it (down to subnormals), zero, past it, with a few cancelling ones, and
+// well past kFlush terms; and an unusable bound sends every term to the ExactSum.
+BOOST_AUTO_TEST_CASE(bounded_sums_added_exactly_equal_exact_sums) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-1080, 1);
+    std::vector<double> terms(30000);
+    for (std::size_t i = 0; i < terms.size(); ++i) {
+        const double m = mantissa(random);
+        terms[i] = i % 3 == 0 ? std::ldexp(m, exponent(random)) : 1.5 * m;  // a third spread over every scale
+    }
+    terms[10] = 0.0, terms[11] = -0.0, terms[12] = std::numeric_limits<double>::denorm_min(), terms[13] = 1.5;
+    terms[14] = 1e-300, terms[15] = -1.5, terms[16] = 3.0;  // 3.0: past the bound
+    auto digits_of = [](pv::ExactSum s) {
+        s.normalize();
+        return std::vector<std::int64_t>(s.digits().begin(), s.digits().end());
+    };
+    pv::ExactSum exact;
+    for (double t : terms) exact.add(t);
+    for (const double bound : {1.5, 2.0, 1e10, -1.0, std::numeric_limits<double>::infinity()}) {
+        pv::detail::BoundedSum s(bound);
+        for (double t : terms) s.add_exact(t);
+        pv::ExactSum total;
+        s.add_to(total);
+        BOOST_TEST_CONTEXT("bound " << bound) {
+            BOOST_TEST(digits_of(total) == digits_of(exact));
+            BOOST_TEST(total.value() == exact.value());
+        }
+    }
+    pv::detail::BoundedSum with_nan(1.5);
+    with_nan.add_exact(1.0);
+    with_nan.add_exact(std::nan(""));
+    pv::ExactSum nan_total;
+    with_nan.add_to(nan_total);
+    BOOST_TEST(std::isnan(nan_total.value()));
+}
+
 // add_all() splits many terms per SIMD instruction: it must give add()'s bits, with terms past
 // the bound, infinities and NaN among them, for any run length and wherever the flushes fall.
 BOOST_AUTO_TEST_CASE(bounded_sums_of_whole_buffers_equal_those_of_single_terms) {

@@ -1,0 +1,16 @@
+#pragma once
+// Several metrics over the same elements, as the quality report rates them: each block of
+// tetrahedra is gathered once and rated by every built-in metric with a block kernel (the
+// report's six), in place of one gather per metric; the other metrics rate the range by their
+// own evaluate(). The qualities are those evaluate() gives, bit for bit.
+#include <span>
+
+#include "paloverde/metrics/quality_metric.hpp"
+
+namespace paloverde::metrics {
+
+// quality[i][e - first] = metric i's quality of element e, for e in [first, last).
+void evaluate_together(std::span<const QualityMetric* const> metrics, const Mesh& mesh, std::span<const double> xyz,
+                       ElementId first, ElementId last, std::span<double* const> quality);
+
+}  // namespace paloverde::metrics
