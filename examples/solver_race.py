@@ -2,7 +2,7 @@
 """The global solver against the local smoother on the same meshes, one thread each: final worst
 and mean quality, the solver's seconds, when each first reached its own final worst quality, and
 when the global solver passed the local smoother's. With --old, the global solver as it was
-before issue 16's focus and adaptive mu (--set gain_tolerance=0, focus_band=1) runs too; with
+before issue 16's focus, adaptive mu and finish (--set gain_tolerance=0, focus_band=1, finish=none) runs too; with
 --previous, as it was before the Newton finish and the narrower focus (finish=none,
 focus_band=0.05). Prints a
 markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
@@ -31,7 +31,8 @@ parser.add_argument("--plot", default=None, help="prefix of the PNG files writte
 parser.add_argument("--set", action="append", default=[], help="an option of the default global solver")
 args = parser.parse_args()
 
-OLD = ["--set", "queue[0].improve.gain_tolerance=0", "--set", "queue[0].improve.focus_band=1"]
+OLD = ["--set", "queue[0].improve.gain_tolerance=0", "--set", "queue[0].improve.focus_band=1", "--set",
+       "queue[0].improve.finish=none"]
 methods = [("global", ["--method", "global"] + [a for kv in args.set for a in ("--set", "queue[0].improve." + kv)])]
 PREVIOUS = ["--set", "queue[0].improve.finish=none", "--set", "queue[0].improve.focus_band=0.05"]
 if args.previous:
