@@ -262,7 +262,7 @@ Tables::Tables() {
               "than this times mu (after at least steps_per_mu steps, at most 100), >= 0; 0: after steps_per_mu steps.")
         .real("focus_band", &GlobalSolverOptions::focus_band,
               "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
-              "their neighbours, chosen anew as the worst climbs and widened where it stalls, in (0, 1]; 1: the "
+              "their neighbours, chosen anew as the worst climbs (finish none: widened where it stalls), in (0, 1]; 1: the "
               "whole mesh every iteration (direction newton: always the whole mesh; the newton finish focuses too).")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton and the newton finish: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")

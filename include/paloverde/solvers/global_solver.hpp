@@ -50,10 +50,11 @@ struct GlobalSolverOptions {
     // Shape phase: iterate on the vertices of the elements whose quality lies in this lowest
     // fraction of worst..ideal and on their neighbours (with every element around them); the rest
     // stand still until the worst has climbed half way up the band, when the focus is chosen
-    // anew, or the focus stalls, when it is widened (twice the band, while widening pays). Terms
-    // of elements far above the worst weigh almost nothing in the barrier, and skipping them
-    // makes an iteration cost what the focus costs, not the whole mesh. 1: the whole mesh (and
-    // always with Newton directions, which measured worse on a focus).
+    // anew, or the focus stalls, when the Newton finish takes over (finish: none: it is widened,
+    // twice the band, while widening pays). Terms of elements far above the worst weigh almost
+    // nothing in the barrier, and skipping them makes an iteration cost what the focus costs, not
+    // the whole mesh. 1: the whole mesh (and always with direction newton, whose directions from
+    // the start measured worse on a focus; the finish focuses).
     double focus_band = 0.03;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
