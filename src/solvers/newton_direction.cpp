@@ -112,11 +112,10 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
     const auto owned = work_.owned();
     const auto free = work_.free_vertices();
     const double c_total = prepare(metric, x, q.size(), curvature_weight);
-    for (const VertexId v : free)
-        for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i) {
-            r_[i] = gradient[i];
-            direction[i] = 0.0;
-        }
+    for_each_free([&](std::size_t i) {
+        r_[i] = gradient[i];
+        direction[i] = 0.0;
+    });
     auto trace = [&](VertexId v) { return curvature[6 * v] + curvature[6 * v + 3] + curvature[6 * v + 5]; };
     const auto [trace_sum, free_count] = free_owned_sums<2>(work_, [&](std::size_t v, auto& acc) {
         acc[0].add(trace(static_cast<VertexId>(v)));
@@ -161,9 +160,7 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
         if (!(rz_next > tolerance * tolerance * rz_first)) break;
         const double beta = rz_next / rz;
         rz = rz_next;
-        for (const VertexId v : free)
-            for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i)
-                p_[i] = z_[i] + beta * p_[i];
+        for_each_free([&](std::size_t i) { p_[i] = z_[i] + beta * p_[i]; });
     }
     step.decrement = free_owned_dot(work_, gradient, direction);
     return step;
