@@ -23,6 +23,12 @@ constexpr bool assessment_only() {
 
 // Adds one corner's weighted gradient (and curvature) to the target: the one place where every
 // pass adds, so that they add alike, bit for bit.
+// Where corner vertex v's sums go in the target (GradientTarget).
+inline std::size_t corner_slot(const QualityMetric::GradientTarget& target, VertexId v) {
+    const auto i = static_cast<std::size_t>(v - target.base);
+    return target.slot ? target.slot[i] : i;
+}
+
 template <bool Curvature>
 void add_corner(const QualityMetric::GradientTarget& target, std::size_t v, double w, double cw, const double* gi) {
     for (int d = 0; d < 3; ++d) target.gradient[3 * v + d] += w * gi[d];
@@ -109,7 +115,7 @@ void accumulate_each(const Mesh& mesh, std::span<const double> xyz, ElementId fi
         gather<K>(c, coords, maps, e, x);
         rate(std::integral_constant<int, K>{}, e, x, g);
         if (maps && maps[e]) unmap_gradient<K>(corner_map(maps[e]), g);
-        for (int i = 0; i < K; ++i) add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, g + 3 * i);
+        for (int i = 0; i < K; ++i) add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, g + 3 * i);
     }
 }
 
@@ -317,7 +323,7 @@ private:
                 for (int i = 0; i < 12; ++i) gradient[i] = g.at[i][j];
                 if (maps && maps[e]) unmap_gradient<4>(corner_map(maps[e]), gradient);
                 for (int i = 0; i < 4; ++i)
-                    add_corner<Curvature>(target, static_cast<std::size_t>(c[i] - target.base), w, cw, gradient + 3 * i);
+                    add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, gradient + 3 * i);
             }
         });
     }

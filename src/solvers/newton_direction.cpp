@@ -83,11 +83,21 @@ void NewtonDirection::precondition(std::span<const double> curvature) {
 double NewtonDirection::prepare(const QualityMetric& metric, std::span<const double> x, std::size_t elements,
                                 std::span<const double> curvature_weight) {
     // Vertex fields are read and written at the free vertices only (a focus is a fraction of
-    // the mesh); elsewhere they stay zero, and xp_ stays x.
+    // the mesh); elsewhere they stay zero, and xp_ stays x. Within one focus only its free
+    // vertices move, so only they are set afresh: a step then costs the focus, not the mesh.
     const std::size_t n = work_.owned().size();
-    for (auto* field : {&r_, &z_, &p_, &ap_, &u_}) field->assign(3 * n, 0.0);
-    lambda_.assign(n, 0.0);
-    xp_.assign(x.begin(), x.end());
+    if (prepared_for_ != work_.focus_generation() || xp_.size() != x.size()) {
+        for (auto* field : {&r_, &z_, &p_, &ap_, &u_}) field->assign(3 * n, 0.0);
+        lambda_.assign(n, 0.0);
+        xp_.assign(x.begin(), x.end());
+        prepared_for_ = work_.focus_generation();
+    } else {
+        for_each_free([&](std::size_t i) {
+            r_[i] = z_[i] = p_[i] = ap_[i] = u_[i] = 0.0;
+            xp_[i] = x[i];
+        });
+        for (const VertexId v : work_.free_vertices()) lambda_[v] = 0.0;
+    }
     qp_.resize(elements);
     w_.resize(elements);
     // u = sum c_i g_i: how t moves along a direction.
@@ -128,7 +138,7 @@ NewtonStep NewtonDirection::solve(const QualityMetric& metric, const ObjectiveFu
         if (owned[v]) lambda_[v] = damping * trace(v) / 3.0 + 1e-8 * mean_trace;
 
     precondition(curvature);
-    p_ = z_;
+    for_each_free([&](std::size_t i) { p_[i] = z_[i]; });
     double rz = free_owned_dot(work_, r_, z_);
     const double rz_first = rz;
     if (!(rz > 0.0)) return step;

@@ -12,6 +12,7 @@
 // gradients preconditioned with the per-vertex 3x3 blocks of sum c_i g_i g_i^T, Lambda a
 // Marquardt damping per vertex, and stops at non-positive curvature (A is indefinite where the
 // quality is not concave).
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -83,6 +84,7 @@ private:
 
     Workspace& work_;
     std::vector<double> lambda_, r_, z_, p_, ap_, xp_, qp_, w_, counted_, u_;
+    std::optional<std::uint64_t> prepared_for_;  // the focus generation the vertex fields were set up for
 };
 
 }  // namespace paloverde::detail

@@ -138,7 +138,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
     reference_length_ = mesh_.kind() == ElementKind::Tetrahedron
                             ? std::cbrt(6.0 * std::numbers::sqrt2 * scale_.reference_volume)
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
-    lanes_ = make_lanes(mesh_, movable_, element_order, global_elements);
+    lanes_ = make_lanes(mesh_, movable_, element_order, global_elements, false);
     free_ = free_vertices_of(mesh_);
     element_order_ = element_order;
     global_elements_ = global_elements;
@@ -146,7 +146,7 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
 }
 
 Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
-                                       GlobalId global_elements) {
+                                       GlobalId global_elements, bool compact) {
     // A lane is a run of movable elements in one block of the canonical order. Lane partials are
     // added in lane order, elements within a lane in order: for an owned vertex, the same sums in
     // the same order as in the serial run.
@@ -156,14 +156,24 @@ Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std:
     for (ElementId first = 0; first < movable;) {
         ElementId last = first + 1;
         while (last < movable && element_order[last] / block == element_order[first] / block) ++last;
-        VertexId low = mesh.num_vertices(), high = 0;
-        for (VertexId v : mesh.connectivity().subspan(static_cast<std::size_t>(first) * mesh.corners(),
-                                                      static_cast<std::size_t>(last - first) * mesh.corners())) {
-            low = std::min(low, v);
-            high = std::max(high, v);
+        const auto corners = mesh.connectivity().subspan(static_cast<std::size_t>(first) * mesh.corners(),
+                                                         static_cast<std::size_t>(last - first) * mesh.corners());
+        const auto [low, high] = std::minmax_element(corners.begin(), corners.end());
+        const auto range = static_cast<std::size_t>(*high - *low + 1);
+        std::size_t size = range, slot_offset = 0;
+        if (compact) {
+            std::vector<VertexId> touched(corners.begin(), corners.end());
+            std::sort(touched.begin(), touched.end());
+            touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+            size = touched.size();
+            slot_offset = lanes.slot.size();
+            lanes.slot.resize(slot_offset + range, 0);
+            for (std::size_t k = 0; k < size; ++k)
+                lanes.slot[slot_offset + static_cast<std::size_t>(touched[k] - *low)] = static_cast<std::uint32_t>(k);
+            lanes.vertex.insert(lanes.vertex.end(), touched.begin(), touched.end());
         }
-        lanes.list.push_back({first, last, low, high, total});
-        total += static_cast<std::size_t>(high - low + 1);
+        lanes.list.push_back({first, last, *low, *high, total, size, slot_offset});
+        total += size;
         first = last;
     }
     lanes.vertices = total;
@@ -179,7 +189,7 @@ std::vector<VertexId> Workspace::free_vertices_of(const Mesh& mesh) {
 }
 
 void Workspace::focus(std::span<const std::uint8_t> moving) {
-    focus_.reset();
+    unfocus();
     const VertexId n = mesh_.num_vertices();
     auto moves = [&](VertexId v) { return moving[v] != 0 && mesh_.can_move(v); };
     Focus f;
@@ -207,7 +217,7 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
         for (ElementId i = 0; i < size; ++i)
             if (part_->counted[f.elements[i]]) f.counted.push_back(i);
     f.global_count = reducer_->total(static_cast<double>(part_ ? f.counted.size() : f.elements.size()));
-    f.lanes = make_lanes(f.mesh, size, positions, global_elements_);
+    f.lanes = make_lanes(f.mesh, size, positions, global_elements_, true);
     f.free = free_vertices_of(f.mesh);
     focus_ = std::move(f);
 }
@@ -260,23 +270,27 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
 #pragma omp parallel for schedule(dynamic, 1) if (static_cast<std::size_t>(movable) > kParallelThreshold)
     for (std::ptrdiff_t l = 0; l < count; ++l) {
         const Lane& lane = lanes.list[static_cast<std::size_t>(l)];
-        const auto touched = static_cast<std::size_t>(lane.high - lane.low + 1);
         QualityMetric::GradientTarget target;
         target.weight = weight.data() + lane.first;
         target.gradient = lanes.gradient.data() + 3 * lane.offset;
-        std::fill(target.gradient, target.gradient + 3 * touched, 0.0);
+        std::fill(target.gradient, target.gradient + 3 * lane.size, 0.0);
         if (with_curvature) {
             target.curvature_weight = curvature_weight.data() + lane.first;
             target.curvature = lanes.curvature.data() + 6 * lane.offset;
-            std::fill(target.curvature, target.curvature + 6 * touched, 0.0);
+            std::fill(target.curvature, target.curvature + 6 * lane.size, 0.0);
         }
         target.base = lane.low;
+        if (lanes.compact()) target.slot = lanes.slot.data() + lane.slot_offset;
         metric.accumulate_gradient(mesh, xyz, lane.first, lane.last, target);
     }
     // Each vertex sums the lanes that touch it in lane order; vertex blocks run in parallel.
     // Fixed vertices get zero; ghosts too, until the halo brings their owners' values.
     const VertexId n = mesh.num_vertices();
     const VertexId block = 4096;
+    auto unless_free_and_owned = [&](std::span<double> out, int width, VertexId v) {
+        if (!mesh.can_move(v) || !owned_[v])
+            for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
+    };
     auto gather = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low, VertexId high) {
         std::fill(out.begin() + width * static_cast<std::size_t>(low), out.begin() + width * (static_cast<std::size_t>(high) + 1), 0.0);
         for (const Lane& lane : lanes.list) {
@@ -288,15 +302,38 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
             const std::size_t run = width * static_cast<std::size_t>(to - from + 1);
             for (std::size_t i = 0; i < run; ++i) target[i] += source[i];
         }
-        for (VertexId v = low; v <= high; ++v)
-            if (!mesh.can_move(v) || !owned_[v])
-                for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
+        for (VertexId v = low; v <= high; ++v) unless_free_and_owned(out, width, v);
+    };
+    // Compact lanes: the same sums in the same order, over the touched vertices only.
+    auto gather_compact = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low,
+                              VertexId high) {
+        auto each_in_block = [&](auto visit) {
+            for (const Lane& lane : lanes.list) {
+                if (lane.high < low || lane.low > high) continue;
+                const auto begin = lanes.vertex.begin() + static_cast<std::ptrdiff_t>(lane.offset);
+                const auto end = begin + static_cast<std::ptrdiff_t>(lane.size);
+                for (auto it = std::lower_bound(begin, end, low); it != end && *it <= high; ++it)
+                    visit(lane, static_cast<std::size_t>(it - lanes.vertex.begin()), *it);
+            }
+        };
+        each_in_block([&](const Lane&, std::size_t, VertexId v) {
+            for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
+        });
+        each_in_block([&](const Lane&, std::size_t k, VertexId v) {
+            for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] += buffer[width * k + c];
+        });
+        each_in_block([&](const Lane&, std::size_t, VertexId v) { unless_free_and_owned(out, width, v); });
     };
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > kParallelThreshold)
     for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
         const VertexId low = b * block, high = std::min(n, low + block) - 1;
-        gather(gradient, lanes.gradient, 3, low, high);
-        if (with_curvature) gather(curvature, lanes.curvature, 6, low, high);
+        if (lanes.compact()) {
+            gather_compact(gradient, lanes.gradient, 3, low, high);
+            if (with_curvature) gather_compact(curvature, lanes.curvature, 6, low, high);
+        } else {
+            gather(gradient, lanes.gradient, 3, low, high);
+            if (with_curvature) gather(curvature, lanes.curvature, 6, low, high);
+        }
     }
 }
 

@@ -67,7 +67,13 @@ public:
     // The same vertices and vertex fields; each owned vertex's gradient is bit for bit the whole
     // mesh's (a moving vertex has all its elements in the focus). Collective.
     void focus(std::span<const std::uint8_t> moving);
-    void unfocus() { focus_.reset(); }
+    void unfocus() {
+        focus_.reset();
+        ++focus_generation_;
+    }
+    // Changes with every focus() and unfocus(): whoever keeps vertex fields between passes knows
+    // whether the moving vertices are still the same.
+    std::uint64_t focus_generation() const { return focus_generation_; }
     bool focused() const { return focus_.has_value(); }
     // While focused: focus element i is movable element focus_elements()[i] of the whole.
     std::span<const ElementId> focus_elements() const { return focus_->elements; }
@@ -76,7 +82,9 @@ public:
     void evaluate(const QualityMetric& metric, std::span<const double> xyz, std::span<double> quality) const;
     // gradient = sum_e weight[e] * grad q_e over the movable elements, zero at fixed vertices;
     // with curvature weights also curvature = sum_e cw[e] * g g^T per vertex (6 doubles).
-    // Complete at owned vertices only; ghosts get their owner's values from the halo.
+    // Complete at owned vertices only; ghosts get their owner's values from the halo. While
+    // focused only the focus elements' vertices are written (the rest keeps what it held): a pass
+    // costs the focus, not the whole mesh, and callers read the free vertices only.
     void gradient(const QualityMetric& metric, std::span<const double> xyz, std::span<const double> weight,
                   std::span<double> gradient, std::span<const double> curvature_weight = {},
                   std::span<double> curvature = {});
@@ -91,12 +99,19 @@ private:
         ElementId first, last;   // elements
         VertexId low, high;      // vertices they touch: [low, high]
         std::size_t offset;      // first vertex of the lane in the lane buffers
+        std::size_t size;        // its vertices there: high - low + 1, or the touched ones (compact)
+        std::size_t slot_offset; // compact: where its map from v - low to slots starts in `slot`
     };
     struct Lanes {
         std::vector<Lane> list;
         std::size_t vertices = 0;       // total over the lanes
         std::vector<double> gradient;   // 3 per lane vertex
         std::vector<double> curvature;  // 6 per lane vertex, allocated on first use
+        // Compact lanes (a focus) keep only the vertices their elements touch: `vertex` lists
+        // them per lane in increasing order, and `slot` maps each lane's range to them.
+        std::vector<VertexId> vertex;
+        std::vector<std::uint32_t> slot;
+        bool compact() const { return !vertex.empty(); }
     };
     struct Focus {
         Mesh mesh;                // every vertex, the focus elements; only moving vertices free
@@ -111,9 +126,10 @@ private:
     // was element order[i].
     std::vector<ElementId> finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                   GlobalId global_elements);
-    // Lanes over elements [0, movable) of `mesh`, whose canonical positions are `element_order`.
+    // Lanes over elements [0, movable) of `mesh`, whose canonical positions are `element_order`;
+    // `compact` for a focus, whose lanes' ranges are mostly vertices they do not touch.
     static Lanes make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,
-                            GlobalId global_elements);
+                            GlobalId global_elements, bool compact);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
     static std::vector<VertexId> free_vertices_of(const Mesh& mesh);
 
@@ -138,6 +154,7 @@ private:
     std::vector<VertexId> free_;
     std::vector<GlobalId> element_order_;  // canonical position of each element (workspace order)
     GlobalId global_elements_ = 0;
+    std::uint64_t focus_generation_ = 0;
     std::optional<Focus> focus_;
 };
 

@@ -1,6 +1,8 @@
 // The whole objective's gradient (metric gradients weighted by the objective and summed over the
 // mesh by the solver's workspace) against finite differences.
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <utility>
 #include <vector>
@@ -64,6 +66,64 @@ BOOST_AUTO_TEST_CASE(whole_mesh_gradient_matches_finite_differences) {
             BOOST_TEST(checked > 10);
         }
     }
+}
+
+// A focus's gradient pass keeps only the vertices its elements touch (compact lanes): each moving
+// vertex still gets the whole mesh's sums bit for bit, curvature included, and nothing outside
+// the focus's elements is written.
+BOOST_AUTO_TEST_CASE(focused_gradient_is_the_whole_meshs_at_the_moving_vertices) {
+    auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
+    pv::detail::Workspace work(mesh, true);
+    auto metric = pv::make_metric("aspect_ratio");
+    metric->set_scale(work.scale());
+    const std::vector<double> x(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
+    const auto m = static_cast<std::size_t>(work.movable_elements());
+    std::vector<double> q(m), w(m), cw(m), g(x.size()), c(2 * x.size());
+    work.evaluate(*metric, x, q);
+    for (std::size_t e = 0; e < m; ++e) {
+        w[e] = 1.0 / (q[e] + 0.01);
+        cw[e] = w[e] * w[e];
+    }
+    work.gradient(*metric, x, w, g, cw, c);
+    // The vertices of the worst hundredth of the elements move.
+    std::vector<double> sorted(q);
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(m / 100), sorted.end());
+    const double below = sorted[m / 100];
+    std::vector<std::uint8_t> moving(static_cast<std::size_t>(work.mesh().num_vertices()), 0);
+    for (std::size_t e = 0; e < m; ++e)
+        if (q[e] < below)
+            for (pv::VertexId v : work.mesh().element(static_cast<pv::ElementId>(e))) moving[v] = 1;
+    work.focus(moving);
+    const auto elements = work.focus_elements();
+    BOOST_TEST_REQUIRE(elements.size() < m / 2);
+    std::vector<double> wf(elements.size()), cwf(elements.size());
+    for (std::size_t i = 0; i < elements.size(); ++i) {
+        wf[i] = w[static_cast<std::size_t>(elements[i])];
+        cwf[i] = cw[static_cast<std::size_t>(elements[i])];
+    }
+    const double untouched = 7.0;
+    std::vector<double> gf(x.size(), untouched), cf(2 * x.size(), untouched);
+    work.gradient(*metric, x, wf, gf, cwf, cf);
+    const auto free = work.free_vertices();
+    BOOST_TEST_REQUIRE(free.size() > 50u);
+    int differ = 0;
+    for (pv::VertexId v : free) {
+        for (int k = 0; k < 3; ++k) differ += gf[3 * v + k] != g[3 * v + k];
+        for (int k = 0; k < 6; ++k) differ += cf[6 * v + k] != c[6 * v + k];
+    }
+    BOOST_TEST(differ == 0);
+    std::vector<std::uint8_t> in_focus(moving.size(), 0);
+    for (pv::ElementId e = 0; e < work.movable_elements(); ++e)
+        for (pv::VertexId v : work.mesh().element(e)) in_focus[v] = 1;
+    int outside = 0, written = 0;
+    for (std::size_t v = 0; v < in_focus.size(); ++v) {
+        if (in_focus[v]) continue;
+        ++outside;
+        written += gf[3 * v] != untouched || cf[6 * v] != untouched;
+    }
+    BOOST_TEST(outside > 0);
+    BOOST_TEST(written == 0);
+    work.unfocus();
 }
 
 // The Newton direction's Hessian product (a difference of the gradient pass at fixed t, plus

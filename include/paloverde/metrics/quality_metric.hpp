@@ -3,6 +3,7 @@
 // metrics) for the regular simplex, <= 0 for inverted elements of the orientation-aware ones.
 // Solvers use the batch calls, one virtual call per block of elements; the one-element calls
 // are for tests, local patches and users.
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <span>
@@ -70,13 +71,16 @@ public:
     //   gradient[3(v - base) + c]   += weight[e - first] * d q_e / d x_v,c
     //   curvature[6(v - base) + ..] += curvature_weight[e - first] * g g^T,  g = d q_e / d x_v
     // (the 3x3 block stored as xx, xy, xz, yy, yz, zz; only when both pointers are set). A base
-    // lets a buffer cover only the vertices these elements touch.
+    // lets a buffer cover only the vertex range these elements touch; with `slot` as well, vertex v
+    // adds at slot[v - base] instead of v - base, so that a buffer holds only the vertices they
+    // touch (a focus's few elements spread over the whole range).
     struct GradientTarget {
         const double* weight = nullptr;
         double* gradient = nullptr;
         const double* curvature_weight = nullptr;
         double* curvature = nullptr;
         VertexId base = 0;
+        const std::uint32_t* slot = nullptr;
     };
     virtual void accumulate_gradient(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
                                      ElementId last, const GradientTarget& target) const = 0;
