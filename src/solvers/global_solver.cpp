@@ -243,6 +243,9 @@ private:
     void refocus();
     // Focus on the elements around the vertices flagged in moving_ (frozen_: the others).
     void focus_on_moving();
+    // best_x_ = x_. Within one focus only its free vertices move, so only they can differ: a
+    // small focus of a large mesh does not copy the mesh at every better iterate.
+    void keep_best();
 
     detail::Workspace& work_;
     std::vector<double>& x_;
@@ -270,6 +273,7 @@ private:
     std::vector<ElementId> reevaluated_;           // line search: the elements of the last damped vertices
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
+    std::optional<std::uint64_t> best_focus_;  // the focus generation best_x_ was last kept in
     double step_ = 0.05;  // largest vertex displacement of the next trial step, in reference lengths
     double gain_ = 0.0;   // objective increase of the last accepted step (at its mu and t)
     // What the iterations carry over (saved in checkpoints).
@@ -513,6 +517,16 @@ void Phase::apply_preconditioner() {
     }
 }
 
+void Phase::keep_best() {
+    if (best_focus_ != work_.focus_generation() || best_x_.size() != x_.size()) {
+        best_x_ = x_;
+        best_focus_ = work_.focus_generation();
+        return;
+    }
+    for (const VertexId v : work_.free_vertices())
+        for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i) best_x_[i] = x_[i];
+}
+
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
     work_.unfocus();
     x_.swap(best_x_);  // the best iterate, which may be the current one
@@ -706,7 +720,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             if (!(decrement > 0.0)) direction_ = gradient_;
         } else {
             if (precondition) apply_preconditioner();
-            else preconditioned_ = gradient_;
+            else
+                for (const VertexId v : work_.free_vertices())  // read at the free vertices only
+                    for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i)
+                        preconditioned_[i] = gradient_[i];
             if (sliding_ && precondition) sliding_->tangent(preconditioned_);
             // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
             // changes (mu) or the direction stops ascending.
@@ -806,7 +823,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         if (detail::better_iterate(s.bad, s.worst, best_bad_, best_worst_)) {
             best_bad_ = s.bad;
             best_worst_ = s.worst;
-            best_x_ = x_;
+            keep_best();
         }
         objective_.weights(q_, weight_);
         record(s, objective, step, accepted ? gain_ : 0.0);
