@@ -21,14 +21,14 @@ constexpr bool assessment_only() {
     return false;
 }
 
-// Adds one corner's weighted gradient (and curvature) to the target: the one place where every
-// pass adds, so that they add alike, bit for bit.
 // Where corner vertex v's sums go in the target (GradientTarget).
 inline std::size_t corner_slot(const QualityMetric::GradientTarget& target, VertexId v) {
     const auto i = static_cast<std::size_t>(v - target.base);
     return target.slot ? target.slot[i] : i;
 }
 
+// Adds one corner's weighted gradient (and curvature) to the target: the one place where every
+// pass adds, so that they add alike, bit for bit.
 template <bool Curvature>
 void add_corner(const QualityMetric::GradientTarget& target, std::size_t v, double w, double cw, const double* gi) {
     for (int d = 0; d < 3; ++d) target.gradient[3 * v + d] += w * gi[d];

@@ -12,6 +12,7 @@
 // gradients preconditioned with the per-vertex 3x3 blocks of sum c_i g_i g_i^T, Lambda a
 // Marquardt damping per vertex, and stops at non-positive curvature (A is indefinite where the
 // quality is not concave).
+#include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>

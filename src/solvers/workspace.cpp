@@ -307,22 +307,23 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
     // Compact lanes: the same sums in the same order, over the touched vertices only.
     auto gather_compact = [&](std::span<double> out, const std::vector<double>& buffer, int width, VertexId low,
                               VertexId high) {
+        // visit(k, v) for each slot k of a lane, lane by lane, whose vertex v lies in [low, high].
         auto each_in_block = [&](auto visit) {
             for (const Lane& lane : lanes.list) {
                 if (lane.high < low || lane.low > high) continue;
                 const auto begin = lanes.vertex.begin() + static_cast<std::ptrdiff_t>(lane.offset);
                 const auto end = begin + static_cast<std::ptrdiff_t>(lane.size);
                 for (auto it = std::lower_bound(begin, end, low); it != end && *it <= high; ++it)
-                    visit(lane, static_cast<std::size_t>(it - lanes.vertex.begin()), *it);
+                    visit(static_cast<std::size_t>(it - lanes.vertex.begin()), *it);
             }
         };
-        each_in_block([&](const Lane&, std::size_t, VertexId v) {
+        each_in_block([&](std::size_t, VertexId v) {
             for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] = 0.0;
         });
-        each_in_block([&](const Lane&, std::size_t k, VertexId v) {
+        each_in_block([&](std::size_t k, VertexId v) {
             for (int c = 0; c < width; ++c) out[width * static_cast<std::size_t>(v) + c] += buffer[width * k + c];
         });
-        each_in_block([&](const Lane&, std::size_t, VertexId v) { unless_free_and_owned(out, width, v); });
+        each_in_block([&](std::size_t, VertexId v) { unless_free_and_owned(out, width, v); });
     };
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(movable) > kParallelThreshold)
     for (VertexId b = 0; b < (n + block - 1) / block; ++b) {
