@@ -518,13 +518,12 @@ void Phase::apply_preconditioner() {
 }
 
 void Phase::keep_best() {
-    if (best_focus_ != work_.focus_generation() || best_x_.size() != x_.size()) {
+    if (best_focus_ != work_.focus_generation()) {
         best_x_ = x_;
         best_focus_ = work_.focus_generation();
         return;
     }
-    for (const VertexId v : work_.free_vertices())
-        for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i) best_x_[i] = x_[i];
+    detail::for_each_free_coordinate(work_, [&](std::size_t i) { best_x_[i] = x_[i]; });
 }
 
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
@@ -720,10 +719,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             if (!(decrement > 0.0)) direction_ = gradient_;
         } else {
             if (precondition) apply_preconditioner();
-            else
-                for (const VertexId v : work_.free_vertices())  // read at the free vertices only
-                    for (std::size_t i = 3 * static_cast<std::size_t>(v); i < 3 * static_cast<std::size_t>(v) + 3; ++i)
-                        preconditioned_[i] = gradient_[i];
+            else  // read at the free vertices only
+                detail::for_each_free_coordinate(work_, [&](std::size_t i) { preconditioned_[i] = gradient_[i]; });
             if (sliding_ && precondition) sliding_->tangent(preconditioned_);
             // Polak-Ribiere+ conjugate gradient (preconditioned), restarted whenever the objective
             // changes (mu) or the direction stops ascending.

@@ -8,15 +8,6 @@
 
 namespace paloverde::detail {
 
-template <class Coordinate>
-void NewtonDirection::for_each_free(Coordinate coordinate) const {
-    const auto free = work_.free_vertices();
-#pragma omp parallel for schedule(static) if (free.size() > kParallelThreshold)
-    for (std::size_t k = 0; k < free.size(); ++k)
-        for (std::size_t i = 3 * static_cast<std::size_t>(free[k]); i < 3 * static_cast<std::size_t>(free[k]) + 3; ++i)
-            coordinate(i);
-}
-
 double NewtonDirection::element_sum(std::span<const double> values) {
     const auto counted = work_.counted(values, counted_);
     double largest = 0.0;
@@ -86,7 +77,7 @@ double NewtonDirection::prepare(const QualityMetric& metric, std::span<const dou
     // the mesh); elsewhere they stay zero, and xp_ stays x. Within one focus only its free
     // vertices move, so only they are set afresh: a step then costs the focus, not the mesh.
     const std::size_t n = work_.owned().size();
-    if (prepared_for_ != work_.focus_generation() || xp_.size() != x.size()) {
+    if (prepared_for_ != work_.focus_generation()) {
         for (auto* field : {&r_, &z_, &p_, &ap_, &u_}) field->assign(3 * n, 0.0);
         lambda_.assign(n, 0.0);
         xp_.assign(x.begin(), x.end());

@@ -78,10 +78,10 @@ private:
     void precondition(std::span<const double> curvature);
     // The exact sum over the elements this process counts, over all processes.
     double element_sum(std::span<const double> values);
-    // coordinate(i) for the three coordinates i of every free vertex (Workspace::free_vertices),
-    // spread over the threads.
     template <class Coordinate>
-    void for_each_free(Coordinate coordinate) const;
+    void for_each_free(Coordinate coordinate) const {
+        for_each_free_coordinate(work_, coordinate);
+    }
 
     Workspace& work_;
     std::vector<double> lambda_, r_, z_, p_, ap_, xp_, qp_, w_, counted_, u_;

@@ -187,6 +187,17 @@ std::array<double, K> free_owned_sums(const Workspace& work, Term term) {
     return owned_sums_over<K>(work, free.size(), [&](std::size_t i) { return free[i]; }, term);
 }
 
+// coordinate(i) for the three coordinates i of every free vertex (Workspace::free_vertices), owned
+// or ghost, spread over the threads: the loops over vertex fields that cost the focus, not the mesh.
+template <class Coordinate>
+void for_each_free_coordinate(const Workspace& work, Coordinate coordinate) {
+    const auto free = work.free_vertices();
+#pragma omp parallel for schedule(static) if (free.size() > kParallelThreshold)
+    for (std::size_t k = 0; k < free.size(); ++k)
+        for (std::size_t i = 3 * static_cast<std::size_t>(free[k]); i < 3 * static_cast<std::size_t>(free[k]) + 3; ++i)
+            coordinate(i);
+}
+
 // The dot product of two vertex fields (3 doubles per vertex) over the owned vertices of all
 // processes: bounded sums (core/exact_sums.hpp) under the largest term, the same bits for any
 // number of threads and processes, with additions only (faster than owned_sums' ExactSum).
