@@ -1,8 +1,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
@@ -33,11 +35,15 @@ LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
 }
 
 void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
-    const double qmin = reducer.min(local_min(q));
+    // The still elements count as terms of S below, at their bins' middles: t stays below them.
+    const double qmin =
+        std::min(reducer.min(local_min(q)), still_quality_.empty() ? std::numeric_limits<double>::infinity()
+                                                                    : still_quality_.front());
     ExactSum count;
     count.add(static_cast<double>(q.size()));
-    const double n = reducer.total(count);
-    if (n == 0.0) return;
+    const double moving = reducer.total(count);
+    const double n = moving + still_total_;
+    if (moving == 0.0) return;  // nothing to weigh
     auto total = [&](auto term) {
         return reducer.total(detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(term(q[i])); })[0]);
     };
@@ -46,7 +52,7 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
         // weight over more than about `active_limit` elements (a large mesh would otherwise
         // spend its first hundreds of iterations on its average elements); take the mu for which
         // that t is optimal.
-        const double mean = total([](double v) { return v; }) / n;
+        const double mean = total([](double v) { return v; }) / moving;
         // Where all elements are nearly alike the spread says nothing: start a tenth of the
         // qualities' size below (they are dimensionless, of order 1 at best). And never closer
         // than a thousandth of it: so steep a barrier lets each step raise the worst element
@@ -66,12 +72,12 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
 #pragma omp parallel for reduction(+ : plain) schedule(static) if (q.size() > detail::kParallelThreshold)
             for (std::size_t i = 0; i < q.size(); ++i) plain += term(d, q[i]);
             plain = reducer.total(plain);
-            const double reach = 2.0 * n * 0x1p-53 * plain + 0x1p-50 * limit;
+            const double reach = 2.0 * moving * 0x1p-53 * plain + 0x1p-50 * limit;
             if (plain - limit > reach) return true;
             if (limit - plain > reach) return false;
             return total([&](double v) { return term(d, v); }) > limit;
         };
-        const double active_limit = automatic_active(n);
+        const double active_limit = automatic_active(moving);
         if (more_active_than(gap, active_limit)) {
             // The count rises with the gap; a relative precision of 1e-3 is plenty, so bisect
             // geometrically between a negligible gap and this one.
@@ -82,6 +88,7 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
             }
             gap = std::max(hi, floor);
         }
+        if (first_gap_fraction_ > 0.0) gap = std::min(gap, first_gap_fraction_ * (ideal_ - qmin));
         const double t0 = qmin - gap;
         mu_ = 1.0 / total([&](double v) { return 1.0 / (v - t0); });
         t_ = t0;
@@ -107,7 +114,13 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
             acc[1].add(r * r);
         });
         reducer.sum(sums);
-        const double sum = sums[0].value(), squares = sums[1].value();
+        double sum = sums[0].value(), squares = sums[1].value();
+        // The still elements' terms: the same bins on every process, so the same numbers.
+        for (std::size_t b = 0; b < still_quality_.size(); ++b) {
+            const double r = 1.0 / ((still_quality_[b] - qmin) + gap);
+            sum += still_count_[b] * r;
+            squares += still_count_[b] * r * r;
+        }
         const double excess = std::log(sum * mu_);  // > 0: the gap is too small
         if (excess > 0.0) lo = s;
         else if (excess < 0.0) hi = s;
@@ -135,6 +148,38 @@ double LogBarrier::automatic_active(double elements) const {
 void LogBarrier::advance() { mu_ *= shrink_; }
 
 void ObjectiveFunction::restore_state(std::span<const double> state) { check_state_size(name(), state, 0); }
+
+void ObjectiveFunction::hold_still(std::span<const double>, const Reducer&) {}
+
+void LogBarrier::limit_first_gap(double fraction, double ideal) {
+    first_gap_fraction_ = fraction;
+    ideal_ = ideal;
+}
+
+void LogBarrier::hold_still(std::span<const double> q, const Reducer& reducer) {
+    still_quality_.clear();
+    still_count_.clear();
+    still_total_ = 0.0;
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    for (double v : q)
+        if (std::isfinite(v)) low = std::min(low, v), high = std::max(high, v);
+    low = reducer.min(low);
+    high = reducer.max(high);
+    if (!(low <= high)) return;  // no still element anywhere
+    constexpr int kBins = 1 << 14;
+    const double width = (high - low) / kBins;
+    std::vector<std::int64_t> count(width > 0.0 ? kBins : 1, 0);
+    for (double v : q)
+        if (std::isfinite(v))
+            ++count[width > 0.0 ? static_cast<std::size_t>(std::min(kBins - 1.0, std::floor((v - low) / width))) : 0];
+    reducer.sum_counts(count);
+    for (std::size_t b = 0; b < count.size(); ++b)
+        if (count[b] > 0) {
+            still_quality_.push_back(low + (static_cast<double>(b) + 0.5) * width);
+            still_count_.push_back(static_cast<double>(count[b]));
+            still_total_ += static_cast<double>(count[b]);
+        }
+}
 
 void LogBarrier::restore_state(std::span<const double> state) {
     check_state_size(name(), state, 3);

@@ -33,6 +33,10 @@ public:
             sums[i].special() = special[i];
         }
     }
+    void sum_counts(std::span<std::int64_t> counts) const override {
+        if (counts.empty()) return;
+        MPI_Allreduce(MPI_IN_PLACE, counts.data(), static_cast<int>(counts.size()), MPI_INT64_T, MPI_SUM, comm_);
+    }
     double min(double value) const override {
         MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MIN, comm_);
         return value;

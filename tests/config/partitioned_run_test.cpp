@@ -417,7 +417,7 @@ BOOST_AUTO_TEST_CASE(mpirun_slides_the_boundary) {
     const int ranks = launch().ranks;
     const pv::test::ScratchDir dir("mpirun_slide_np" + std::to_string(ranks));
     const auto tire = pv::test::shared_data("mesquite/tets/tire.vtk");
-    const std::string flags = " -q --boundary slide --iterations 20 --threads 1";
+    const std::string flags = " -q --boundary slide --iterations 40 --threads 1";
     const auto serial = run_cli("improve " + quoted(tire) + " -o " + quoted(dir / "serial.vtu") + flags + " --summary " +
                                 quoted(dir / "serial.json"));
     BOOST_TEST_REQUIRE(serial.exit_code == 0, serial.output);

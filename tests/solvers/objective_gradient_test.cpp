@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -223,6 +224,34 @@ BOOST_AUTO_TEST_CASE(barrier_start_follows_the_element_count) {
     BOOST_TEST((start(3'000'000, 0.0) == start(3'000'000, 15'000.0)));
     BOOST_TEST((start(3'000'000, 0.0) != start(3'000'000, 1e4)));
     BOOST_CHECK_THROW(pv::LogBarrier(0.8, 0.0, 0.5), pv::OptionError);
+}
+
+// A focus moves the worst elements only; the still ones keep weighing in the barrier's t
+// (LogBarrier::hold_still), which therefore lies where the whole mesh's barrier puts it: from the
+// moving elements alone it would climb to within a few mu of the worst quality.
+BOOST_AUTO_TEST_CASE(barrier_t_weighs_the_still_elements) {
+    const std::size_t n = 200'000;
+    const double limit = std::numeric_limits<double>::infinity();
+    std::vector<double> all(n), moving, still(n, limit);
+    for (std::size_t i = 0; i < n; ++i) {
+        all[i] = 0.1 + 0.8 * std::sqrt(static_cast<double>(i) / static_cast<double>(n));
+        if (all[i] < 0.15) moving.push_back(all[i]);
+        else still[i] = all[i];  // the moving ones stay +infinity: skipped
+    }
+    const pv::Reducer serial;
+    const double mu = 1e-5;
+    pv::LogBarrier whole(0.8, mu), focused(0.8, mu), alone(0.8, mu);
+    whole.update(all, serial);
+    focused.hold_still(still, serial);
+    focused.update(moving, serial);
+    alone.update(moving, serial);
+    const double gap = 0.1 - whole.t();
+    BOOST_TEST(std::abs(focused.t() - whole.t()) <= 1e-3 * gap);
+    BOOST_TEST(0.1 - alone.t() < 0.1 * gap);  // far closer: the weight on the worst few alone
+    // No still element: the barrier of the moving elements alone again.
+    focused.hold_still({}, serial);
+    focused.update(moving, serial);
+    BOOST_TEST(std::abs(focused.t() - alone.t()) <= 1e-9 * gap);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

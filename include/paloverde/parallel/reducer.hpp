@@ -3,6 +3,7 @@
 // already global); a distributed run passes an MPI implementation. Solvers and objective
 // functions never know which. Sums are exact (ExactSum), so a result never depends on how the
 // mesh was split among processes.
+#include <cstdint>
 #include <span>
 
 #include "paloverde/core/exact_sum.hpp"
@@ -14,6 +15,8 @@ public:
     virtual ~Reducer() = default;
     // In place: each sum becomes the sum of that entry over all processes.
     virtual void sum(std::span<ExactSum> sums) const { (void)sums; }
+    // In place: each count becomes its sum over all processes (integers: exact in any order).
+    virtual void sum_counts(std::span<std::int64_t> counts) const { (void)counts; }
     virtual double min(double value) const { return value; }
     virtual double max(double value) const { return value; }
     // The total over all processes, rounded.
