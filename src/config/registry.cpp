@@ -263,7 +263,9 @@ Tables::Tables() {
         .real("focus_band", &GlobalSolverOptions::focus_band,
               "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
               "their neighbours, chosen anew as the worst climbs (finish none: widened where it stalls), in (0, 1]; 1: the "
-              "whole mesh every iteration (direction newton: always the whole mesh; the newton finish focuses too).")
+              "whole mesh every iteration (direction newton: always the whole mesh; the newton finish focuses too). "
+              "Focused, the barrier's t still weighs the elements held still, and its automatic start lies no more "
+              "than the band below the worst quality.")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton and the newton finish: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,
