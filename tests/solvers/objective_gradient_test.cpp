@@ -231,12 +231,13 @@ BOOST_AUTO_TEST_CASE(barrier_start_follows_the_element_count) {
 // moving elements alone it would climb to within a few mu of the worst quality.
 BOOST_AUTO_TEST_CASE(barrier_t_weighs_the_still_elements) {
     const std::size_t n = 200'000;
-    const double limit = std::numeric_limits<double>::infinity();
-    std::vector<double> all(n), moving, still(n, limit);
+    // As a focus passes them: +infinity where an element moves (skipped), its quality where not.
+    const double in_focus = std::numeric_limits<double>::infinity();
+    std::vector<double> all(n), moving, still(n, in_focus);
     for (std::size_t i = 0; i < n; ++i) {
         all[i] = 0.1 + 0.8 * std::sqrt(static_cast<double>(i) / static_cast<double>(n));
         if (all[i] < 0.15) moving.push_back(all[i]);
-        else still[i] = all[i];  // the moving ones stay +infinity: skipped
+        else still[i] = all[i];
     }
     const pv::Reducer serial;
     const double mu = 1e-5;
