@@ -368,11 +368,12 @@ void Phase::focus_on_moving() {
                 whole_q_[e] = std::numeric_limits<double>::infinity();
                 break;
             }
-    frozen_ = frozen_stats(reducer_, work_.counted(whole_q_, counted_));
+    const auto still = work_.counted(whole_q_, counted_);
+    frozen_ = frozen_stats(reducer_, still);
     // The barrier's t goes on weighing them: t where the whole mesh puts it, as if it all moved.
     // From the focus's terms alone t rose to within about one mu of the worst quality, where a
     // single element drives each step (fandisk-9M: 0.145 after 500 iterations, docs/global_solver.md).
-    objective_.hold_still(work_.counted(whole_q_, counted_), reducer_);
+    objective_.hold_still(still, reducer_);
     work_.focus(moving_);
     const Mesh& focus = work_.mesh();
     const auto owned = work_.owned();

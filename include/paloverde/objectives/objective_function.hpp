@@ -2,7 +2,6 @@
 // An objective function combines the qualities of the elements being optimized into one number
 // to maximize, and gives its derivative with respect to each quality; the solver chains that
 // with the metric's gradient. Sums are global: they go through the Reducer.
-#include <limits>
 #include <memory>
 #include <span>
 #include <string>
