@@ -259,7 +259,7 @@ Tables::Tables() {
                  "in the shape phase the fewest steps at one mu, >= 1 (conjugate_gradient and steepest_ascent).")
         .real("gain_tolerance", &GlobalSolverOptions::gain_tolerance,
               "Shape phase (conjugate_gradient and steepest_ascent, log_barrier): mu shrinks once a step gains less "
-              "than this times mu (after at least steps_per_mu steps, at most 100), >= 0; 0: after steps_per_mu steps.")
+              "than this times mu (after at least steps_per_mu steps), >= 0; 0: after steps_per_mu steps.")
         .real("focus_band", &GlobalSolverOptions::focus_band,
               "Shape phase: move the vertices of the elements in this lowest fraction of worst..ideal quality and "
               "their neighbours, chosen anew as the worst climbs (finish none: widened where it stalls), in (0, 1]; 1: the "
