@@ -302,6 +302,7 @@ private:
     double focus_base_ = 0.0, focus_top_ = 0.0;
     double band_ = 1.0;        // the focus band now: focus_band, widened where the focus stalled
     double widened_at_ = 0.0;  // the best worst quality when it was last widened
+    double shrunk_at_ = 0.0;   // the best worst quality when a long stage was last cut short
     long focus_vertices_ = 0;  // free vertices of the focus, over all processes
     Frozen frozen_;
     std::vector<double> whole_q_;
@@ -562,7 +563,8 @@ void Phase::save_checkpoint(int iteration) {
                      {"focus_base", focus_base_},
                      {"focus_top", focus_top_},
                      {"focus_band", band_},
-                     {"widened_at", widened_at_}};
+                     {"widened_at", widened_at_},
+                     {"shrunk_at", shrunk_at_}};
     state.lists = {{"objective", objective_.state()},
                    {"best_history", best_history_},
                    {"measure_history", measure_history_},
@@ -601,6 +603,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     failures_ = static_cast<int>(state.number("failures"));
     steps_at_mu_ = static_cast<int>(state.number("steps_at_mu"));
     if (state.numbers.contains("newton_damping")) newton_damping_ = state.number("newton_damping");
+    if (state.numbers.contains("shrunk_at")) shrunk_at_ = state.number("shrunk_at");
     objective_.restore_state(state.list("objective"));
     best_history_ = state.list("best_history");
     measure_history_ = state.list("measure_history");
@@ -647,6 +650,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     focusing_ = !untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0;
     band_ = options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();
+    shrunk_at_ = std::numeric_limits<double>::lowest();
     size_element_arrays();
 
     // The objective and its weights at the current iterate, for the history and the next step.
@@ -806,7 +810,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // subproblem is solved leaves t hugging the worst element (fandisk-9M with a 100-step
             // cap: 0.166 to 0.191 as focus_band or barrier_initial_active moved by 10%; without,
             // 0.187 to 0.191). A stage in which neither the worst quality nor t rises for three
-            // progress windows is a stall, which ends the phase (below).
+            // progress windows is a stall (below): mu shrinks once more if the last such shrink
+            // paid, else the phase ends.
             const bool adaptive = !untangling_ && options_.gain_tolerance > 0.0 && barrier_mu() > 0.0;
             // At least steps_per_mu steps at each mu: a step blocked by some element also gains
             // little, and shrinking mu at each such step would run away.
@@ -873,12 +878,27 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // the widened conjugate gradients crept 160 iterations from 0.2270 to 0.2271 first).
         const bool widen = stalled && focusing_ && !stage_.finish && !stage_.newton_follows && band_ < 1.0 &&
                            best_worst_ > widened_at_ + progress.tolerance();
+        // A stall inside one stage (mu held for three windows by gains that do not reach the
+        // worst element) may be the subproblem's own plateau: a smaller mu weights the worst
+        // elements more, as long as the last such cut paid.
+        const bool shrink = !widen && stalled && failures_ < options_.max_failed_searches && !untangling_ && !newton &&
+                            options_.gain_tolerance > 0.0 && barrier_mu() > 0.0 && !progress.rose(stage_history_) &&
+                            best_worst_ > shrunk_at_ + progress.tolerance();
         if (widen) {
             band_ = std::min(1.0, 2.0 * band_);
             widened_at_ = best_worst_;
             failures_ = 0;
             restart_ = true;
             restart_histories();
+        } else if (shrink) {
+            objective_.advance();
+            steps_at_mu_ = 0;
+            shrunk_at_ = best_worst_;
+            restart_ = true;
+            restart_histories();
+            objective_.update(work_.counted(q_, counted_), reducer_);
+            objective = objective_value(q_);
+            objective_.weights(q_, weight_);
         } else if (failures_ >= options_.max_failed_searches) {
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         } else if (stalled) {

@@ -42,7 +42,10 @@ struct GlobalSolverOptions {
     // untangling (then the ascent resumes). 0 keeps untangling purely global.
     int local_untangle_rounds = 5;
     // Shape phase: mu shrinks once an accepted step gains less than gain_tolerance * mu (the
-    // barrier's subproblem nearly solved), after at least steps_per_mu steps at one mu. Untangling, and the shape phase with gain_tolerance 0: after steps_per_mu steps.
+    // barrier's subproblem nearly solved), after at least steps_per_mu steps at one mu; also
+    // when one mu held through three progress windows while the worst quality stood still (as
+    // long as the last such shrink paid). Untangling, and the shape phase with gain_tolerance 0:
+    // after steps_per_mu steps.
     // Newton has its own rule (newton_tolerance).
     double gain_tolerance = 0.1;
     int steps_per_mu = 5;
