@@ -791,6 +791,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // out (two_tets.vtk) and must be able to come back.
         if (accepted) step_ = std::min(2.0 * step_, 1e6);
         else step_ = 0.05;
+        // The shape phase's conjugate gradients on the barrier shrink mu on their gains (below).
+        const bool adaptive = !newton && !untangling_ && options_.gain_tolerance > 0.0 && barrier_mu() > 0.0;
         bool solved = false;
         if (newton) {
             // Levenberg-Marquardt: less damping after a full step that gained at least half of
@@ -812,7 +814,6 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // 0.187 to 0.191). A stage in which neither the worst quality nor t rises for three
             // progress windows is a stall (below): mu shrinks once more if the last such shrink
             // paid, else the phase ends.
-            const bool adaptive = !untangling_ && options_.gain_tolerance > 0.0 && barrier_mu() > 0.0;
             // At least steps_per_mu steps at each mu: a step blocked by some element also gains
             // little, and shrinking mu at each such step would run away.
             ++steps_at_mu_;
@@ -881,9 +882,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // A stall inside one stage (mu held for three windows by gains that do not reach the
         // worst element) may be the subproblem's own plateau: a smaller mu weights the worst
         // elements more, as long as the last such cut paid.
-        const bool shrink = !widen && stalled && failures_ < options_.max_failed_searches && !untangling_ && !newton &&
-                            options_.gain_tolerance > 0.0 && barrier_mu() > 0.0 && !progress.rose(stage_history_) &&
-                            best_worst_ > shrunk_at_ + progress.tolerance();
+        const bool shrink = !widen && stalled && adaptive && failures_ < options_.max_failed_searches &&
+                            !progress.rose(stage_history_) && best_worst_ > shrunk_at_ + progress.tolerance();
         if (widen) {
             band_ = std::min(1.0, 2.0 * band_);
             widened_at_ = best_worst_;
