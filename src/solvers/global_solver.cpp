@@ -61,17 +61,21 @@ using detail::seconds_since;
 struct PhaseResult {
     TerminationReason reason;
     std::string message;
+    // The Newton finish found its barrier's subproblem out of reach: a fresh barrier should follow.
+    bool recenter = false;
 };
 
 // Where solve() stands, for checkpoints: the phase and, while untangling, the round; `finish`:
 // the Newton finish of the shape phase, which goes on counting from the `iterations_before` of the
-// phase before it; `newton_follows`: a shape phase the finish will follow.
+// phase before it; `fresh`: the finish's second part, on a fresh barrier; `newton_follows`: a
+// shape phase the finish will follow.
 struct Stage {
     bool untangling = false;
     int round = 0;
     bool finish = false;
     bool newton_follows = false;
     int iterations_before = 0;
+    bool fresh = false;
 };
 
 // Whole-mesh figures of the movable elements' qualities, the same on every process.
@@ -403,7 +407,7 @@ void Phase::damp_like_owners(std::vector<VertexId>& damped) {
 void Phase::record(const Stats& s, double objective, double step, double gain) {
     IterationRecord r;
     r.iteration = summary_.iterations;
-    r.phase = untangling_ ? "untangle" : stage_.finish ? "finish" : "shape";
+    r.phase = untangling_ ? "untangle" : stage_.fresh ? "finish_fresh" : stage_.finish ? "finish" : "shape";
     r.worst_quality = s.worst;
     r.best_worst_quality = best_worst_;
     r.mean_quality = s.mean;
@@ -549,6 +553,7 @@ void Phase::save_checkpoint(int iteration) {
     detail::SolverState state;
     state.numbers = {{"untangling", untangling_ ? 1.0 : 0.0},
                      {"finish", stage_.finish ? 1.0 : 0.0},
+                     {"fresh", stage_.fresh ? 1.0 : 0.0},
                      {"round", stage_.round},
                      {"budget", stop_.max_iterations},
                      {"iteration", iteration},
@@ -793,7 +798,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         else step_ = 0.05;
         // The shape phase's conjugate gradients on the barrier shrink mu on their gains (below).
         const bool adaptive = !newton && !untangling_ && options_.gain_tolerance > 0.0 && barrier_mu() > 0.0;
-        bool solved = false;
+        bool solved = false, out_of_reach = false;
         if (newton) {
             // Levenberg-Marquardt: less damping after a full step that gained at least half of
             // what the model promised (decrement / 2), more after a shortened or failed one.
@@ -802,7 +807,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // The subproblem at this mu is solved when the Newton decrement (in the barrier's own
             // units, F / mu) is small; a cap keeps a subproblem that cannot be solved from
             // holding mu forever.
-            solved = decrement <= options_.newton_tolerance * barrier_mu() || ++steps_at_mu_ >= 50;
+            const bool converged = decrement <= options_.newton_tolerance * barrier_mu();
+            const bool capped = ++steps_at_mu_ >= 50;
+            // The finish's first part goes on with the shape phase's barrier. Where Newton steps
+            // cannot solve its subproblem, the iterate is far from the barrier's central path at
+            // this mu: a fresh barrier recenters it (solve(), below) instead of a smaller mu.
+            out_of_reach = capped && !converged && stage_.finish && !stage_.fresh;
+            solved = converged || (capped && !out_of_reach);
         } else {
             // The shape phase's barrier subproblem is solved when a step gains little against
             // mu (F is in quality units; F / mu in the barrier's own): a fixed count of steps
@@ -854,6 +865,11 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         }
         if (!untangling_ && detail::target_reached(stop_, best_worst_))
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
+        if (out_of_reach) {
+            PhaseResult result = end(TerminationReason::Converged, "the barrier's subproblem is out of Newton's reach");
+            result.recenter = true;
+            return result;
+        }
         // A stall is judged once a smaller mu has been tried in the window (a worst element held
         // at one mu is often freed by the next: house2 with long stages, fandisk-100k), or over
         // three windows without (a mu held by gains elsewhere while the worst stands still:
@@ -1081,19 +1097,33 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         // for first-order steps; Newton steps go on from the best iterate (docs/global_solver.md).
         const bool finish = options.finish == GlobalSolverOptions::Finish::Newton && options.objective == "log_barrier" &&
                             options.direction != GlobalSolverOptions::Direction::Newton && !sliding;
-        // A run resumed from a checkpoint of the finish goes straight back to it.
+        // A run resumed from a checkpoint of the finish goes straight back to it, and to its part.
         const bool resume_finish = resume && resume->numbers.contains("finish") && resume->number("finish") != 0.0;
+        // (Checkpoints from before the finish had two parts have no "fresh": theirs was fresh.)
+        const bool resume_fresh = resume_finish && (!resume->numbers.contains("fresh") || resume->number("fresh") != 0.0);
         if (!resume_finish)
             result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0, false, finish},
                            summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
                          .run(resume ? &*resume : nullptr);
         const bool stalled = result.reason == TerminationReason::Converged || result.reason == TerminationReason::NoImprovingStep;
-        const int shape_iterations = summary.iterations - summary.untangle_iterations;
-        if (resume_finish || (finish && stalled && shape_iterations < options.termination.max_iterations)) {
-            auto fresh = make_objective(options.objective, options.objective_options);
-            result = Phase(work, xyz, *metric, *fresh, options.termination, options, Stage{false, 0, true, false, shape_iterations},
-                           summary, observer, start, checkpointer)
+        auto shape_iterations = [&] { return summary.iterations - summary.untangle_iterations; };
+        const bool budget_left = shape_iterations() < options.termination.max_iterations;
+        // First with the shape phase's own barrier (its mu): where the conjugate gradients stalled
+        // near a max-min point, Newton steps converge from there (fandisk-9M).
+        if (resume_finish ? !resume_fresh : finish && stalled && budget_left)
+            result = Phase(work, xyz, *metric, *objective, options.termination, options,
+                           Stage{false, 0, true, false, shape_iterations()}, summary, observer, start, checkpointer)
                          .run(resume_finish ? &*resume : nullptr);
+        // Far from that barrier's central path, a fresh barrier from the best iterate (mu from
+        // the qualities, as at the start), under which the worst elements can rearrange.
+        if (result.recenter && shape_iterations() >= options.termination.max_iterations) {
+            result = {TerminationReason::IterationLimit,
+                      detail::budget_message(TerminationReason::IterationLimit, options.termination, "iterations")};
+        } else if (resume_fresh || result.recenter) {
+            auto fresh = make_objective(options.objective, options.objective_options);
+            result = Phase(work, xyz, *metric, *fresh, options.termination, options,
+                           Stage{false, 0, true, false, shape_iterations(), true}, summary, observer, start, checkpointer)
+                         .run(resume_fresh ? &*resume : nullptr);
         }
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");

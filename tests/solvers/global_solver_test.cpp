@@ -305,6 +305,38 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
     check_fixed_unchanged(mesh, before);
 }
 
+// The finish first goes on with the conjugate gradients' own barrier (the same mu). On tire its
+// Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps at one mu a fresh
+// barrier (a larger mu) takes over from the best iterate. On cub_wedge_like they solve it and
+// raise the worst element, and no fresh barrier follows.
+BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and_recenters_out_of_reach,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cub_wedge_like.vtk"}), name) {
+    auto mesh = shared_mesh(name);
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto& h = summary.history;
+    auto first_of = [&h](const char* phase) {
+        return std::find_if(h.begin(), h.end(), [&](const pv::IterationRecord& r) { return r.phase == phase; });
+    };
+    const auto finish = first_of("finish"), fresh = first_of("finish_fresh");
+    BOOST_TEST_REQUIRE((finish != h.end()));
+    BOOST_TEST(finish->mu == std::prev(finish)->mu);
+    BOOST_TEST(finish->best_worst_quality == std::prev(finish)->best_worst_quality);
+    BOOST_TEST(summary.worst_after > finish->best_worst_quality);
+    check_never_worse(summary);
+    if (std::string(name) == "mesquite/tets/tire.vtk") {
+        BOOST_TEST_REQUIRE((fresh != h.end()));
+        BOOST_TEST((fresh - finish) == 51);  // its first record, then 50 steps
+        BOOST_TEST(std::all_of(finish, fresh, [&](const pv::IterationRecord& r) { return r.mu == finish->mu; }));
+        BOOST_TEST(fresh->mu > finish->mu);
+        BOOST_TEST(fresh->best_worst_quality == std::prev(fresh)->best_worst_quality);
+        BOOST_TEST(summary.worst_after > fresh->best_worst_quality);
+    } else {
+        BOOST_TEST((fresh == h.end()));
+    }
+}
+
 // A tangled mesh: untangled with conjugate gradients as before, then Newton steps.
 BOOST_AUTO_TEST_CASE(newton_directions_after_untangling) {
     auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cube-clip-5.vtk", 0.3, 1);
