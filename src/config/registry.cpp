@@ -274,8 +274,8 @@ Tables::Tables() {
                 {{"none", GlobalSolverOptions::Finish::None}, {"newton", GlobalSolverOptions::Finish::Newton}},
                 "Shape phase (conjugate_gradient and steepest_ascent, log_barrier; not while the boundary slides): newton: "
                 "where it stalls, truncated Newton steps go on from its best iterate on a new focus, with its barrier, or "
-                "a fresh one where 50 steps cannot solve that barrier's subproblem, until they stall too (judged per "
-                "gradient pass); none: stop there.")
+                "a fresh one where 50 steps cannot solve that barrier's subproblem or the budget leaves no room for them, "
+                "until they stall too (judged per gradient pass); none: stop there.")
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
         .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")

@@ -121,7 +121,7 @@ BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uni
 // on their barrier hands over to a fresh one at 303).
 BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_newton_finish_ends_as_the_uninterrupted_run) {
     pv::GlobalSolverOptions options;
-    options.termination.max_iterations = 340;
+    options.termination.max_iterations = 360;
     const auto phase = check_global_shape_run_resumes(options, "checkpoint_global_finish", {200, 285, 325});
     BOOST_TEST(phase.at(200) == "shape");
     BOOST_TEST(phase.at(285) == "finish");

@@ -308,7 +308,8 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
 // The finish first goes on with the conjugate gradients' own barrier (the same mu). On tire its
 // Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps at one mu a fresh
 // barrier (a larger mu) takes over from the best iterate. On cub_wedge_like they solve it and
-// raise the worst element, and no fresh barrier follows.
+// raise the worst element, and no fresh barrier follows. (Both with the default budget of 500
+// iterations; the shape phases stall at 253 and 184.)
 BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and_recenters_out_of_reach,
                      bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cub_wedge_like.vtk"}), name) {
     auto mesh = shared_mesh(name);
@@ -335,6 +336,24 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
     } else {
         BOOST_TEST((fresh == h.end()));
     }
+}
+
+// With fewer than twice the 50 steps left in the budget when the conjugate gradients stall (tire:
+// they stall at iteration 253), the fresh barrier goes first and alone.
+BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    options.termination.max_iterations = 340;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto& h = summary.history;
+    const auto fresh = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
+    BOOST_TEST_REQUIRE((fresh != h.end()));
+    BOOST_TEST(fresh->phase == "finish_fresh");
+    BOOST_TEST(fresh->iteration == 253);
+    BOOST_TEST(std::none_of(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "finish"; }));
+    BOOST_TEST(summary.worst_after > fresh->best_worst_quality);
+    check_never_worse(summary);
 }
 
 // A tangled mesh: untangled with conjugate gradients as before, then Newton steps.
