@@ -1066,7 +1066,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                                        : std::max(0, stop.max_iterations - summary.untangle_iterations);
             // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
             auto objective = make_objective("log_barrier", options.objective_options);
-            result = Phase(work, xyz, *hybrid, *objective, stop, options, Stage{true, round}, summary, observer, start,
+            result = Phase(work, xyz, *hybrid, *objective, stop, options, Stage{.untangling = true, .round = round}, summary, observer, start,
                            checkpointer)
                          .run(here);
             if (result.reason == TerminationReason::TargetReached) break;
@@ -1105,7 +1105,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         // (Checkpoints from before the finish had two parts have no "fresh": theirs was fresh.)
         const bool resume_fresh = resume_finish && (!resume->numbers.contains("fresh") || resume->number("fresh") != 0.0);
         if (!resume_finish)
-            result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{false, 0, false, finish},
+            result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{.newton_follows = finish},
                            summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
                          .run(resume ? &*resume : nullptr);
         const bool stalled = result.reason == TerminationReason::Converged || result.reason == TerminationReason::NoImprovingStep;
@@ -1121,7 +1121,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         const bool first_part = resume_finish ? !resume_fresh : finishing && left >= 2 * kNewtonStepsAtOneMu;
         if (first_part)
             result = Phase(work, xyz, *metric, *objective, options.termination, options,
-                           Stage{false, 0, true, false, shape_iterations()}, summary, observer, start, checkpointer)
+                           Stage{.finish = true, .iterations_before = shape_iterations()}, summary, observer, start, checkpointer)
                          .run(resume_finish ? &*resume : nullptr);
         // Far from that barrier's central path, a fresh barrier from the best iterate (mu from
         // the qualities, as at the start), under which the worst elements can rearrange.
@@ -1131,7 +1131,8 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         } else if (resume_fresh || result.recenter || (finishing && !first_part)) {
             auto fresh = make_objective(options.objective, options.objective_options);
             result = Phase(work, xyz, *metric, *fresh, options.termination, options,
-                           Stage{false, 0, true, false, shape_iterations(), true}, summary, observer, start, checkpointer)
+                           Stage{.finish = true, .iterations_before = shape_iterations(), .fresh = true}, summary, observer,
+                           start, checkpointer)
                          .run(resume_fresh ? &*resume : nullptr);
         }
     } else if (resume) {
