@@ -2,9 +2,26 @@
 
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <numeric>
 
+#include "core/prefetch.hpp"
+
 namespace paloverde {
+
+namespace {
+// A stable sort for the short ranges a vertex's neighbours make (about fourteen in a tetrahedral
+// mesh): insertion, without the buffer std::stable_sort allocates at every call.
+template <class It, class Less>
+void sort_short(It first, It last, Less less) {
+    if (last - first > 32) {
+        std::stable_sort(first, last, less);
+        return;
+    }
+    for (It w = first; w != last; ++w)
+        for (It at = w; at != first && less(*at, *(at - 1)); --at) std::iter_swap(at - 1, at);
+}
+}  // namespace
 
 VertexGraph vertex_graph(const Mesh& mesh) { return vertex_graph(mesh, false); }
 
@@ -12,56 +29,52 @@ VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
     cell_edges = cell_edges && mesh.has_cells();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
     const auto k = static_cast<std::size_t>(mesh.corners());
-    const auto connectivity = mesh.connectivity();
-    // Every element's edges, each at its lower end, in passes over the elements in order (rows
-    // counted first): reading the elements around each vertex instead would miss the cache at
-    // nearly every element. A cell's edges join a corner's vertex to its frame's others
-    // (cell_types.hpp).
-    auto for_each_edge = [&](auto visit) {
-        for (std::size_t at = 0; at < connectivity.size(); at += k) {
-            const VertexId* c = connectivity.data() + at;
-            for (std::size_t i = 0; i < (cell_edges ? 1 : k); ++i)
-                for (std::size_t j = i + 1; j < k; ++j) visit(std::min(c[i], c[j]), std::max(c[i], c[j]));
-        }
-    };
-    std::vector<std::int64_t> row(n + 1, 0);
-    for_each_edge([&](VertexId low, VertexId) { ++row[static_cast<std::size_t>(low) + 1]; });
-    std::partial_sum(row.begin(), row.end(), row.begin());
-    std::vector<VertexId> higher(static_cast<std::size_t>(row[n]));
-    {
-        std::vector<std::int64_t> next(row.begin(), row.end() - 1);
-        for_each_edge([&](VertexId low, VertexId high) { higher[static_cast<std::size_t>(next[static_cast<std::size_t>(low)]++)] = high; });
-    }
-    // Each row sorted, without repeats, in place: a vertex's higher neighbours. Its lower ones are
-    // the vertices in whose rows it appears.
-    std::vector<std::int64_t> higher_end(n), lower(n, 0);
-    for (std::size_t v = 0; v < n; ++v) {
-        const auto first = higher.begin() + row[v];
-        std::sort(first, higher.begin() + row[v + 1]);
-        const auto last = std::unique(first, higher.begin() + row[v + 1]);
-        higher_end[v] = last - higher.begin();
-        for (auto w = first; w != last; ++w) ++lower[static_cast<std::size_t>(*w)];
-    }
-    // Each vertex's list, sorted: its lower neighbours in increasing order, then its higher ones.
+    const VertexId* corners = mesh.connectivity().data();
+    const auto first_around = mesh.vertex_element_offsets();
+    const auto around = mesh.vertex_elements();
+    // Each vertex's row from the elements around it, rows written in order. In a mesh in file
+    // order those elements lie scattered: their corners are asked for a few elements ahead, so
+    // the loads overlap (scattering every element's edges into rows instead wrote to a cache line
+    // of its own at nearly every edge). A cell's edges join a corner's vertex to its frame's
+    // others (cell_types.hpp). Repeats (an edge lies in about five tetrahedra) are dropped by a
+    // mark per vertex, then the row is sorted.
     VertexGraph graph;
     graph.offsets.assign(n + 1, 0);
-    for (std::size_t v = 0; v < n; ++v) graph.offsets[v + 1] = graph.offsets[v] + lower[v] + (higher_end[v] - row[v]);
-    graph.neighbours.resize(static_cast<std::size_t>(graph.offsets[n]));
-    std::vector<std::int64_t> next_lower(graph.offsets.begin(), graph.offsets.end() - 1);
+    graph.neighbours.reserve(around.size());
+    std::vector<VertexId> last_row(n, -1);  // the row that last took each vertex
+    const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
     for (std::size_t v = 0; v < n; ++v) {
-        const auto first = higher.begin() + row[v], last = higher.begin() + higher_end[v];
-        std::copy(first, last, graph.neighbours.begin() + graph.offsets[v] + lower[v]);
-        for (auto w = first; w != last; ++w)
-            graph.neighbours[static_cast<std::size_t>(next_lower[static_cast<std::size_t>(*w)]++)] = static_cast<VertexId>(v);
+        const auto vertex = static_cast<VertexId>(v);
+        const std::size_t row = graph.neighbours.size();
+        auto take = [&](VertexId w) {
+            if (last_row[static_cast<std::size_t>(w)] == vertex) return;
+            last_row[static_cast<std::size_t>(w)] = vertex;
+            graph.neighbours.push_back(w);
+        };
+        const auto end = static_cast<std::size_t>(first_around[v + 1]);
+        for (auto i = static_cast<std::size_t>(first_around[v]); i < end; ++i) {
+            if (i + ahead < around.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(around[i + ahead]));
+            const VertexId* c = corners + k * static_cast<std::size_t>(around[i]);
+            if (!cell_edges) {
+                for (std::size_t j = 0; j < k; ++j)
+                    if (c[j] != vertex) take(c[j]);
+            } else if (c[0] == vertex) {
+                for (std::size_t j = 1; j < k; ++j) take(c[j]);
+            } else {
+                take(c[0]);  // v is one of the frame's other corners
+            }
+        }
+        sort_short(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(row), graph.neighbours.end(), std::less<>());
+        graph.offsets[v + 1] = static_cast<std::int64_t>(graph.neighbours.size());
     }
     return graph;
 }
 
 namespace {
 
-// Breadth-first levels from `start` within its component; returns the visit order.
-std::vector<VertexId> bfs(const VertexGraph& g, VertexId start, std::vector<int>& level) {
-    std::vector<VertexId> order{start};
+// Breadth-first levels from `start` within its component, into `order` (the visit order).
+void bfs(const VertexGraph& g, VertexId start, std::vector<int>& level, std::vector<VertexId>& order) {
+    order.assign(1, start);
     level[start] = 0;
     for (std::size_t head = 0; head < order.size(); ++head) {
         const VertexId v = order[head];
@@ -73,23 +86,24 @@ std::vector<VertexId> bfs(const VertexGraph& g, VertexId start, std::vector<int>
             }
         }
     }
-    return order;
 }
 
-// A vertex far from everything in its component (George-Liu pseudo-peripheral search).
-VertexId pseudo_peripheral(const VertexGraph& g, VertexId start) {
+// A vertex far from everything in its component (George-Liu pseudo-peripheral search). `level`
+// is -1 everywhere on entry and on return: each round resets only the vertices it reached, so a
+// mesh of many small components (unused vertices, say) costs no pass over all vertices each.
+VertexId pseudo_peripheral(const VertexGraph& g, VertexId start, std::vector<int>& level,
+                           std::vector<VertexId>& order) {
     const auto degree = [&](VertexId v) { return g.offsets[v + 1] - g.offsets[v]; };
-    std::vector<int> level(g.offsets.size() - 1, -1);
     int eccentricity = -1;
     for (int round = 0; round < 8; ++round) {
-        std::fill(level.begin(), level.end(), -1);  // O(n) per round; a handful of rounds
-        const auto order = bfs(g, start, level);
+        bfs(g, start, level, order);
         const int depth = level[order.back()];
-        if (depth <= eccentricity) break;
-        eccentricity = depth;
         VertexId best = order.back();
         for (auto it = order.rbegin(); it != order.rend() && level[*it] == depth; ++it)
             if (degree(*it) < degree(best)) best = *it;
+        for (VertexId v : order) level[v] = -1;
+        if (depth <= eccentricity) break;
+        eccentricity = depth;
         start = best;
     }
     return start;
@@ -97,20 +111,28 @@ VertexId pseudo_peripheral(const VertexGraph& g, VertexId start) {
 
 }  // namespace
 
-Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_group) {
+std::vector<VertexId> locality_vertex_order(const Mesh& mesh) {
     const VertexGraph g = vertex_graph(mesh);
     const VertexId n = mesh.num_vertices();
     const auto degree = [&](VertexId v) { return g.offsets[v + 1] - g.offsets[v]; };
     std::vector<VertexId> order;
     order.reserve(static_cast<std::size_t>(n));
     std::vector<char> placed(static_cast<std::size_t>(n), 0);
+    // Every vertex by degree, ties by id: a counting sort, as degrees are small.
     std::vector<VertexId> ranked(static_cast<std::size_t>(n));
-    std::iota(ranked.begin(), ranked.end(), VertexId{0});
-    std::stable_sort(ranked.begin(), ranked.end(), [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
-    std::vector<VertexId> neighbours;
+    {
+        std::int64_t most = 0;
+        for (VertexId v = 0; v < n; ++v) most = std::max(most, degree(v));
+        std::vector<std::int64_t> first_of(static_cast<std::size_t>(most) + 2, 0);
+        for (VertexId v = 0; v < n; ++v) ++first_of[static_cast<std::size_t>(degree(v)) + 1];
+        std::partial_sum(first_of.begin(), first_of.end(), first_of.begin());
+        for (VertexId v = 0; v < n; ++v) ranked[static_cast<std::size_t>(first_of[static_cast<std::size_t>(degree(v))]++)] = v;
+    }
+    std::vector<VertexId> neighbours, visited;
+    std::vector<int> level(static_cast<std::size_t>(n), -1);
     for (VertexId seed : ranked) {  // one Cuthill-McKee sweep per connected component
         if (placed[seed]) continue;
-        const VertexId start = pseudo_peripheral(g, seed);
+        const VertexId start = pseudo_peripheral(g, seed, level, visited);
         std::size_t head = order.size();
         order.push_back(start);
         placed[start] = 1;
@@ -119,8 +141,7 @@ Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_
             neighbours.clear();
             for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i)
                 if (!placed[g.neighbours[i]]) neighbours.push_back(g.neighbours[i]);
-            std::stable_sort(neighbours.begin(), neighbours.end(),
-                             [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
+            sort_short(neighbours.begin(), neighbours.end(), [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
             for (VertexId w : neighbours) {
                 placed[w] = 1;
                 order.push_back(w);
@@ -128,9 +149,13 @@ Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_
         }
     }
     std::reverse(order.begin(), order.end());
+    return order;
+}
 
+Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_group) {
+    const VertexId n = mesh.num_vertices();
     Renumbering result;
-    result.old_vertex = std::move(order);
+    result.old_vertex = locality_vertex_order(mesh);
     std::vector<VertexId> new_id(static_cast<std::size_t>(n));
     for (VertexId i = 0; i < n; ++i) new_id[result.old_vertex[i]] = i;
 
@@ -178,11 +203,12 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
 
 std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<const GlobalId> vertex_key) {
     const ElementId m = mesh.num_elements();
+    const VertexId n = mesh.num_vertices();
     const int k = mesh.corners();
     const auto maps = mesh.corner_maps();
-    // Sorted in one array with their keys (an order of ids that looks its keys up would miss the
-    // cache at every comparison). Two corners of different cells may share their vertices: their
-    // maps tell them apart; no two elements have the same key and map.
+    // Sorted with their keys (an order of ids that looks its keys up would miss the cache at every
+    // comparison). Two corners of different cells may share their vertices: their maps tell them
+    // apart; no two elements have the same key and map.
     struct Keyed {
         std::array<GlobalId, 4> key;
         std::uint8_t map;
@@ -193,17 +219,43 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
             return map < o.map;
         }
     };
-    std::vector<Keyed> sorted(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
-        Keyed& entry = sorted[e];
+    auto keyed = [&](ElementId e) {
+        Keyed entry;
         entry.key.fill(-1);
         for (int i = 0; i < k; ++i) entry.key[i] = vertex_key[mesh.element(e)[i]];
-        std::sort(entry.key.begin(), entry.key.begin() + k);
+        sort_short(entry.key.begin(), entry.key.begin() + k, std::less<>());
         entry.map = maps.empty() ? 0 : maps[e];
         entry.element = e;
+        return entry;
+    };
+    std::vector<GlobalId> position(static_cast<std::size_t>(m));
+    const bool small_keys =
+        std::all_of(vertex_key.begin(), vertex_key.end(), [n](GlobalId key) { return key >= 0 && key < n; });
+    if (!small_keys) {
+        std::vector<Keyed> sorted(static_cast<std::size_t>(m));
+        for (ElementId e = 0; e < m; ++e) sorted[e] = keyed(e);
+        std::sort(sorted.begin(), sorted.end());
+        for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
+        return position;
+    }
+    // Keys that number the vertices from 0 (a serial run's new ids) fit four to two words: the
+    // elements, made in file order, are counted into buckets by their smallest key and each
+    // bucket (about six) is sorted. The same order as above in a fraction of the time.
+    struct Packed {
+        std::uint64_t high, low;  // the sorted keys, two to a word
+        ElementId element;
+        std::uint8_t map;
+        bool operator<(const Packed& o) const {
+            return high != o.high ? high < o.high : low != o.low ? low < o.low : map < o.map;
+        }
+    };
+    std::vector<Packed> sorted(static_cast<std::size_t>(m));
+    for (ElementId e = 0; e < m; ++e) {
+        const Keyed entry = keyed(e);
+        auto word = [&](int i) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(entry.key[i])); };
+        sorted[e] = {word(0) << 32 | word(1), word(2) << 32 | word(3), e, entry.map};
     }
     std::sort(sorted.begin(), sorted.end());
-    std::vector<GlobalId> position(static_cast<std::size_t>(m));
     for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
     return position;
 }

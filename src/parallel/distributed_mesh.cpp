@@ -144,13 +144,12 @@ WholeSplit split_whole(const Mesh& whole, int ranks) {
     if (whole.num_vertices() < ranks)
         throw OptionError("cannot distribute a mesh of " + std::to_string(whole.num_vertices()) + " vertices over " +
                           std::to_string(ranks) + " processes: use at most as many processes as vertices");
-    Renumbering order = locality_order(whole);
-    std::vector<ElementId>().swap(order.old_element);  // elements get the canonical order instead
+    std::vector<VertexId> old_vertex = locality_vertex_order(whole);  // elements get the canonical order
     std::vector<GlobalId> canonical(static_cast<std::size_t>(whole.num_vertices()));
-    for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[order.old_vertex[i]] = i;
+    for (VertexId i = 0; i < whole.num_vertices(); ++i) canonical[old_vertex[i]] = i;
     const CanonicalOrders orders = canonical_orders(whole, std::move(canonical));
     const auto part = partition_vertices(whole, ranks);
-    return {split(whole, orders, part, ranks), std::move(order.old_vertex)};
+    return {split(whole, orders, part, ranks), std::move(old_vertex)};
 }
 
 

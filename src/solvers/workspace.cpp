@@ -19,6 +19,38 @@ constexpr ElementId kEvaluateChunk = 2048;
 // The canonical element order is cut into this many blocks; each vertex sums its elements'
 // contributions block by block. The blocks depend only on the whole mesh.
 constexpr GlobalId kGradientBlocks = 64;
+
+// out[i] = values[order[i]]
+template <class T>
+std::vector<T> permuted(const std::vector<T>& values, std::span<const ElementId> order) {
+    std::vector<T> out(values.size());
+    for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
+    return out;
+}
+
+// The elements' working order: the movable ones first, each group in canonical order (the
+// elements placed by their positions when these number them from 0, as serially; else sorted,
+// then split stably).
+struct MovableFirst {
+    std::vector<ElementId> order;
+    ElementId movable = 0;
+};
+MovableFirst movable_first(const Mesh& mesh, std::span<const GlobalId> element_order) {
+    const ElementId m = mesh.num_elements();
+    MovableFirst result;
+    std::vector<ElementId>& order = result.order;
+    order.resize(static_cast<std::size_t>(m));
+    std::iota(order.begin(), order.end(), ElementId{0});
+    const bool numbered = std::all_of(element_order.begin(), element_order.end(),
+                                      [m](GlobalId position) { return position >= 0 && position < m; });
+    if (numbered)
+        for (ElementId e = 0; e < m; ++e) order[static_cast<std::size_t>(element_order[e])] = e;
+    else
+        std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
+    const auto frozen = std::stable_partition(order.begin(), order.end(), [&](ElementId e) { return mesh.element_can_move(e); });
+    result.movable = static_cast<ElementId>(frozen - order.begin());
+    return result;
+}
 }  // namespace
 
 Workspace::Workspace(MeshPart part, bool renumber)
@@ -36,31 +68,30 @@ Workspace::Workspace(MeshPart part, bool renumber)
         if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
         return;
     }
+    // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
+    // elements already in the order finish() puts them: movable first, each group canonical.
     const Mesh& mesh = part.mesh();
+    std::vector<VertexId> old_vertex = renumber ? locality_vertex_order(mesh) : std::vector<VertexId>{};
+    std::vector<GlobalId> new_id(static_cast<std::size_t>(mesh.num_vertices()));
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) new_id[renumber ? old_vertex[v] : v] = v;
+    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
+    Renumbering order;
+    order.old_element = movable_first(mesh, positions).order;
     if (renumber) {
-        Renumbering order = locality_order(mesh);
-        own_ = renumbered(mesh, order);
-        old_vertex_ = std::move(order.old_vertex);
+        order.old_vertex = old_vertex;
     } else {
-        own_ = mesh;
+        order.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+        std::iota(order.old_vertex.begin(), order.old_vertex.end(), VertexId{0});
     }
-    const VertexId n = own_.num_vertices();
-    std::vector<GlobalId> ids(static_cast<std::size_t>(n));
-    std::iota(ids.begin(), ids.end(), GlobalId{0});
-    auto positions = canonical_element_positions(own_, ids);
-    owned_.assign(static_cast<std::size_t>(n), 1);
+    own_ = renumbered(mesh, order);
+    positions = permuted(positions, order.old_element);
+    old_vertex_ = std::move(old_vertex);
+    owned_.assign(static_cast<std::size_t>(own_.num_vertices()), 1);
     std::vector<std::uint8_t> all_counted;
     finish(positions, all_counted, own_.num_elements());
 }
 
 namespace {
-// out[i] = values[order[i]]
-template <class T>
-std::vector<T> permuted(const std::vector<T>& values, std::span<const ElementId> order) {
-    std::vector<T> out(values.size());
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
-    return out;
-}
 // The order that undoes `order`.
 std::vector<ElementId> inverse(std::span<const ElementId> order) {
     std::vector<ElementId> out(order.size());
@@ -95,25 +126,16 @@ Workspace::~Workspace() {
 
 std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
                                          GlobalId global_elements) {
-    // Movable elements first, each group in canonical order: the elements in canonical order
-    // (placed by their positions when these number them from 0, as serially; else sorted), then
-    // split stably.
     const ElementId m = mesh_.num_elements();
-    std::vector<ElementId> order(static_cast<std::size_t>(m));
-    std::iota(order.begin(), order.end(), ElementId{0});
-    {
-        const bool numbered = std::all_of(element_order.begin(), element_order.end(),
-                                          [m](GlobalId position) { return position >= 0 && position < m; });
-        if (numbered)
-            for (ElementId e = 0; e < m; ++e) order[static_cast<std::size_t>(element_order[e])] = e;
-        else
-            std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
-        const auto frozen = std::stable_partition(order.begin(), order.end(), [&](ElementId e) { return mesh_.element_can_move(e); });
-        movable_ = static_cast<ElementId>(frozen - order.begin());
+    auto [order, movable] = movable_first(mesh_, element_order);
+    movable_ = movable;
+    bool in_order = true;  // as the serial constructor leaves them: no second copy
+    for (ElementId e = 0; e < m && in_order; ++e) in_order = order[static_cast<std::size_t>(e)] == e;
+    if (!in_order) {
+        mesh_ = reordered_elements(mesh_, order);
+        element_order = permuted(element_order, order);
+        if (!counted.empty()) counted = permuted(counted, order);
     }
-    mesh_ = reordered_elements(mesh_, order);
-    element_order = permuted(element_order, order);
-    if (!counted.empty()) counted = permuted(counted, order);
     const auto is_counted = [&](ElementId e) { return counted.empty() || counted[e] != 0; };
     if (!counted.empty())
         for (ElementId e = 0; e < movable_; ++e)

@@ -1,7 +1,13 @@
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
+#include <array>
+#include <numeric>
+#include <set>
 #include <string>
+#include <utility>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/mesh.hpp"
 #include "paloverde/mesh/openmesh_adapter.hpp"
 #include "paloverde/mesh/orientation.hpp"
@@ -27,6 +33,35 @@ pv::Mesh grid(double flip = 1.0) {
             tris.insert(tris.end(), {a, a + 1, a + 4, a, a + 4, a + 3});
         }
     return pv::Mesh(pv::ElementKind::Triangle, xyz, tris);
+}
+const std::string shared = PALOVERDE_SHARED_DATA;
+
+// The vertex graph the slow way: every edge of every element (with `cell_edges`, only those from
+// corner 0 of each element, the cell edges), in ordered sets.
+pv::VertexGraph reference_graph(const pv::Mesh& mesh, bool cell_edges) {
+    std::vector<std::set<pv::VertexId>> rows(static_cast<std::size_t>(mesh.num_vertices()));
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto c = mesh.element(e);
+        for (std::size_t i = 0; i < (cell_edges && mesh.has_cells() ? 1 : c.size()); ++i)
+            for (std::size_t j = i + 1; j < c.size(); ++j) {
+                rows[static_cast<std::size_t>(c[i])].insert(c[j]);
+                rows[static_cast<std::size_t>(c[j])].insert(c[i]);
+            }
+    }
+    pv::VertexGraph g;
+    g.offsets.push_back(0);
+    for (const auto& row : rows) {
+        g.neighbours.insert(g.neighbours.end(), row.begin(), row.end());
+        g.offsets.push_back(static_cast<std::int64_t>(g.neighbours.size()));
+    }
+    return g;
+}
+// The mesh with `extra` unused vertices appended (a file may list points no element uses).
+pv::Mesh with_unused_vertices(const pv::Mesh& mesh, int extra) {
+    std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
+    for (int i = 0; i < 3 * extra; ++i) xyz.push_back(0.001 * i);
+    return pv::Mesh(mesh.kind(), std::move(xyz),
+                    std::vector<pv::VertexId>(mesh.connectivity().begin(), mesh.connectivity().end()));
 }
 bool message_has(const std::exception& e, const std::string& word) {
     return std::string(e.what()).find(word) != std::string::npos;
@@ -80,6 +115,71 @@ BOOST_AUTO_TEST_CASE(degrees_of_freedom_say_where_a_vertex_moves_and_survive_ren
         BOOST_TEST(message_has(e, "vertex 2"));
     }
     BOOST_CHECK_THROW(mesh.set_degrees_of_freedom({0, 3}), pv::MeshError);
+}
+
+BOOST_AUTO_TEST_CASE(vertex_graph_lists_each_vertex_neighbours_once_in_order) {
+    // Tetrahedra (with unused vertices: empty rows), triangles, and a mesh of hexahedra, pyramids
+    // and tetrahedra with and without the cell-edges-only graph.
+    const auto tire = pv::read_mesh(shared + "/mesquite/tets/tire.vtk").mesh;
+    const auto mixed = pv::read_mesh(shared + "/mesquite/mixed/mixed-hex-pyr-tet.vtk").mesh;
+    const auto hexes = pv::read_mesh(shared + "/mesquite/hexes/hex_5_tangled.vtk").mesh;
+    for (const pv::Mesh* mesh : {&tire, &mixed, &hexes})
+        for (bool cell_edges : {false, true}) {
+            const auto g = pv::vertex_graph(*mesh, cell_edges), want = reference_graph(*mesh, cell_edges);
+            BOOST_TEST(g.offsets == want.offsets);
+            BOOST_TEST(g.neighbours == want.neighbours);
+        }
+    BOOST_TEST(mixed.has_cells());
+    BOOST_TEST(pv::vertex_graph(mixed, true).neighbours.size() < pv::vertex_graph(mixed, false).neighbours.size());
+    const auto unused = with_unused_vertices(tire, 1000);
+    const auto g = pv::vertex_graph(unused);
+    BOOST_TEST(g.offsets == reference_graph(unused, false).offsets);
+    BOOST_TEST(g.offsets.back() == pv::vertex_graph(tire).offsets.back());
+    const auto t = pv::read_mesh(shared + "/mesquite/tris/" + std::string("bad_circle_tri.vtk")).mesh;
+    BOOST_TEST(pv::vertex_graph(t).neighbours == reference_graph(t, false).neighbours);
+}
+
+BOOST_AUTO_TEST_CASE(locality_order_is_a_permutation_with_many_unused_vertices) {
+    // Each unused vertex is a component of its own: thousands of them, each visited alone.
+    const auto tire = pv::read_mesh(shared + "/mesquite/tets/tire.vtk").mesh;
+    const auto mesh = with_unused_vertices(tire, 20000);
+    auto order = pv::locality_vertex_order(mesh);
+    BOOST_TEST(order.size() == static_cast<std::size_t>(mesh.num_vertices()));
+    std::sort(order.begin(), order.end());
+    std::vector<pv::VertexId> every(order.size());
+    std::iota(every.begin(), every.end(), pv::VertexId{0});
+    BOOST_TEST(order == every);
+    // The used vertices keep the order they have without the unused ones around them.
+    std::vector<pv::VertexId> used;
+    for (pv::VertexId v : pv::locality_vertex_order(mesh))
+        if (v < tire.num_vertices()) used.push_back(v);
+    BOOST_TEST(used == pv::locality_vertex_order(tire));
+    BOOST_TEST(pv::locality_order(mesh).old_vertex == pv::locality_vertex_order(mesh));
+}
+
+BOOST_AUTO_TEST_CASE(canonical_element_positions_sort_the_sorted_vertex_keys) {
+    // Keys that number the vertices from 0 (a serial run's) and the same keys far above any vertex
+    // count (global ids of a part) take different paths to the same order, that of one sort.
+    const auto tire = pv::read_mesh(shared + "/mesquite/tets/tire.vtk").mesh;
+    const auto order = pv::locality_vertex_order(tire);
+    std::vector<pv::GlobalId> key(order.size()), far(order.size());
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        key[static_cast<std::size_t>(order[i])] = static_cast<pv::GlobalId>(i);
+        far[static_cast<std::size_t>(order[i])] = static_cast<pv::GlobalId>(i) + (pv::GlobalId{1} << 40);
+    }
+    const auto positions = pv::canonical_element_positions(tire, key);
+    BOOST_TEST(positions == pv::canonical_element_positions(tire, far));
+    std::vector<std::pair<std::array<pv::GlobalId, 4>, pv::ElementId>> sorted;
+    for (pv::ElementId e = 0; e < tire.num_elements(); ++e) {
+        std::array<pv::GlobalId, 4> k{};
+        for (int i = 0; i < 4; ++i) k[static_cast<std::size_t>(i)] = key[static_cast<std::size_t>(tire.element(e)[static_cast<std::size_t>(i)])];
+        std::sort(k.begin(), k.end());
+        sorted.emplace_back(k, e);
+    }
+    std::sort(sorted.begin(), sorted.end());
+    bool same = true;
+    for (std::size_t i = 0; i < sorted.size(); ++i) same = same && positions[static_cast<std::size_t>(sorted[i].second)] == static_cast<pv::GlobalId>(i);
+    BOOST_TEST(same);
 }
 
 BOOST_AUTO_TEST_CASE(planar_triangles_are_oriented_by_the_majority_normal) {

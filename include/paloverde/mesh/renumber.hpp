@@ -17,6 +17,8 @@ struct Renumbering {
 // Vertices in reverse Cuthill-McKee order; elements sorted by `last_group` (elements flagged 1
 // go after all others) and then by their smallest new vertex id.
 Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_group = {});
+// The vertex order alone (new id -> original id), for callers that order the elements themselves.
+std::vector<VertexId> locality_vertex_order(const Mesh& mesh);
 
 // The mesh with vertices and elements in the new order (fixed flags and global ids follow).
 Mesh renumbered(const Mesh& mesh, const Renumbering& order);
