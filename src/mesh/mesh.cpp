@@ -159,9 +159,8 @@ void Mesh::build_adjacency() {
     std::partial_sum(vertex_element_offsets_.begin(), vertex_element_offsets_.end(), vertex_element_offsets_.begin());
     vertex_elements_.resize(connectivity_.size());
     std::vector<std::int64_t> next(vertex_element_offsets_.begin(), vertex_element_offsets_.end() - 1);
-    const VertexId* corner = connectivity_.data();
-    for (ElementId e = 0, m = num_elements(); e < m; ++e)  // by element: no division per corner
-        for (int i = 0; i < k; ++i) vertex_elements_[next[*corner++]++] = e;
+    for (std::size_t i = 0; i < connectivity_.size(); ++i)
+        vertex_elements_[next[connectivity_[i]]++] = static_cast<ElementId>(i / k);
 }
 
 void Mesh::find_plane() {
