@@ -203,7 +203,6 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
 
 std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<const GlobalId> vertex_key) {
     const ElementId m = mesh.num_elements();
-    const VertexId n = mesh.num_vertices();
     const int k = mesh.corners();
     const auto maps = mesh.corner_maps();
     // Sorted with their keys (an order of ids that looks its keys up would miss the cache at every
@@ -229,8 +228,9 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
         return entry;
     };
     std::vector<GlobalId> position(static_cast<std::size_t>(m));
-    const bool small_keys =
-        std::all_of(vertex_key.begin(), vertex_key.end(), [n](GlobalId key) { return key >= 0 && key < n; });
+    constexpr GlobalId kWord = GlobalId{1} << 32;
+    const bool small_keys = std::all_of(vertex_key.begin(), vertex_key.end(),
+                                        [](GlobalId key) { return key >= 0 && key < kWord - 1; });
     if (!small_keys) {
         std::vector<Keyed> sorted(static_cast<std::size_t>(m));
         for (ElementId e = 0; e < m; ++e) sorted[e] = keyed(e);
@@ -238,9 +238,8 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
         for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
         return position;
     }
-    // Keys that number the vertices from 0 (a serial run's new ids) fit four to two words: the
-    // elements, made in file order, are counted into buckets by their smallest key and each
-    // bucket (about six) is sorted. The same order as above in a fraction of the time.
+    // Keys below 2^32 - 1 (a triangle's missing fourth key, -1, packs to 2^32 - 1 in every
+    // element alike) fit two to a word: 24-byte records to sort instead of 40, the same order.
     struct Packed {
         std::uint64_t high, low;  // the sorted keys, two to a word
         ElementId element;

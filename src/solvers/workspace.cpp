@@ -51,47 +51,7 @@ MovableFirst movable_first(const Mesh& mesh, std::span<const GlobalId> element_o
     result.movable = static_cast<ElementId>(frozen - order.begin());
     return result;
 }
-}  // namespace
 
-Workspace::Workspace(MeshPart part, bool renumber)
-    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
-    if (part_) {
-        reducer_ = &part.reducer();
-        halo_ = &part.halo();
-        const VertexId n = mesh_.num_vertices();
-        owned_.resize(static_cast<std::size_t>(n));
-        for (VertexId v = 0; v < n; ++v) {
-            owned_[v] = part.owns(v);
-            if (!owned_[v]) ghosts_.push_back(v);
-        }
-        part_order_ = finish(part_->element_order, part_->counted, part_->global_elements);
-        if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
-        return;
-    }
-    // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
-    // elements already in the order finish() puts them: movable first, each group canonical.
-    const Mesh& mesh = part.mesh();
-    std::vector<VertexId> old_vertex = renumber ? locality_vertex_order(mesh) : std::vector<VertexId>{};
-    std::vector<GlobalId> new_id(static_cast<std::size_t>(mesh.num_vertices()));
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) new_id[renumber ? old_vertex[v] : v] = v;
-    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
-    Renumbering order;
-    order.old_element = movable_first(mesh, positions).order;
-    if (renumber) {
-        order.old_vertex = old_vertex;
-    } else {
-        order.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
-        std::iota(order.old_vertex.begin(), order.old_vertex.end(), VertexId{0});
-    }
-    own_ = renumbered(mesh, order);
-    positions = permuted(positions, order.old_element);
-    old_vertex_ = std::move(old_vertex);
-    owned_.assign(static_cast<std::size_t>(own_.num_vertices()), 1);
-    std::vector<std::uint8_t> all_counted;
-    finish(positions, all_counted, own_.num_elements());
-}
-
-namespace {
 // The order that undoes `order`.
 std::vector<ElementId> inverse(std::span<const ElementId> order) {
     std::vector<ElementId> out(order.size());
@@ -107,6 +67,52 @@ Mesh reordered_elements(const Mesh& mesh, std::vector<ElementId> order) {
     return renumbered(mesh, elements);
 }
 }  // namespace
+
+Workspace::Workspace(MeshPart part, bool renumber)
+    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
+    if (part_) {
+        reducer_ = &part.reducer();
+        halo_ = &part.halo();
+        const VertexId n = mesh_.num_vertices();
+        owned_.resize(static_cast<std::size_t>(n));
+        for (VertexId v = 0; v < n; ++v) {
+            owned_[v] = part.owns(v);
+            if (!owned_[v]) ghosts_.push_back(v);
+        }
+        // The part's elements in the working order, in place.
+        auto [order, movable] = movable_first(mesh_, part_->element_order);
+        mesh_ = reordered_elements(mesh_, order);
+        part_->element_order = permuted(part_->element_order, order);
+        if (!part_->counted.empty()) part_->counted = permuted(part_->counted, order);
+        part_order_ = std::move(order);
+        finish(part_->element_order, part_->counted, part_->global_elements, movable);
+        if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
+        return;
+    }
+    // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
+    // elements in the working order.
+    const Mesh& mesh = part.mesh();
+    std::vector<VertexId> old_vertex = renumber ? locality_vertex_order(mesh) : std::vector<VertexId>{};
+    std::vector<GlobalId> new_id(static_cast<std::size_t>(mesh.num_vertices()));
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) new_id[renumber ? old_vertex[v] : v] = v;
+    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
+    Renumbering order;
+    auto [element_order, movable] = movable_first(mesh, positions);
+    order.old_element = std::move(element_order);
+    if (renumber) {
+        order.old_vertex = old_vertex;
+    } else {
+        order.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+        std::iota(order.old_vertex.begin(), order.old_vertex.end(), VertexId{0});
+    }
+    own_ = renumbered(mesh, order);
+    positions = permuted(positions, order.old_element);
+    old_vertex_ = std::move(old_vertex);
+    owned_.assign(static_cast<std::size_t>(own_.num_vertices()), 1);
+    std::vector<std::uint8_t> all_counted;
+    finish(positions, all_counted, own_.num_elements(), movable);
+}
+
 
 Workspace::~Workspace() {
     if (!part_) return;
@@ -124,18 +130,10 @@ Workspace::~Workspace() {
     }
 }
 
-std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
-                                         GlobalId global_elements) {
+void Workspace::finish(std::span<const GlobalId> element_order, std::span<const std::uint8_t> counted,
+                       GlobalId global_elements, ElementId movable) {
     const ElementId m = mesh_.num_elements();
-    auto [order, movable] = movable_first(mesh_, element_order);
     movable_ = movable;
-    bool in_order = true;  // as the serial constructor leaves them: no second copy
-    for (ElementId e = 0; e < m && in_order; ++e) in_order = order[static_cast<std::size_t>(e)] == e;
-    if (!in_order) {
-        mesh_ = reordered_elements(mesh_, order);
-        element_order = permuted(element_order, order);
-        if (!counted.empty()) counted = permuted(counted, order);
-    }
     const auto is_counted = [&](ElementId e) { return counted.empty() || counted[e] != 0; };
     if (!counted.empty())
         for (ElementId e = 0; e < movable_; ++e)
@@ -162,9 +160,8 @@ std::vector<ElementId> Workspace::finish(std::vector<GlobalId>& element_order, s
                             : std::sqrt(4.0 * scale_.reference_volume / std::numbers::sqrt3);
     lanes_ = make_lanes(mesh_, movable_, element_order, global_elements, false);
     free_ = free_vertices_of(mesh_);
-    element_order_ = element_order;
+    element_order_.assign(element_order.begin(), element_order.end());
     global_elements_ = global_elements;
-    return order;
 }
 
 Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,

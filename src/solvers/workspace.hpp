@@ -121,11 +121,11 @@ private:
         Lanes lanes;
         std::vector<VertexId> free;      // its moving vertices
     };
-    // Orders mesh_'s elements in place (movable first, then canonical), with `element_order` and
-    // `counted` (empty: all counted), and sets up scale and lanes. Returns the order: element i
-    // was element order[i].
-    std::vector<ElementId> finish(std::vector<GlobalId>& element_order, std::vector<std::uint8_t>& counted,
-                                  GlobalId global_elements);
+    // Sets up the scale and the lanes of mesh_, whose elements are in the working order (the
+    // `movable` ones first, each group canonical), with their canonical positions
+    // `element_order` and `counted` (empty: all counted).
+    void finish(std::span<const GlobalId> element_order, std::span<const std::uint8_t> counted, GlobalId global_elements,
+                ElementId movable);
     // Lanes over elements [0, movable) of `mesh`, whose canonical positions are `element_order`;
     // `compact` for a focus, whose lanes' ranges are mostly vertices they do not touch.
     static Lanes make_lanes(const Mesh& mesh, ElementId movable, std::span<const GlobalId> element_order,

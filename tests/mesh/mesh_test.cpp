@@ -158,8 +158,8 @@ BOOST_AUTO_TEST_CASE(locality_order_is_a_permutation_with_many_unused_vertices) 
 }
 
 BOOST_AUTO_TEST_CASE(canonical_element_positions_sort_the_sorted_vertex_keys) {
-    // Keys that number the vertices from 0 (a serial run's) and the same keys far above any vertex
-    // count (global ids of a part) take different paths to the same order, that of one sort.
+    // Keys below 2^32 (packed two to a word) and the same keys beyond 2^40 take different paths to
+    // the same order, that of one sort.
     const auto tire = pv::read_mesh(shared + "/mesquite/tets/tire.vtk").mesh;
     const auto order = pv::locality_vertex_order(tire);
     std::vector<pv::GlobalId> key(order.size()), far(order.size());
