@@ -92,27 +92,26 @@ Workspace::Workspace(MeshPart part, bool renumber)
     // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
     // elements in the working order.
     const Mesh& mesh = part.mesh();
-    std::vector<VertexId> old_vertex = renumber ? locality_vertex_order(mesh) : std::vector<VertexId>{};
-    std::vector<GlobalId> new_id(static_cast<std::size_t>(mesh.num_vertices()));
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) new_id[renumber ? old_vertex[v] : v] = v;
-    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
     Renumbering order;
-    auto [element_order, movable] = movable_first(mesh, positions);
-    order.old_element = std::move(element_order);
     if (renumber) {
-        order.old_vertex = old_vertex;
+        order.old_vertex = locality_vertex_order(mesh);
     } else {
-        order.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+        order.old_vertex.resize(n);
         std::iota(order.old_vertex.begin(), order.old_vertex.end(), VertexId{0});
     }
+    std::vector<GlobalId> new_id(n);
+    for (std::size_t i = 0; i < n; ++i) new_id[static_cast<std::size_t>(order.old_vertex[i])] = static_cast<GlobalId>(i);
+    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
+    auto [element_order, movable] = movable_first(mesh, positions);
+    order.old_element = std::move(element_order);
     own_ = renumbered(mesh, order);
     positions = permuted(positions, order.old_element);
-    old_vertex_ = std::move(old_vertex);
-    owned_.assign(static_cast<std::size_t>(own_.num_vertices()), 1);
+    if (renumber) old_vertex_ = std::move(order.old_vertex);
+    owned_.assign(n, 1);
     std::vector<std::uint8_t> all_counted;
     finish(positions, all_counted, own_.num_elements(), movable);
 }
-
 
 Workspace::~Workspace() {
     if (!part_) return;
