@@ -25,7 +25,7 @@ def history_of(path):
     return summary, [r for step in summary["steps"] for r in step["summary"]["history"]]
 
 
-print("| summary | final worst | iterations | " + " | ".join("%g" % level for level in levels) + " |")
+print("| summary | final worst | iterations | " + " | ".join(str(level) for level in levels) + " |")
 print("|---|---|---|" + "---|" * len(levels))
 for path in args.summaries:
     summary, history = history_of(path)
