@@ -2,10 +2,10 @@
 """The global solver against the local smoother on the same meshes, one thread each: final worst
 and mean quality, the solver's seconds, when each first reached its own final worst quality, and
 when the global solver passed the local smoother's. With --old, the global solver as it was
-before issue 16's focus, adaptive mu and finish (--set gain_tolerance=0, focus_band=1, finish=none) runs too; with
---previous, as it was before the Newton finish and the narrower focus (finish=none,
-focus_band=0.05). Prints a
-markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
+before issue 16's focus, adaptive mu, finish and damped-vertex ascent (--set gain_tolerance=0,
+focus_band=1, finish=none, damped_vertex_ascent=false) runs too; with --previous, as it was before
+the Newton finish, the narrower focus and the damped-vertex ascent (finish=none, focus_band=0.05,
+damped_vertex_ascent=false). Prints a markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
 python3-matplotlib), writes one plot per mesh of the best worst quality against seconds.
 
     python3 examples/solver_race.py MESH [MESH ...] [--old] [--previous] [--plot PREFIX] [--set KEY=VALUE ...]
@@ -32,9 +32,10 @@ parser.add_argument("--set", action="append", default=[], help="an option of the
 args = parser.parse_args()
 
 OLD = ["--set", "queue[0].improve.gain_tolerance=0", "--set", "queue[0].improve.focus_band=1", "--set",
-       "queue[0].improve.finish=none"]
+       "queue[0].improve.finish=none", "--set", "queue[0].improve.damped_vertex_ascent=false"]
 methods = [("global", ["--method", "global"] + [a for kv in args.set for a in ("--set", "queue[0].improve." + kv)])]
-PREVIOUS = ["--set", "queue[0].improve.finish=none", "--set", "queue[0].improve.focus_band=0.05"]
+PREVIOUS = ["--set", "queue[0].improve.finish=none", "--set", "queue[0].improve.focus_band=0.05", "--set",
+            "queue[0].improve.damped_vertex_ascent=false"]
 if args.previous:
     methods.append(("previous global", ["--method", "global"] + PREVIOUS))
 if args.old:

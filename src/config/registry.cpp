@@ -276,6 +276,9 @@ Tables::Tables() {
                 "where it stalls, truncated Newton steps go on from its best iterate on a new focus, with its barrier, or "
                 "a fresh one where 50 steps cannot solve that barrier's subproblem or the budget leaves no room for them, "
                 "until they stall too (judged per gradient pass); none: stop there.")
+        .flag("damped_vertex_ascent", &GlobalSolverOptions::damped_vertex_ascent,
+              "Shape phase (log_barrier, not the newton finish): a vertex the line search damped so that no element "
+              "blocks is damped further while its own elements' barrier terms are lower than at the iterate.")
         .integer("max_failed_searches", &GlobalSolverOptions::max_failed_searches,
                  "Line searches in a row without a step before giving up, >= 1.")
         .flag("renumber", &GlobalSolverOptions::renumber, "Reverse Cuthill-McKee order while solving (the output keeps the input's order).")

@@ -160,7 +160,7 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("untangle_termination", o.untangle_termination)("precondition_untangling", o.precondition_untangling)
         ("untangling", o.untangling == GlobalSolverOptions::Untangling::Energy ? "energy" : "barrier")
         ("local_untangle_rounds", o.local_untangle_rounds)("steps_per_mu", o.steps_per_mu)
-        ("gain_tolerance", o.gain_tolerance)
+        ("gain_tolerance", o.gain_tolerance)("damped_vertex_ascent", o.damped_vertex_ascent)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     if (o.focus_band < 1.0) t("focus_band", o.focus_band);
     const bool finish = o.finish == GlobalSolverOptions::Finish::Newton;
@@ -237,6 +237,17 @@ private:
     double objective_value(std::span<const double> q) { return objective_.value(work_.counted(q, counted_), reducer_); }
     void damp_like_owners(std::vector<VertexId>& damped);
     bool line_search(double objective, double max_direction);
+    // A trial element blocks the step when it leaves the objective's domain (above floor) or
+    // becomes non-positive although it was positive.
+    bool blocks(ElementId e, double floor) const {
+        return !(trial_q_[e] > floor) || (trial_q_[e] <= 0.0 && q_[e] > 0.0);
+    }
+    // Damps each vertex's share of the trial step (s times the direction) fourfold and rates
+    // its elements again (into reevaluated_).
+    void damp(const std::vector<VertexId>& vertices, double s);
+    // The trial's damped vertices are damped again while their own elements' barrier terms are
+    // lower than at the iterate. False when that makes an element block (the trial fails).
+    bool damp_where_barrier_falls(std::vector<VertexId>& once_damped, double s, double t);
     void apply_preconditioner();
     bool untangled() const { return detail::untangled(work_, x_); }
     void record(const Stats& s, double objective, double step, double gain);
@@ -274,6 +285,7 @@ private:
     std::vector<double> damping_;                  // per vertex: fraction of the step it takes
     std::vector<int> stamp_;                       // per vertex: damped in this round
     std::vector<double> mark_;                     // per vertex: damped by its owner (distributed runs)
+    std::vector<std::uint8_t> once_damped_mark_;   // per vertex: damped by the trial (descent test)
     std::vector<double> counted_;                  // scratch: the qualities this process counts
     std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
     std::uint32_t element_stamp_round_ = 0;
@@ -432,12 +444,14 @@ bool Phase::line_search(double objective, double max_direction) {
     const Mesh& mesh = work_.mesh();
     const ElementId movable = work_.movable_elements();
     const double length = work_.reference_length();
-    // An element blocks a step when it leaves the objective's domain or becomes non-positive
-    // although it was positive. Rather than shrinking the whole step for it, the step of its
+    // Rather than shrinking the whole step for an element that blocks it, the step of its
     // vertices is damped until it no longer blocks: one tangle does not freeze the mesh.
     const double floor = objective_.domain_floor();
-    auto blocks = [&](ElementId e) { return !(trial_q_[e] > floor) || (trial_q_[e] <= 0.0 && q_[e] > 0.0); };
-    std::vector<VertexId> damped;
+    // In the shape phase, the barrier's own terms also judge the damped vertices (below).
+    const auto* barrier = options_.damped_vertex_ascent && !untangling_ && !stage_.finish
+                              ? dynamic_cast<const LogBarrier*>(&objective_)
+                              : nullptr;
+    std::vector<VertexId> damped, once_damped;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;
         // Only free vertices move: elsewhere trial_x_ holds x_ already (Phase::run, focus_on_moving).
@@ -453,11 +467,12 @@ bool Phase::line_search(double objective, double max_direction) {
         if (sliding_) sliding_->project(mesh, trial_x_);
         work_.evaluate(metric_, trial_x_, trial_q_);
         ++summary_.quality_passes;
+        once_damped.clear();
         bool blocked = true;
         for (int round = 0; round < 64 && blocked; ++round) {
             damped.clear();
             auto damp_if_blocking = [&](ElementId e) {
-                if (blocks(e))
+                if (blocks(e, floor))
                     for (VertexId v : mesh.element(e))
                         if (mesh.can_move(v) && stamp_[v] != round + 1) {
                             stamp_[v] = round + 1;
@@ -472,23 +487,13 @@ bool Phase::line_search(double objective, double max_direction) {
             damp_like_owners(damped);
             blocked = reducer_.max(damped.empty() ? 0.0 : 1.0) > 0.0;
             if (!blocked) break;
-            ++element_stamp_round_;
-            for (VertexId v : damped) {
-                damping_[v] *= 0.25;
-                for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + damping_[v] * s * direction_[3 * v + c];
-                if (sliding_) sliding_->project(v, trial_x_);
-            }
-            reevaluated_.clear();
             for (VertexId v : damped)
-                for (ElementId e : mesh.elements_of(v)) {
-                    if (e >= movable || element_stamp_[e] == element_stamp_round_) continue;
-                    element_stamp_[e] = element_stamp_round_;
-                    metric_.evaluate(mesh, trial_x_, e, e + 1, &trial_q_[e]);
-                    reevaluated_.push_back(e);
-                }
+                if (damping_[v] == 1.0) once_damped.push_back(v);
+            damp(damped, s);
         }
         for (VertexId v : free) stamp_[v] = 0;
         if (blocked) continue;
+        if (barrier && !damp_where_barrier_falls(once_damped, s, barrier->t())) continue;
         // The Armijo test uses the slope of the damped step actually taken.
         const double slope = detail::free_owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             double d = 0.0;
@@ -505,6 +510,74 @@ bool Phase::line_search(double objective, double max_direction) {
         }
     }
     return false;
+}
+
+void Phase::damp(const std::vector<VertexId>& vertices, double s) {
+    const Mesh& mesh = work_.mesh();
+    const ElementId movable = work_.movable_elements();
+    ++element_stamp_round_;
+    for (VertexId v : vertices) {
+        damping_[v] *= 0.25;
+        for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + damping_[v] * s * direction_[3 * v + c];
+        if (sliding_) sliding_->project(v, trial_x_);
+    }
+    reevaluated_.clear();
+    for (VertexId v : vertices)
+        for (ElementId e : mesh.elements_of(v)) {
+            if (e >= movable || element_stamp_[e] == element_stamp_round_) continue;
+            element_stamp_[e] = element_stamp_round_;
+            metric_.evaluate(mesh, trial_x_, e, e + 1, &trial_q_[e]);
+            reevaluated_.push_back(e);
+        }
+}
+
+// A vertex damped for one blocking element usually sits by the worst elements. Whole-mesh steps
+// grow to thousands of reference lengths while they pay (the bulk of the barrier), and such a
+// vertex, damped only until nothing blocks, may still take a step that lowers its own elements:
+// the gain elsewhere carries the Armijo test, and the worst element gives up what the last steps
+// won. Each such vertex is therefore damped again while the sum of log(q - t) over its elements is
+// lower at the trial than at the iterate (at most 8 rounds). Only the owner of a vertex decides,
+// as it holds all its elements; exact sums make the decision the same for any partition.
+bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double s, double t) {
+    const Mesh& mesh = work_.mesh();
+    const ElementId movable = work_.movable_elements();
+    const auto owned = work_.owned();
+    auto barrier_falls = [&](VertexId v) {
+        ExactSum change;
+        for (ElementId e : mesh.elements_of(v))
+            if (e < movable) {
+                change.add(std::log(trial_q_[e] - t));
+                change.add(-std::log(q_[e] - t));
+            }
+        return change.value() < 0.0;
+    };
+    std::erase_if(once_damped, [&](VertexId v) { return !owned[v]; });
+    for (VertexId v : once_damped) once_damped_mark_[v] = 1;
+    std::vector<VertexId> falling;
+    bool blocked = false;
+    for (int round = 0; round < 8 && !blocked; ++round) {
+        // After the first round only the vertices of the elements just re-rated can have changed.
+        falling.clear();
+        if (round == 0) {
+            for (VertexId v : once_damped)
+                if (barrier_falls(v)) falling.push_back(v);
+        } else {
+            for (ElementId e : reevaluated_)
+                for (VertexId v : mesh.element(e))
+                    if (once_damped_mark_[v] == 1) {
+                        once_damped_mark_[v] = 2;  // tested in this round
+                        if (barrier_falls(v)) falling.push_back(v);
+                    }
+            for (VertexId v : once_damped) once_damped_mark_[v] = 1;
+        }
+        damp_like_owners(falling);
+        if (reducer_.max(falling.empty() ? 0.0 : 1.0) == 0.0) break;
+        damp(falling, s);
+        for (ElementId e : reevaluated_) blocked = blocked || blocks(e, t);
+        blocked = reducer_.max(blocked ? 1.0 : 0.0) > 0.0;
+    }
+    for (VertexId v : once_damped) once_damped_mark_[v] = 0;
+    return !blocked;
 }
 
 // preconditioned = M^-1 gradient, M per vertex the 3x3 Gauss-Newton block of the objective
@@ -652,6 +725,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
     mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
+    once_damped_mark_.assign(n3 / 3, 0);
     // Newton's directions from the start come out worse on a focus (fandisk-100k: 0.0895 against
     // 0.2302 on the whole mesh after 500 iterations): they keep the whole mesh. The finish, from
     // where conjugate gradients stalled, focuses like them.

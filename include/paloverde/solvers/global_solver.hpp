@@ -68,6 +68,11 @@ struct GlobalSolverOptions {
     // boundary slides (the surface's constraint is not in its Hessian).
     enum class Finish { None, Newton };
     Finish finish = Finish::Newton;
+    // Shape phase (log_barrier, not the finish): a vertex the line search damped so that no element
+    // blocks is damped further while its own elements' barrier terms are lower at the trial than
+    // at the iterate. The bulk keeps its long steps; the vertices by the worst elements stop
+    // giving their neighbourhood away (docs/global_solver.md, "Damped vertices ascend").
+    bool damped_vertex_ascent = true;
     int max_failed_searches = 8;      // line searches in a row without a step before giving up
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the boundary
