@@ -290,6 +290,11 @@ private:
     std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
     std::uint32_t element_stamp_round_ = 0;
     std::vector<ElementId> reevaluated_;           // line search: the elements of the last damped vertices
+    // damp_where_barrier_falls: per element, log(trial q - t) - log(q - t), valid where
+    // change_stamp_ holds change_round_ (its trial quality unchanged since).
+    std::vector<double> barrier_change_;
+    std::vector<std::uint32_t> change_stamp_;
+    std::uint32_t change_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
     std::optional<std::uint64_t> best_focus_;  // the focus generation best_x_ was last kept in
@@ -334,6 +339,8 @@ void Phase::size_element_arrays() {
     weight_.resize(m);
     if (!curvature_.empty()) curvature_weight_.assign(m, 0.0);
     element_stamp_.assign(m, 0);
+    barrier_change_.resize(m);
+    change_stamp_.assign(m, 0);
 }
 
 void Phase::refocus() {
@@ -542,12 +549,16 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
     const Mesh& mesh = work_.mesh();
     const ElementId movable = work_.movable_elements();
     const auto owned = work_.owned();
+    ++change_round_;  // the changes of the last call are stale: another trial, maybe another t
     auto barrier_falls = [&](VertexId v) {
         ExactSum change;
         for (ElementId e : mesh.elements_of(v))
             if (e < movable) {
-                change.add(std::log(trial_q_[e] - t));
-                change.add(-std::log(q_[e] - t));
+                if (change_stamp_[e] != change_round_) {
+                    change_stamp_[e] = change_round_;
+                    barrier_change_[e] = std::log(trial_q_[e] - t) - std::log(q_[e] - t);
+                }
+                change.add(barrier_change_[e]);
             }
         return change.value() < 0.0;
     };
@@ -573,7 +584,10 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
         damp_like_owners(falling);
         if (reducer_.max(falling.empty() ? 0.0 : 1.0) == 0.0) break;
         damp(falling, s);
-        for (ElementId e : reevaluated_) blocked = blocked || blocks(e, t);
+        for (ElementId e : reevaluated_) {
+            change_stamp_[e] = 0;
+            blocked = blocked || blocks(e, t);
+        }
         blocked = reducer_.max(blocked ? 1.0 : 0.0) > 0.0;
     }
     for (VertexId v : once_damped) once_damped_mark_[v] = 0;
