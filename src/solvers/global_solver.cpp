@@ -285,7 +285,7 @@ private:
     std::vector<double> damping_;                  // per vertex: fraction of the step it takes
     std::vector<int> stamp_;                       // per vertex: damped in this round
     std::vector<double> mark_;                     // per vertex: damped by its owner (distributed runs)
-    std::vector<std::uint8_t> once_damped_mark_;   // per vertex: damped by the trial (descent test)
+    std::vector<std::uint8_t> once_damped_mark_;   // per vertex: damped by the trial (damp_where_barrier_falls)
     std::vector<double> counted_;                  // scratch: the qualities this process counts
     std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
     std::uint32_t element_stamp_round_ = 0;
