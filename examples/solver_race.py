@@ -5,8 +5,9 @@ when the global solver passed the local smoother's. With --old, the global solve
 before issue 16's focus, adaptive mu, finish and damped-vertex ascent (--set gain_tolerance=0,
 focus_band=1, finish=none, damped_vertex_ascent=false) runs too; with --previous, as it was before
 the Newton finish, the narrower focus and the damped-vertex ascent (finish=none, focus_band=0.05,
-damped_vertex_ascent=false). Prints a markdown table (docs/global_solver.md, "Global against local") and, with matplotlib (Debian:
-python3-matplotlib), writes one plot per mesh of the best worst quality against seconds.
+damped_vertex_ascent=false). Prints a markdown table (docs/global_solver.md, "Global against
+local") and, with matplotlib (Debian: python3-matplotlib), writes one plot per mesh of the best
+worst quality against seconds.
 
     python3 examples/solver_race.py MESH [MESH ...] [--old] [--previous] [--plot PREFIX] [--set KEY=VALUE ...]
                                     [--paloverde build/bin/paloverde] [--threads 1]
