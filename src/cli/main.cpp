@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "mpi_session.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/core/memory.hpp"
 #include "signals.hpp"
 
 namespace {
@@ -33,6 +34,7 @@ private:
 
 int main(int argc, char** argv) {
     using namespace paloverde::cli;
+    paloverde::keep_freed_memory();
     const MpiSession mpi;
     const bool root = MpiSession::rank() == 0;
     // Every rank runs the command, and its errors are thrown on every rank: rank 0 tells.

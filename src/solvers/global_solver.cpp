@@ -290,6 +290,7 @@ private:
     std::vector<std::uint32_t> element_stamp_;     // per element: re-evaluated in this round
     std::uint32_t element_stamp_round_ = 0;
     std::vector<ElementId> reevaluated_;           // line search: the elements of the last damped vertices
+    std::vector<VertexId> falling_;                // damp_where_barrier_falls: the vertices to damp again
     // damp_where_barrier_falls: per element, log(trial q - t) - log(q - t), valid where
     // change_stamp_ holds change_round_ (its trial quality unchanged since).
     std::vector<double> barrier_change_;
@@ -564,7 +565,7 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
     };
     std::erase_if(once_damped, [&](VertexId v) { return !owned[v]; });
     for (VertexId v : once_damped) once_damped_mark_[v] = 1;
-    std::vector<VertexId> falling;
+    std::vector<VertexId>& falling = falling_;  // a member: no allocation per trial
     bool blocked = false;
     for (int round = 0; round < 8 && !blocked; ++round) {
         // After the first round only the vertices of the elements just re-rated can have changed.

@@ -12,6 +12,7 @@
 #include <iostream>
 #include <string>
 
+#include "paloverde/core/memory.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/perturb.hpp"
 #include "paloverde/solvers/global_solver.hpp"
@@ -21,6 +22,7 @@
 namespace pv = paloverde;
 
 int main(int argc, char** argv) {
+    paloverde::keep_freed_memory();  // as the command line does
     int n = 47, seeds = 3, threads = 1;
     double fraction = 0.2, amount = 0.5;
     pv::test::Fill fill = pv::test::Fill::Hexahedra;

@@ -15,6 +15,7 @@
 
 #include "metrics/tet_blocks.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/core/memory.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/objectives/objective_function.hpp"
@@ -41,6 +42,7 @@ double best_of(int repeats, F f) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    paloverde::keep_freed_memory();  // as the command line does
     if (argc < 2) {
         std::cerr << "usage: paloverde_benchmark MESH [--threads N] [--iterations N]\n";
         return 2;

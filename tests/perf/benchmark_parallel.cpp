@@ -17,6 +17,7 @@
 #include <string>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/core/memory.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/global_solver.hpp"
@@ -31,6 +32,7 @@ double seconds_since(Clock::time_point start) { return std::chrono::duration<dou
 }  // namespace
 
 int main(int argc, char** argv) {
+    paloverde::keep_freed_memory();  // as the command line does
     MPI_Init(&argc, &argv);
     int rank = 0, ranks = 1, status = 0;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
