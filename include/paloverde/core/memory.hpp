@@ -8,9 +8,9 @@ namespace paloverde {
 // quality reports, the solver's copies of the mesh, each focus). By default glibc hands large
 // freed blocks back (a block above its mmap threshold is a mapping of its own, and the heap's free
 // top is trimmed), so the next array pays a page fault per 4 KiB page: a quarter of a 0-iteration
-// run on fandisk-2M (docs/benchmarks.md). The peak grows little (a freed
-// block is reused when it fits: 2-12% on fandisk-9M); what the process once held it keeps until
-// it exits. Call it first thing in main(); a no-op where the C library is not glibc.
+// run on fandisk-2M (docs/benchmarks.md). The peak grows little (a freed block is reused when it
+// fits: 2-12% on fandisk-9M); what the process once held it keeps until it exits. Call it first
+// thing in main(); a no-op where the C library is not glibc.
 void keep_freed_memory() noexcept;
 
 }  // namespace paloverde
