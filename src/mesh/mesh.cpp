@@ -323,35 +323,41 @@ void check_no_duplicate_elements(const Mesh& mesh) {
         ElementId element;
     };
     // Cells with the same vertices have the same smallest one: each cell is listed at its smallest
-    // vertex (rows counted first) and only these short rows are sorted, which orders the keys as
-    // one sort of them all would, so the pair named is the same.
+    // vertex (rows counted first) and only these short rows are compared, their keys built and
+    // sorted one row at a time. That orders them as one sort of all keys would, so the pair named
+    // is the same; and only the row's keys, not all of them, pass through memory.
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    const ElementId m = mesh.num_cells();
+    auto smallest = [&](ElementId e) {
+        const auto cell = mesh.cell(e);
+        return static_cast<std::size_t>(*std::min_element(cell.begin(), cell.end()));
+    };
     std::vector<std::int64_t> row(n + 1, 0);
-    for (ElementId e = 0; e < mesh.num_cells(); ++e) {
-        const auto cell = mesh.cell(e);
-        ++row[static_cast<std::size_t>(*std::min_element(cell.begin(), cell.end())) + 1];
-    }
+    for (ElementId e = 0; e < m; ++e) ++row[smallest(e) + 1];
     std::partial_sum(row.begin(), row.end(), row.begin());
-    std::vector<Key> keys(static_cast<std::size_t>(mesh.num_cells()));
+    std::vector<ElementId> listed(static_cast<std::size_t>(m));
     std::vector<std::int64_t> next(row.begin(), row.end() - 1);
-    for (ElementId e = 0; e < mesh.num_cells(); ++e) {
-        const auto cell = mesh.cell(e);
-        const auto smallest = static_cast<std::size_t>(*std::min_element(cell.begin(), cell.end()));
-        Key& key = keys[static_cast<std::size_t>(next[smallest]++)];
-        key.corners.fill(-1);
-        std::copy(cell.begin(), cell.end(), key.corners.begin());
-        std::sort(key.corners.begin(), key.corners.begin() + static_cast<std::ptrdiff_t>(cell.size()));
-        key.element = e;
-    }
+    for (ElementId e = 0; e < m; ++e) listed[static_cast<std::size_t>(next[smallest(e)]++)] = e;
+    std::vector<Key> keys;
     for (std::size_t v = 0; v < n; ++v) {
-        const auto first = keys.begin() + row[v], last = keys.begin() + row[v + 1];
-        std::sort(first, last, [](const Key& a, const Key& b) {
+        if (row[v + 1] - row[v] < 2) continue;
+        keys.clear();
+        for (std::int64_t i = row[v]; i < row[v + 1]; ++i) {
+            const ElementId e = listed[static_cast<std::size_t>(i)];
+            const auto cell = mesh.cell(e);
+            Key& key = keys.emplace_back();
+            key.corners.fill(-1);
+            std::copy(cell.begin(), cell.end(), key.corners.begin());
+            std::sort(key.corners.begin(), key.corners.begin() + static_cast<std::ptrdiff_t>(cell.size()));
+            key.element = e;
+        }
+        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
             return a.corners != b.corners ? a.corners < b.corners : a.element < b.element;
         });
-        for (auto i = first; i != last && i + 1 != last; ++i)
-            if (i[1].corners == i[0].corners)
-                throw MeshError(std::string(mesh.has_cells() ? "cells " : "elements ") + std::to_string(i[0].element) +
-                                " and " + std::to_string(i[1].element) + " have the same vertices (duplicate element)");
+        for (std::size_t i = 0; i + 1 < keys.size(); ++i)
+            if (keys[i + 1].corners == keys[i].corners)
+                throw MeshError(std::string(mesh.has_cells() ? "cells " : "elements ") + std::to_string(keys[i].element) +
+                                " and " + std::to_string(keys[i + 1].element) + " have the same vertices (duplicate element)");
     }
 }
 

@@ -140,6 +140,16 @@ void accumulate_gradient_each(const Mesh& mesh, std::span<const double> xyz, Ele
     }
 }
 
+// Maps the corners of lane j of a gathered block when its cell gives it a map (m != 0), as
+// gather<4>() maps them: the same bits.
+inline void map_lane(std::uint8_t m, int j, TetBlock& x) {
+    if (!m) return;
+    double corner[12];
+    for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
+    map_corner<4>(corner_map(m), corner);
+    for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
+}
+
 // Gathers the corners of the tetrahedra [first, last) kTetBlock at a time and calls
 // rate(corners, b, count) for the block of elements b, ..., b + count - 1. Padding lanes of a
 // last, partial block hold a degenerate element at the origin, which rates 0 without trouble. A
@@ -158,14 +168,29 @@ void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId fir
                                      4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
         gather_tets(conn + 4 * static_cast<std::size_t>(b), coords, count, x);
         if (maps)
-            for (int j = 0; j < count; ++j)
-                if (const std::uint8_t m = maps[b + j]) {
-                    double corner[12];
-                    for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
-                    map_corner<4>(corner_map(m), corner);
-                    for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
-                }
+            for (int j = 0; j < count; ++j) map_lane(maps[b + j], j, x);
         rate(std::as_const(x), b, count);
+    }
+}
+
+// As for_each_block() over the listed tetrahedra, kTetBlock at a time: rate(corners, ids, count)
+// for the block of elements ids[0], ..., ids[count - 1].
+template <class Rate>
+void for_each_listed_block(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
+                           Rate&& rate) {
+    const VertexId* conn = mesh.connectivity().data();
+    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    TetBlock x;
+    VertexId corners[4 * kTetBlock];
+    for (std::size_t b = 0; b < elements.size(); b += kTetBlock) {
+        const int count = static_cast<int>(std::min<std::size_t>(kTetBlock, elements.size() - b));
+        const ElementId* ids = elements.data() + b;
+        for (int j = 0; j < count; ++j)
+            std::copy_n(conn + 4 * static_cast<std::size_t>(ids[j]), 4, corners + 4 * j);
+        gather_tets(corners, xyz.data(), count, x);
+        if (maps)
+            for (int j = 0; j < count; ++j) map_lane(maps[ids[j]], j, x);
+        rate(std::as_const(x), ids, count);
     }
 }
 
@@ -222,6 +247,22 @@ public:
         evaluate_each(mesh, xyz, first, last, quality, [&](auto k, ElementId e, const double* x, double* g) {
             return kernel<decltype(k)::value>(x, g, scale_of(e, local));
         });
+    }
+
+    void evaluate_listed(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
+                         double* quality) const override {
+        if constexpr (kHasBlocks || kHasValueBlocks) {
+            if (mesh.kind() == ElementKind::Tetrahedron && elements.size() >= static_cast<std::size_t>(kTetBlock)) {
+                alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
+                for_each_listed_block(mesh, xyz, elements, [&](const TetBlock& x, const ElementId* ids, int count) {
+                    for (int j = 0; j < kTetBlock; ++j) reference_volume[j] = j < count ? reference_volume_of(ids[j]) : 1.0;
+                    rate_block_at(x, reference_volume, q);
+                    for (int j = 0; j < count; ++j) quality[ids[j]] = q[j];
+                });
+                return;
+            }
+        }
+        QualityMetric::evaluate_listed(mesh, xyz, elements, quality);
     }
 
     void accumulate_gradient(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
@@ -289,10 +330,14 @@ private:
     void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const override {
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         reference_volumes(first, count, reference_volume);
+        rate_block_at(x, reference_volume, q);
+        std::copy(q, q + count, quality);
+    }
+    // q[j] for every lane of the block, lane j at reference volume reference_volume[j].
+    void rate_block_at(const TetBlock& x, const double* reference_volume, double* q) const {
         if constexpr (kHasBlocks) kernel_.tet_block(path_, x, reference_volume, q, nullptr);
         else if constexpr (kHasValueBlocks) kernel_.tet_values_block(path_, x, reference_volume, q);
         else throw Error("metric '" + std::string(Kernel::name) + "' has no block kernel");
-        std::copy(q, q + count, quality);
     }
 
     void evaluate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
@@ -390,6 +435,11 @@ double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xy
     };
     return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
                                                    : rate(std::integral_constant<int, 3>{});
+}
+
+void QualityMetric::evaluate_listed(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
+                                    double* quality) const {
+    for (ElementId e : elements) evaluate(mesh, xyz, e, e + 1, quality + e);
 }
 
 void ElementMetric::evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,

@@ -99,13 +99,16 @@ struct Frozen {
 Frozen frozen_stats(const Reducer& reducer, std::span<const double> counted) {
     Frozen f;
     std::array<ExactSum, 3> sums;
+    std::int64_t count = 0, bad = 0;  // counted as integers, then summed exactly like the qualities
     for (double q : counted) {
         if (q == std::numeric_limits<double>::infinity()) continue;
         f.worst = std::min(f.worst, q);
         sums[0].add(q);
-        sums[1].add(1.0);
-        if (q <= 0.0) sums[2].add(1.0);
+        ++count;
+        bad += q <= 0.0;
     }
+    sums[1].add(static_cast<double>(count));
+    sums[2].add(static_cast<double>(bad));
     reducer.sum(sums);
     f.worst = reducer.min(f.worst);
     f.sum = sums[0].value();
@@ -260,7 +263,8 @@ private:
     // Focus on the elements below the band above the whole mesh's worst quality (focus_band).
     void refocus();
     // Focus on the elements around the vertices flagged in moving_ (frozen_: the others).
-    void focus_on_moving();
+    // whole_rated: whole_q_ holds the whole mesh's qualities at x_ already (refocus).
+    void focus_on_moving(bool whole_rated = false);
     // best_x_ = x_. Within one focus only its free vertices move, so only they can differ: a
     // small focus of a large mesh does not copy the mesh at every better iterate.
     void keep_best();
@@ -376,7 +380,7 @@ void Phase::refocus() {
             for (VertexId v : corners) moving_[v] = 1;
     }
     from_owners();
-    focus_on_moving();
+    focus_on_moving(true);
 }
 
 void Phase::restart_histories() {
@@ -384,12 +388,14 @@ void Phase::restart_histories() {
         *history = {history->back()};
 }
 
-void Phase::focus_on_moving() {
+void Phase::focus_on_moving(bool whole_rated) {
     work_.unfocus();
     const Mesh& whole = work_.mesh();
     // The elements that stay out, at the positions they keep while the focus lasts.
-    whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
-    work_.evaluate(metric_, x_, whole_q_);
+    if (!whole_rated) {
+        whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
+        work_.evaluate(metric_, x_, whole_q_);
+    }
     for (ElementId e = 0; e < work_.movable_elements(); ++e)
         for (VertexId v : whole.element(e))
             if (moving_[v] && whole.can_move(v)) {
@@ -534,9 +540,9 @@ void Phase::damp(const std::vector<VertexId>& vertices, double s) {
         for (ElementId e : mesh.elements_of(v)) {
             if (e >= movable || element_stamp_[e] == element_stamp_round_) continue;
             element_stamp_[e] = element_stamp_round_;
-            metric_.evaluate(mesh, trial_x_, e, e + 1, &trial_q_[e]);
             reevaluated_.push_back(e);
         }
+    metric_.evaluate_listed(mesh, trial_x_, reevaluated_, trial_q_.data());
 }
 
 // A vertex damped for one blocking element usually sits by the worst elements. Whole-mesh steps

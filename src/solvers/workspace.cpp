@@ -180,15 +180,19 @@ Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std:
         const auto range = static_cast<std::size_t>(*high - *low + 1);
         std::size_t size = range, slot_offset = 0;
         if (compact) {
-            std::vector<VertexId> touched(corners.begin(), corners.end());
-            std::sort(touched.begin(), touched.end());
-            touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
-            size = touched.size();
+            // The touched vertices in increasing order: marked in the lane's slots, then numbered
+            // in one scan of its range (which the slots span anyway; faster than sorting them).
             slot_offset = lanes.slot.size();
             lanes.slot.resize(slot_offset + range, 0);
-            for (std::size_t k = 0; k < size; ++k)
-                lanes.slot[slot_offset + static_cast<std::size_t>(touched[k] - *low)] = static_cast<std::uint32_t>(k);
-            lanes.vertex.insert(lanes.vertex.end(), touched.begin(), touched.end());
+            std::uint32_t* slot = lanes.slot.data() + slot_offset;
+            for (VertexId v : corners) slot[v - *low] = 1;
+            std::uint32_t k = 0;
+            for (std::size_t i = 0; i < range; ++i)
+                if (slot[i] != 0) {
+                    slot[i] = k++;
+                    lanes.vertex.push_back(*low + static_cast<VertexId>(i));
+                }
+            size = k;
         }
         lanes.list.push_back({first, last, *low, *high, total, size, slot_offset});
         total += size;

@@ -329,3 +329,50 @@ BOOST_AUTO_TEST_CASE(batch_passes_equal_element_by_element_sums) {
 }
 
 BOOST_AUTO_TEST_SUITE_END()
+
+// The listed call (the solvers' re-rating of a few elements around moved vertices) against the
+// batch call over the whole range: the same bits, scattered by element id, for lists long enough
+// for blocks and too short for them, in any order; tetrahedra, cells and triangles alike.
+BOOST_AUTO_TEST_CASE(listed_elements_rate_as_the_batch_call_rates_them) {
+    for (const char* file : {"tetwild/octopus-vol.mesh", "mesquite/mixed/mixed-hex-pyr-tet.vtk",
+                             "mesquite/tris/bad_circle_tri.vtk"}) {
+        const auto mesh = pv::read_mesh(pv::test::shared_data(file)).mesh;
+        const pv::ElementId m = mesh.num_elements();
+        std::vector<double> local_volume(static_cast<std::size_t>(m));
+        for (pv::ElementId e = 0; e < m; ++e) local_volume[e] = 0.001 * (1.0 + e % 13);
+        std::vector<pv::ElementId> many, few;
+        const pv::ElementId stride = m >= 40 * pm::kTetBlock ? 7 : 1;
+        for (pv::ElementId e = m - 1; e >= 0; e -= stride) many.push_back(e);  // scattered, decreasing
+        for (pv::ElementId e = 0; e < m && few.size() < 5; e += 3) few.push_back(e);
+        BOOST_TEST_REQUIRE(many.size() > static_cast<std::size_t>(pm::kTetBlock + 1), file << ": " << m << " elements");
+        std::vector<std::unique_ptr<pv::QualityMetric>> metrics;
+        for (const auto& name : pv::metric_names())
+            if (auto metric = pv::make_metric(name); metric->supports(mesh.kind())) metrics.push_back(std::move(metric));
+        metrics.push_back(pv::make_untangle_energy(kEpsilon, kTheta));
+        for (const bool per_element_scale : {false, true})
+            for (auto& metric : metrics) {
+                pv::MetricScale scale = pv::MetricScale::of(mesh);
+                if (per_element_scale) scale.element_reference_volume = local_volume;
+                metric->set_scale(scale);
+                std::vector<double> whole(static_cast<std::size_t>(m));
+                metric->evaluate(mesh, mesh.coordinates(), 0, m, whole.data());
+                for (const auto* listed : {&many, &few}) {
+                    const double untouched = -12345.0;
+                    std::vector<double> quality(static_cast<std::size_t>(m), untouched);
+                    metric->evaluate_listed(mesh, mesh.coordinates(), *listed, quality.data());
+                    std::size_t mismatches = 0, strays = 0;
+                    std::vector<bool> in_list(static_cast<std::size_t>(m), false);
+                    for (pv::ElementId e : *listed) {
+                        in_list[e] = true;
+                        mismatches += !same(quality[e], whole[e]);
+                    }
+                    for (pv::ElementId e = 0; e < m; ++e) strays += !in_list[e] && quality[e] != untouched;
+                    BOOST_TEST_CONTEXT(file << ", " << metric->name() << ", " << listed->size() << " elements"
+                                            << (per_element_scale ? ", per-element scale" : "")) {
+                        BOOST_TEST(mismatches == 0u);
+                        BOOST_TEST(strays == 0u);
+                    }
+                }
+            }
+    }
+}

@@ -67,6 +67,11 @@ public:
     // mesh's own or trial positions of the same layout): quality[e - first].
     virtual void evaluate(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
                           ElementId last, double* quality) const = 0;
+    // Qualities of the listed elements, scattered by element id: quality[e] for each e in
+    // `elements` (the same bits as evaluate()). For the few elements around the vertices a solver
+    // just moved: the built-in metrics rate them in blocks too, not one call per element.
+    virtual void evaluate_listed(const Mesh& mesh, std::span<const double> coordinates,
+                                 std::span<const ElementId> elements, double* quality) const;
     // Where accumulate_gradient() adds its sums over elements [first, last):
     //   gradient[3(v - base) + c]   += weight[e - first] * d q_e / d x_v,c
     //   curvature[6(v - base) + ..] += curvature_weight[e - first] * g g^T,  g = d q_e / d x_v
