@@ -412,6 +412,54 @@ private:
     }
 };
 
+// One term of dihedral_sine: the sine of the dihedral angle at the edge of corners 0 and 1 alone,
+// over the regular tetrahedron's, signed by the volume. The global solver rates each angle of a
+// tetrahedron as a term of its own by rating six copies of it, corners permuted so that each edge
+// comes first once (docs/metrics.md, "Six terms per tetrahedron"): the barrier then weighs every
+// small angle, not only the smallest, and ties between two angles are no kinks.
+struct DihedralSineTerm {
+    static constexpr std::string_view name = "dihedral_sine_term";
+    static constexpr ElementKind only_kind = ElementKind::Tetrahedron;
+
+    double tet(const double* x, double* g, const MetricScale&) const {
+        P c[4];
+        for (int i = 0; i < 4; ++i) c[i] = load(x, i);
+        // The faces at the edge: opposite corner 2 (corners 0, 1, 3) and opposite corner 3 (0, 1, 2).
+        const P edge = c[1] - c[0], n2 = cross(edge, c[3] - c[0]), n3 = cross(edge, c[2] - c[0]);
+        const double a2 = 0.5 * norm(n2), a3 = 0.5 * norm(n3), length = norm(edge);
+        const P e1 = c[1] - c[0], e2 = c[2] - c[0], e3 = c[3] - c[0];
+        const double volume = dot(e1, cross(e2, e3)) / 6.0;
+        const double faces = a2 * a3;
+        const double term = faces > 0.0 ? DihedralSine::kTet * volume * length / faces : 0.0;
+        if (!g) return term;
+        std::fill(g, g + 12, 0.0);
+        if (!(faces > 0.0) || !(length > 0.0)) return term;
+        // d term = kTet (L dV + V dL) / (A_2 A_3) - term (dA_2 / A_2 + dA_3 / A_3)
+        const P dvolume[4] = {-(1.0 / 6.0) * (cross(e2, e3) + cross(e3, e1) + cross(e1, e2)), (1.0 / 6.0) * cross(e2, e3),
+                              (1.0 / 6.0) * cross(e3, e1), (1.0 / 6.0) * cross(e1, e2)};
+        P grad[4];
+        for (int v = 0; v < 4; ++v) grad[v] = (DihedralSine::kTet * length / faces) * dvolume[v];
+        const P dl = (DihedralSine::kTet * volume / faces / length) * edge;
+        grad[1] = grad[1] + dl;
+        grad[0] = grad[0] - dl;
+        // A face (0, 1, r) of normal n = (c1 - c0) x (cr - c0): d|n|/dc1 = (cr - c0) x n^,
+        // d|n|/dcr = n^ x (c1 - c0), d|n|/dc0 = -(both).
+        auto add_face = [&](int r, const P& n, double area) {
+            const P u = (1.0 / (2.0 * area)) * n;
+            const double w = -term / area * 0.5;
+            const P d1 = cross(c[r] - c[0], u), dr = cross(u, edge);
+            grad[1] = grad[1] + w * d1;
+            grad[r] = grad[r] + w * dr;
+            grad[0] = grad[0] - w * (d1 + dr);
+        };
+        add_face(3, n2, a2);
+        add_face(2, n3, a3);
+        for (int v = 0; v < 4; ++v) store(g, v, grad[v]);
+        return term;
+    }
+    double tri(const double*, double*, const MetricScale&) const { return 0.0; }
+};
+
 // Smallest dihedral angle of a tetrahedron in degrees (70.53 for the regular tet), negative for
 // an inverted one. Assessment only.
 struct MinDihedralAngle {

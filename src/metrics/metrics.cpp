@@ -535,6 +535,10 @@ std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOp
     throw OptionError("unknown quality metric '" + std::string(name) + "' (known: " + known + ")");
 }
 
+std::unique_ptr<QualityMetric> make_dihedral_sine_term() {
+    return std::make_unique<metrics::KernelMetric<metrics::DihedralSineTerm>>();
+}
+
 std::unique_ptr<QualityMetric> make_untangle_energy(double epsilon, double theta) {
     if (!(epsilon > 0.0) || !std::isfinite(epsilon) || !(theta >= 0.0 && theta <= 1.0))
         throw OptionError("untangle_energy needs epsilon > 0 and theta in [0, 1]");

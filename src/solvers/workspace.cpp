@@ -7,6 +7,7 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
@@ -66,27 +67,70 @@ Mesh reordered_elements(const Mesh& mesh, std::vector<ElementId> order) {
     elements.old_element = std::move(order);
     return renumbered(mesh, elements);
 }
+
+// The corners of copy k of a tetrahedron: edge k of (0 1), (0 2), (0 3), (1 2), (1 3), (2 3) first,
+// the other two after them in the order that keeps the permutation even.
+constexpr int kTermCorners[Workspace::kAngleTerms][4] = {{0, 1, 2, 3}, {0, 2, 3, 1}, {0, 3, 1, 2},
+                                                         {1, 2, 0, 3}, {1, 3, 2, 0}, {2, 3, 0, 1}};
+
+// The mesh with each tetrahedron as its kAngleTerms copies (Workspace's angle terms).
+Mesh with_angle_terms(const Mesh& mesh) {
+    std::vector<VertexId> connectivity;
+    connectivity.reserve(Workspace::kAngleTerms * mesh.connectivity().size());
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto corners = mesh.element(e);
+        for (const auto& order : kTermCorners)
+            for (int i : order) connectivity.push_back(corners[i]);
+    }
+    Mesh out(mesh.kind(), std::vector<double>(mesh.coordinates().begin(), mesh.coordinates().end()), std::move(connectivity));
+    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(mesh.num_vertices()));
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) freedom[v] = static_cast<std::uint8_t>(mesh.degrees_of_freedom(v));
+    out.set_degrees_of_freedom(std::move(freedom));
+    out.set_global_ids(std::vector<GlobalId>(mesh.global_ids().begin(), mesh.global_ids().end()));
+    out.set_elements_flipped(mesh.elements_flipped());
+    return out;
+}
+
+// Canonical positions of the copies: copy k of the element at p is at kAngleTerms p + k.
+std::vector<GlobalId> term_positions(std::span<const GlobalId> positions) {
+    std::vector<GlobalId> out;
+    out.reserve(Workspace::kAngleTerms * positions.size());
+    for (GlobalId p : positions)
+        for (int k = 0; k < Workspace::kAngleTerms; ++k) out.push_back(Workspace::kAngleTerms * p + k);
+    return out;
+}
 }  // namespace
 
-Workspace::Workspace(MeshPart part, bool renumber)
-    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ ? part.mesh() : own_) {
+Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
+    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ && !angle_terms ? part.mesh() : own_),
+      angle_terms_(angle_terms) {
+    if (angle_terms && (part.mesh().kind() != ElementKind::Tetrahedron || part.mesh().has_cells()))
+        throw OptionError("angle terms are for meshes of tetrahedra only");
     if (part_) {
         reducer_ = &part.reducer();
         halo_ = &part.halo();
-        const VertexId n = mesh_.num_vertices();
+        Mesh& held = part_->mesh;
+        const VertexId n = held.num_vertices();
         owned_.resize(static_cast<std::size_t>(n));
         for (VertexId v = 0; v < n; ++v) {
             owned_[v] = part.owns(v);
             if (!owned_[v]) ghosts_.push_back(v);
         }
         // The part's elements in the working order, in place.
-        auto [order, movable] = movable_first(mesh_, part_->element_order);
-        mesh_ = reordered_elements(mesh_, order);
+        auto [order, movable] = movable_first(held, part_->element_order);
+        held = reordered_elements(held, order);
         part_->element_order = permuted(part_->element_order, order);
         if (!part_->counted.empty()) part_->counted = permuted(part_->counted, order);
         part_order_ = std::move(order);
-        finish(part_->element_order, part_->counted, part_->global_elements, movable);
-        if (mesh_.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
+        if (angle_terms_) {  // the copies in a mesh of the workspace's own, the part as it is
+            own_ = with_angle_terms(held);
+            for (std::uint8_t c : part_->counted) term_counted_.insert(term_counted_.end(), kAngleTerms, c);
+            finish(term_positions(part_->element_order), term_counted_, kAngleTerms * part_->global_elements,
+                   kAngleTerms * movable);
+        } else {
+            finish(part_->element_order, part_->counted, part_->global_elements, movable);
+        }
+        if (held.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
         return;
     }
     // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
@@ -107,6 +151,11 @@ Workspace::Workspace(MeshPart part, bool renumber)
     order.old_element = std::move(element_order);
     own_ = renumbered(mesh, order);
     positions = permuted(positions, order.old_element);
+    if (angle_terms_) {
+        own_ = with_angle_terms(own_);
+        positions = term_positions(positions);
+        movable *= kAngleTerms;
+    }
     if (renumber) old_vertex_ = std::move(order.old_vertex);
     owned_.assign(n, 1);
     std::vector<std::uint8_t> all_counted;
@@ -237,7 +286,7 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
     const auto size = static_cast<ElementId>(f.elements.size());
     if (part_)
         for (ElementId i = 0; i < size; ++i)
-            if (part_->counted[f.elements[i]]) f.counted.push_back(i);
+            if ((angle_terms_ ? term_counted_ : part_->counted)[f.elements[i]]) f.counted.push_back(i);
     f.global_count = reducer_->total(static_cast<double>(part_ ? f.counted.size() : f.elements.size()));
     f.lanes = make_lanes(f.mesh, size, positions, global_elements_, true);
     f.free = free_vertices_of(f.mesh);

@@ -30,7 +30,14 @@ public:
     // distributed mesh is in canonical order already: the workspace orders the part's elements in
     // place rather than holding a reordered copy (a copy would cost as much as the part's mesh),
     // and puts them back in the part's order when it is destroyed.
-    Workspace(MeshPart part, bool renumber);
+    //
+    // With `angle_terms` (tetrahedra without cells), each element is held as kAngleTerms copies,
+    // corners permuted (evenly: the orientation stays) so that each of its edges comes first in one
+    // of them: a metric of the edge of corners 0 and 1 (make_dihedral_sine_term) then rates each
+    // dihedral angle as an element of its own. Copy k of element e is element kAngleTerms e + k,
+    // at canonical position kAngleTerms p + k; copy 0 keeps the corners' order.
+    Workspace(MeshPart part, bool renumber, bool angle_terms = false);
+    static constexpr int kAngleTerms = 6;
     ~Workspace();
     Workspace(const Workspace&) = delete;
     Workspace& operator=(const Workspace&) = delete;
@@ -58,6 +65,8 @@ public:
 
     // The movable elements' qualities this process counts in global sums (all, serially).
     std::span<const double> counted(std::span<const double> quality, std::vector<double>& buffer) const;
+    // Elements per element of the part: kAngleTerms with angle terms, else 1.
+    int copies() const { return angle_terms_ ? kAngleTerms : 1; }
     // Number of movable elements over all processes.
     double global_movable() const { return focus_ ? focus_->global_count : global_movable_; }
 
@@ -137,7 +146,9 @@ private:
     Mesh own_;                   // serial runs: the mesh in canonical order
     DistributedMesh* part_ = nullptr;    // distributed runs: the part, whose elements mesh_ reorders
     std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
-    Mesh& mesh_;                  // own_, or the part's mesh
+    Mesh& mesh_;                  // own_, or the part's mesh (own_, the copies, with angle terms)
+    bool angle_terms_ = false;
+    std::vector<std::uint8_t> term_counted_;  // distributed, angle terms: counted, per copy
     std::vector<VertexId> old_vertex_;  // serial, renumbered: caller's id of each vertex
     ElementId movable_ = 0;
     std::vector<std::uint8_t> owned_;

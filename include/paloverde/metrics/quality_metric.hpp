@@ -132,5 +132,9 @@ std::unique_ptr<QualityMetric> make_metric(std::string_view name, const MetricOp
 // the catalogue above: it rates every element below zero, and its epsilon belongs to the
 // untangling phase, which lowers it as the mesh untangles. theta weighs its volume term.
 std::unique_ptr<QualityMetric> make_untangle_energy(double epsilon, double theta);
+// One term of dihedral_sine: the sine of the dihedral angle at the edge of corners 0 and 1 (over
+// the regular tetrahedron's, signed by the volume). Not in the catalogue: the global solver rates
+// the six angles of a tetrahedron with it, each on a copy whose corners put that edge first.
+std::unique_ptr<QualityMetric> make_dihedral_sine_term();
 
 }  // namespace paloverde
