@@ -1,8 +1,13 @@
 #include "text_scanner.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <utility>
 
 #include "paloverde/core/error.hpp"
@@ -14,15 +19,41 @@ bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' |
 }  // namespace
 
 TextScanner::TextScanner(std::string path, char comment) : path_(std::move(path)), comment_(comment) {
-    std::ifstream in(path_, std::ios::binary);
-    if (!in) throw FileError(path_, 0, "cannot open the file (missing or unreadable)");
-    in.seekg(0, std::ios::end);
-    const auto size = in.tellg();
-    if (size < 0) throw FileError(path_, 0, "cannot read the file");
-    data_.resize(static_cast<std::size_t>(size));
-    in.seekg(0);
-    in.read(data_.data(), static_cast<std::streamsize>(data_.size()));
-    if (!in) throw FileError(path_, 0, "cannot read the file");
+    const int fd = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw FileError(path_, 0, "cannot open the file (missing or unreadable)");
+    struct stat status {};
+    if (::fstat(fd, &status) != 0 || S_ISDIR(status.st_mode)) {
+        ::close(fd);
+        throw FileError(path_, 0, "cannot read the file (a directory?)");
+    }
+    if (S_ISREG(status.st_mode) && status.st_size > 0) {
+        const auto size = static_cast<std::size_t>(status.st_size);
+        void* mapped = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+        if (mapped != MAP_FAILED) {
+            ::close(fd);
+            mapping_ = mapped;
+            data_ = std::string_view(static_cast<const char*>(mapped), size);
+            return;
+        }
+    }
+    // Not mappable (a pipe, an empty file): read it to the end.
+    char buffer[1 << 16];
+    for (;;) {
+        const ssize_t got = ::read(fd, buffer, sizeof buffer);
+        if (got == 0) break;
+        if (got < 0) {
+            if (errno == EINTR) continue;
+            ::close(fd);
+            throw FileError(path_, 0, "cannot read the file");
+        }
+        copy_.append(buffer, static_cast<std::size_t>(got));
+    }
+    ::close(fd);
+    data_ = copy_;
+}
+
+TextScanner::~TextScanner() {
+    if (mapping_) ::munmap(mapping_, data_.size());
 }
 
 void TextScanner::skip_space() {
@@ -45,7 +76,7 @@ std::string_view TextScanner::token() {
     skip_space();
     const std::size_t begin = pos_;
     while (pos_ < data_.size() && !is_space(data_[pos_])) ++pos_;
-    return std::string_view(data_).substr(begin, pos_ - begin);
+    return data_.substr(begin, pos_ - begin);
 }
 
 std::string_view TextScanner::expect_token(std::string_view what) {
@@ -100,7 +131,7 @@ std::string_view TextScanner::rest_of_line() {
         ++pos_;
         ++line_;
     }
-    return std::string_view(data_).substr(begin, end - begin);
+    return data_.substr(begin, end - begin);
 }
 
 void TextScanner::skip_line() { rest_of_line(); }
@@ -109,7 +140,7 @@ std::string_view TextScanner::bytes(std::size_t n, std::string_view what) {
     if (n > remaining())
         fail_at_byte("file ends inside " + std::string(what) + " (" + std::to_string(n) + " bytes needed, " +
                      std::to_string(remaining()) + " left)");
-    const std::string_view out = std::string_view(data_).substr(pos_, n);
+    const std::string_view out = data_.substr(pos_, n);
     pos_ += n;
     return out;
 }

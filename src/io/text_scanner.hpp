@@ -15,8 +15,13 @@ class TextScanner {
 public:
     // Reads the file; throws FileError if it cannot. With a `comment` character other than '\0',
     // a token that starts with it begins a comment running to the end of its line, which
-    // token() and at_end() skip like whitespace.
+    // token() and at_end() skip like whitespace. A regular file is mapped, not copied (a large
+    // mesh's text is read once, from the page cache; another process that truncates the file
+    // meanwhile ends this one); anything else (a pipe) is read to its end.
     explicit TextScanner(std::string path, char comment = '\0');
+    TextScanner(const TextScanner&) = delete;
+    TextScanner& operator=(const TextScanner&) = delete;
+    ~TextScanner();
 
     const std::string& path() const noexcept { return path_; }
     std::size_t line() const noexcept { return line_; }
@@ -61,7 +66,9 @@ public:
 private:
     void skip_space();
     std::string path_;
-    std::string data_;
+    std::string_view data_;  // the mapping, or copy_ where the file cannot be mapped
+    void* mapping_ = nullptr;
+    std::string copy_;
     std::size_t pos_ = 0;
     std::size_t line_ = 1;
     bool byte_offsets_ = false;

@@ -1,8 +1,10 @@
 // The command line keeps the memory it frees (paloverde::keep_freed_memory, called first in main):
-// a large array freed stays in the heap for the next one instead of going back to the kernel.
+// a large block freed stays in the heap for the next one instead of going back to the kernel.
+// malloc's blocks, that is: the program's operator new maps arrays of 2 MiB and more on huge pages
+// of their own (huge_pages_test.cpp).
 #include <boost/test/unit_test.hpp>
 #include <cstdlib>
-#include <vector>
+#include <cstring>
 
 #include "paloverde/core/memory.hpp"
 
@@ -20,9 +22,12 @@ BOOST_AUTO_TEST_CASE(a_freed_large_array_stays_in_the_heap) {
     const auto before = mallinfo2();
     auto held = before;
     {
-        std::vector<char> big(bytes, 1);
-        asm volatile("" : : "r"(big.data()) : "memory");  // the array is used: not elided
+        char* big = static_cast<char*>(std::malloc(bytes));
+        BOOST_TEST_REQUIRE(big != nullptr);
+        std::memset(big, 1, bytes);
+        asm volatile("" : : "r"(big) : "memory");  // the block is used: not elided
         held = mallinfo2();
+        std::free(big);
     }
     const auto after = mallinfo2();
     BOOST_TEST(held.hblkhd == before.hblkhd);  // not a mapping of its own: in the heap

@@ -3,6 +3,12 @@
 #include <boost/test/data/test_case.hpp>
 #include <boost/test/unit_test.hpp>
 
+#include <sys/stat.h>
+
+#include <fstream>
+#include <iterator>
+#include <thread>
+
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
@@ -86,6 +92,39 @@ BOOST_AUTO_TEST_CASE(a_mirrored_file_is_flipped_on_reading_and_written_back_as_i
                                   swapped.end()));
         }
     }
+}
+
+
+// Regular files are mapped; a pipe cannot be, and is read to its end instead: the same mesh either
+// way, in every format. A directory is refused by name.
+BOOST_AUTO_TEST_CASE(a_mesh_read_through_a_pipe_is_the_mesh_read_from_its_file) {
+    const auto mesh = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    const pv::test::ScratchDir dir("piped_formats");
+    for (const Target& target : kTargets) {
+        BOOST_TEST_CONTEXT(target.name) {
+            pv::WriteOptions options;
+            options.encoding = target.encoding;
+            pv::write_mesh(dir / target.name, mesh, options);
+            std::ifstream file(dir / target.name, std::ios::binary);
+            const std::string bytes((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+            const auto pipe = dir / (std::string("pipe_") + target.name);
+            BOOST_TEST_REQUIRE(::mkfifo(pipe.c_str(), 0600) == 0);
+            std::thread writer([&] { std::ofstream(pipe, std::ios::binary) << bytes; });
+            const auto piped = pv::read_mesh(pipe);
+            writer.join();
+            const auto direct = pv::read_mesh(dir / target.name);
+            BOOST_TEST(bytes.size() > 1000u);
+            BOOST_TEST_REQUIRE(piped.mesh.num_elements() == mesh.num_elements());
+            BOOST_TEST(std::equal(piped.mesh.coordinates().begin(), piped.mesh.coordinates().end(),
+                                  direct.mesh.coordinates().begin(), direct.mesh.coordinates().end()));
+            BOOST_TEST(std::equal(piped.mesh.connectivity().begin(), piped.mesh.connectivity().end(),
+                                  direct.mesh.connectivity().begin(), direct.mesh.connectivity().end()));
+        }
+    }
+    std::filesystem::create_directory(dir / "folder.vtk");
+    BOOST_CHECK_EXCEPTION(pv::read_mesh(dir / "folder.vtk"), pv::FileError, [](const pv::FileError& e) {
+        return std::string(e.what()).find("folder.vtk") != std::string::npos;
+    });
 }
 
 BOOST_AUTO_TEST_SUITE_END()
