@@ -72,11 +72,23 @@ VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
 
 namespace {
 
+// In a sweep over a queue of vertices (breadth-first), the rows of the vertices a few places
+// ahead are asked for: in a mesh in file order they lie scattered, and the loads then overlap
+// (fandisk-2M's five sweeps 0.27 -> 0.16 s). Always inlined: GCC drops a call to a function that
+// only prefetches, as it sees no effect.
+[[gnu::always_inline]] inline void prefetch_rows_ahead(const VertexGraph& g, const std::vector<VertexId>& queue,
+                                                       std::size_t head) {
+    const auto ahead = static_cast<std::size_t>(detail::kPrefetchAhead);
+    if (head + 2 * ahead < queue.size()) __builtin_prefetch(&g.offsets[queue[head + 2 * ahead]]);
+    if (head + ahead < queue.size()) __builtin_prefetch(g.neighbours.data() + g.offsets[queue[head + ahead]]);
+}
+
 // Breadth-first levels from `start` within its component, into `order` (the visit order).
 void bfs(const VertexGraph& g, VertexId start, std::vector<int>& level, std::vector<VertexId>& order) {
     order.assign(1, start);
     level[start] = 0;
     for (std::size_t head = 0; head < order.size(); ++head) {
+        prefetch_rows_ahead(g, order, head);
         const VertexId v = order[head];
         for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i) {
             const VertexId w = g.neighbours[i];
@@ -137,6 +149,7 @@ std::vector<VertexId> locality_vertex_order(const Mesh& mesh) {
         order.push_back(start);
         placed[start] = 1;
         for (; head < order.size(); ++head) {
+            prefetch_rows_ahead(g, order, head);
             const VertexId v = order[head];
             neighbours.clear();
             for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i)
@@ -250,6 +263,10 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
     };
     std::vector<Packed> sorted(static_cast<std::size_t>(m));
     for (ElementId e = 0; e < m; ++e) {
+        // The keys of the corners of an element a few ahead: scattered in a mesh in file order.
+        if (e + detail::kPrefetchAhead < m)
+            for (VertexId v : mesh.element(e + static_cast<ElementId>(detail::kPrefetchAhead)))
+                __builtin_prefetch(&vertex_key[v]);
         const Keyed entry = keyed(e);
         auto word = [&](int i) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(entry.key[i])); };
         sorted[e] = {word(0) << 32 | word(1), word(2) << 32 | word(3), e, entry.map};
