@@ -10,16 +10,46 @@
 namespace paloverde {
 
 namespace {
-// A stable sort for the short ranges a vertex's neighbours make (about fourteen in a tetrahedral
-// mesh): insertion, without the buffer std::stable_sort allocates at every call.
-template <class It, class Less>
-void sort_short(It first, It last, Less less) {
-    if (last - first > 32) {
-        std::stable_sort(first, last, less);
+// Sorts for the short ranges a vertex's neighbours make (about fourteen in a tetrahedral mesh):
+// each value goes to its rank (how many come before it), so no branch depends on the values,
+// where insertion sort mispredicted at nearly every step (fandisk-2M's vertex graph 0.29 ->
+// 0.18 s), and nothing is allocated, as std::stable_sort does at every call.
+constexpr std::ptrdiff_t kShort = 32;
+
+// Distinct values, increasing.
+template <class T>
+void sort_distinct_short(T* first, T* last) {
+    const std::ptrdiff_t n = last - first;
+    if (n > kShort) {
+        std::sort(first, last);
         return;
     }
-    for (It w = first; w != last; ++w)
-        for (It at = w; at != first && less(*at, *(at - 1)); --at) std::iter_swap(at - 1, at);
+    T copy[kShort];
+    std::copy(first, last, copy);
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+        std::ptrdiff_t rank = 0;
+        for (std::ptrdiff_t j = 0; j < n; ++j) rank += copy[j] < copy[i];
+        first[rank] = copy[i];
+    }
+}
+
+// Stable, by increasing key(value).
+template <class T, class Key>
+void stable_sort_short_by(T* first, T* last, Key key) {
+    const std::ptrdiff_t n = last - first;
+    if (n > kShort) {
+        std::stable_sort(first, last, [&](const T& a, const T& b) { return key(a) < key(b); });
+        return;
+    }
+    T copy[kShort];
+    decltype(key(*first)) keys[kShort];
+    for (std::ptrdiff_t i = 0; i < n; ++i) copy[i] = first[i], keys[i] = key(first[i]);
+    for (std::ptrdiff_t i = 0; i < n; ++i) {
+        std::ptrdiff_t rank = 0;  // those with a smaller key, and those before it with its own
+        for (std::ptrdiff_t j = 0; j < i; ++j) rank += keys[j] <= keys[i];
+        for (std::ptrdiff_t j = i + 1; j < n; ++j) rank += keys[j] < keys[i];
+        first[rank] = copy[i];
+    }
 }
 }  // namespace
 
@@ -64,7 +94,7 @@ VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
                 take(c[0]);  // v is one of the frame's other corners
             }
         }
-        sort_short(graph.neighbours.begin() + static_cast<std::ptrdiff_t>(row), graph.neighbours.end(), std::less<>());
+        sort_distinct_short(graph.neighbours.data() + row, graph.neighbours.data() + graph.neighbours.size());
         graph.offsets[v + 1] = static_cast<std::int64_t>(graph.neighbours.size());
     }
     return graph;
@@ -154,7 +184,7 @@ std::vector<VertexId> locality_vertex_order(const Mesh& mesh) {
             neighbours.clear();
             for (auto i = g.offsets[v]; i < g.offsets[v + 1]; ++i)
                 if (!placed[g.neighbours[i]]) neighbours.push_back(g.neighbours[i]);
-            sort_short(neighbours.begin(), neighbours.end(), [&](VertexId a, VertexId b) { return degree(a) < degree(b); });
+            stable_sort_short_by(neighbours.data(), neighbours.data() + neighbours.size(), degree);
             for (VertexId w : neighbours) {
                 placed[w] = 1;
                 order.push_back(w);
@@ -234,8 +264,13 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
     auto keyed = [&](ElementId e) {
         Keyed entry;
         entry.key.fill(-1);
-        for (int i = 0; i < k; ++i) entry.key[i] = vertex_key[mesh.element(e)[i]];
-        sort_short(entry.key.begin(), entry.key.begin() + k, std::less<>());
+        std::array<GlobalId, 4> corner{};
+        for (int i = 0; i < k; ++i) corner[i] = vertex_key[mesh.element(e)[i]];
+        for (int i = 0; i < k; ++i) {  // each at its rank, as sort_distinct_short places them
+            int rank = 0;
+            for (int j = 0; j < k; ++j) rank += corner[j] < corner[i];
+            entry.key[rank] = corner[i];
+        }
         entry.map = maps.empty() ? 0 : maps[e];
         entry.element = e;
         return entry;
