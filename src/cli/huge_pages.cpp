@@ -5,8 +5,9 @@
 // each first touch is a page fault, and in a virtual machine a fault costs microseconds: on
 // fandisk-2M with --iterations 0 they were 97 thousand faults and about a sixth of the run.
 // Mapped on huge pages (2 MiB), where the kernel grants them on request
-// (/sys/kernel/mm/transparent_hugepage/enabled: madvise, Debian's default), they take a few
-// hundred. glibc can do much the same (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), but only when set
+// (/sys/kernel/mm/transparent_hugepage/enabled: madvise, Debian's default), the large arrays take
+// a few hundred, and that run 16 thousand in all (docs/benchmarks.md, "Seventh round"). glibc
+// can do much the same (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), but only when set
 // before the process starts; this does it from inside, for the program alone (the library's users
 // keep their own allocator).
 //

@@ -24,7 +24,7 @@ TextScanner::TextScanner(std::string path, char comment) : path_(std::move(path)
     struct stat status {};
     if (::fstat(fd, &status) != 0 || S_ISDIR(status.st_mode)) {
         ::close(fd);
-        throw FileError(path_, 0, "cannot read the file (a directory?)");
+        throw FileError(path_, 0, S_ISDIR(status.st_mode) ? "is a directory, not a mesh file" : "cannot read the file");
     }
     if (S_ISREG(status.st_mode) && status.st_size > 0) {
         const auto size = static_cast<std::size_t>(status.st_size);
