@@ -349,11 +349,16 @@ void Phase::size_element_arrays() {
 }
 
 void Phase::refocus() {
-    work_.unfocus();
+    // Not yet focused (the phase's start), q_ rates the whole mesh at x_ already.
+    if (work_.focused()) {
+        work_.unfocus();
+        whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
+        work_.evaluate(metric_, x_, whole_q_);
+        ++summary_.quality_passes;
+    } else {
+        whole_q_ = q_;
+    }
     frozen_ = {};
-    whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
-    work_.evaluate(metric_, x_, whole_q_);
-    ++summary_.quality_passes;
     const Mesh& mesh = work_.mesh();
     focus_base_ = quality_stats(work_, whole_q_, counted_).worst;
     focus_top_ = focus_base_ + band_ * (metric_.ideal_value() - focus_base_);

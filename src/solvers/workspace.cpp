@@ -219,33 +219,43 @@ Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std:
     // the same order as in the serial run.
     const GlobalId block = std::max<GlobalId>(1, (global_elements + kGradientBlocks - 1) / kGradientBlocks);
     Lanes lanes;
-    std::size_t total = 0;
+    std::size_t slots = 0;
     for (ElementId first = 0; first < movable;) {
+        // The block's end bounds the lane: one division per lane, not one per element.
+        const GlobalId end = (element_order[first] / block + 1) * block;
         ElementId last = first + 1;
-        while (last < movable && element_order[last] / block == element_order[first] / block) ++last;
+        while (last < movable && element_order[last] < end && element_order[last] >= end - block) ++last;
         const auto corners = mesh.connectivity().subspan(static_cast<std::size_t>(first) * mesh.corners(),
                                                          static_cast<std::size_t>(last - first) * mesh.corners());
         const auto [low, high] = std::minmax_element(corners.begin(), corners.end());
         const auto range = static_cast<std::size_t>(*high - *low + 1);
-        std::size_t size = range, slot_offset = 0;
+        lanes.list.push_back({first, last, *low, *high, 0, range, slots});
+        if (compact) slots += range;
+        first = last;
+    }
+    // Compact lanes number their touched vertices in increasing order: marked in the lane's
+    // slots, then numbered in one scan of its range (which the slots span anyway; faster than
+    // sorting them). The slots of all lanes are allocated at once: growing them lane by lane
+    // copied them over and over.
+    lanes.slot.assign(slots, 0);
+    std::size_t total = 0;
+    for (Lane& lane : lanes.list) {
+        lane.offset = total;
         if (compact) {
-            // The touched vertices in increasing order: marked in the lane's slots, then numbered
-            // in one scan of its range (which the slots span anyway; faster than sorting them).
-            slot_offset = lanes.slot.size();
-            lanes.slot.resize(slot_offset + range, 0);
-            std::uint32_t* slot = lanes.slot.data() + slot_offset;
-            for (VertexId v : corners) slot[v - *low] = 1;
+            std::uint32_t* slot = lanes.slot.data() + lane.slot_offset;
+            const auto corners =
+                mesh.connectivity().subspan(static_cast<std::size_t>(lane.first) * mesh.corners(),
+                                            static_cast<std::size_t>(lane.last - lane.first) * mesh.corners());
+            for (VertexId v : corners) slot[v - lane.low] = 1;
             std::uint32_t k = 0;
-            for (std::size_t i = 0; i < range; ++i)
+            for (std::size_t i = 0; i < lane.size; ++i)
                 if (slot[i] != 0) {
                     slot[i] = k++;
-                    lanes.vertex.push_back(*low + static_cast<VertexId>(i));
+                    lanes.vertex.push_back(lane.low + static_cast<VertexId>(i));
                 }
-            size = k;
+            lane.size = k;
         }
-        lanes.list.push_back({first, last, *low, *high, total, size, slot_offset});
-        total += size;
-        first = last;
+        total += lane.size;
     }
     lanes.vertices = total;
     lanes.gradient.assign(3 * total, 0.0);

@@ -3,8 +3,12 @@
 // malloc's blocks, that is: the program's operator new maps arrays of 2 MiB and more on huge pages
 // of their own (huge_pages_test.cpp).
 #include <boost/test/unit_test.hpp>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <sstream>
+#include <string>
 
 #include "paloverde/core/memory.hpp"
 
@@ -36,6 +40,53 @@ BOOST_AUTO_TEST_CASE(a_freed_large_array_stays_in_the_heap) {
     BOOST_TEST(after.fordblks >= bytes);
 #else
     BOOST_TEST_MESSAGE("not glibc's allocator (a sanitizer's, or another C library): nothing to check");
+#endif
+}
+
+namespace {
+
+// The VmFlags of the mapping that holds address p (/proc/self/smaps), or "" if none does.
+std::string mapping_flags(const void* p) {
+    const auto address = reinterpret_cast<std::uintptr_t>(p);
+    std::ifstream smaps("/proc/self/smaps");
+    std::string line;
+    bool inside = false;
+    while (std::getline(smaps, line)) {
+        std::uintptr_t low = 0, high = 0;
+        char dash = 0;
+        std::istringstream head(line);
+        if (head >> std::hex >> low >> dash >> high && dash == '-') inside = low <= address && address < high;
+        else if (inside && line.rfind("VmFlags:", 0) == 0) return line;
+    }
+    return "";
+}
+
+bool kernel_has_huge_pages() {
+    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
+    std::string modes;
+    return std::getline(in, modes) && modes.find("[never]") == std::string::npos;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_CASE(the_kept_heap_is_advised_for_huge_pages) {
+#if defined(PALOVERDE_GLIBC_MALLOC) && !defined(__SANITIZE_THREAD__) && defined(__linux__)
+    if (!kernel_has_huge_pages()) {
+        BOOST_TEST_MESSAGE("this kernel has no transparent huge pages: nothing to check");
+        return;
+    }
+    paloverde::keep_freed_memory();
+    // Carved from the heap's free top, which the call grew and advised; its middle lies past the
+    // first huge-page boundary of the advised stretch.
+    constexpr std::size_t bytes = std::size_t{8} << 20;
+    char* block = static_cast<char*>(std::malloc(bytes));
+    BOOST_TEST_REQUIRE(block != nullptr);
+    const std::string flags = mapping_flags(block + bytes / 2);
+    BOOST_TEST_INFO("VmFlags of the block's mapping: " << flags);
+    BOOST_TEST(flags.find(" hg") != std::string::npos);
+    std::free(block);
+#else
+    BOOST_TEST_MESSAGE("not glibc's allocator on Linux: nothing to check");
 #endif
 }
 
