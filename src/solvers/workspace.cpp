@@ -221,7 +221,8 @@ Workspace::Lanes Workspace::make_lanes(const Mesh& mesh, ElementId movable, std:
     Lanes lanes;
     std::size_t slots = 0;
     for (ElementId first = 0; first < movable;) {
-        // The block's end bounds the lane: one division per lane, not one per element.
+        // The lane runs while the positions stay in its first element's block [end - block, end):
+        // one division per lane, not one per element.
         const GlobalId end = (element_order[first] / block + 1) * block;
         ElementId last = first + 1;
         while (last < movable && element_order[last] < end && element_order[last] >= end - block) ++last;
