@@ -8,11 +8,11 @@
 
 #include <algorithm>
 #include <cstdint>
-#include <fstream>
 #include <memory>
 #include <random>
-#include <string>
 #include <vector>
+
+#include "transparent_huge_pages.hpp"
 
 namespace {
 
@@ -24,13 +24,6 @@ long minor_faults() {
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return usage.ru_minflt;
-}
-
-bool kernel_grants_huge_pages_on_request() {
-    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
-    std::string modes;
-    std::getline(in, modes);
-    return modes.find("[madvise]") != std::string::npos || modes.find("[always]") != std::string::npos;
 }
 
 }  // namespace

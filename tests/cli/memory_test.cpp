@@ -11,6 +11,7 @@
 #include <string>
 
 #include "paloverde/core/memory.hpp"
+#include "transparent_huge_pages.hpp"
 
 #if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
 #include <malloc.h>
@@ -61,17 +62,11 @@ std::string mapping_flags(const void* p) {
     return "";
 }
 
-bool kernel_has_huge_pages() {
-    std::ifstream in("/sys/kernel/mm/transparent_hugepage/enabled");
-    std::string modes;
-    return std::getline(in, modes) && modes.find("[never]") == std::string::npos;
-}
-
 }  // namespace
 
 BOOST_AUTO_TEST_CASE(the_kept_heap_is_advised_for_huge_pages) {
 #if defined(PALOVERDE_GLIBC_MALLOC) && !defined(__SANITIZE_THREAD__) && defined(__linux__)
-    if (!kernel_has_huge_pages()) {
+    if (!kernel_grants_huge_pages_on_request()) {
         BOOST_TEST_MESSAGE("this kernel has no transparent huge pages: nothing to check");
         return;
     }
