@@ -61,6 +61,12 @@ using detail::seconds_since;
 // Newton steps at one mu before its subproblem counts as out of reach.
 constexpr int kNewtonStepsAtOneMu = 50;
 
+// A shape phase the Newton finish follows hands over once its worst quality and t rose by less
+// than this many times min_progress over three progress windows (docs/global_solver.md, "The
+// handover"): conjugate gradients that creep that slowly are slower than Newton steps (tire: the
+// local smoother's worst at iteration 196 instead of 384).
+constexpr double kHandoverProgress = 100.0;
+
 struct PhaseResult {
     TerminationReason reason;
     std::string message;
@@ -1022,6 +1028,22 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         } else if (stalled) {
             return end(TerminationReason::Converged, "the worst quality stopped improving");
+        }
+        // Over three windows, as the worst quality rises in steps (a window without a rise is
+        // common long before conjugate gradients stop paying: fandisk-100k); only while the
+        // barrier's t creeps too (on fandisk-9M the worst stands still for 30 iterations at the
+        // start while t climbs from 0.073 to 0.100), and mu has shrunk meanwhile (on fandisk-9M
+        // with barrier_shrink 0.88 one mu holds for 95 iterations while the worst stands still
+        // for 80, then jumps by 6%).
+        if (stage_.newton_follows) {
+            TerminationCriterion creeping = stop_;
+            creeping.min_progress *= kHandoverProgress;
+            creeping.progress_window = 3 * stop_.progress_window;
+            const detail::StallWindow slow(creeping, best_worst_);
+            if (slow.rose_too_little(best_history_) && slow.rose_too_little(measure_history_) &&
+                slow.did_not_fall(bad_history_) && slow.rose(stage_history_))
+                return end(TerminationReason::Converged,
+                           "the worst quality rose too slowly for conjugate gradients; Newton steps take over");
         }
         // An ascent can inch up for hundreds of iterations on one element that it cannot free
         // (fandisk-100k-boundary: 440 iterations from -0.102 to -0.100). When the inverted count

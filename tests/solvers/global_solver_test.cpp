@@ -305,13 +305,13 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
     check_fixed_unchanged(mesh, before);
 }
 
-// The finish first goes on with the conjugate gradients' own barrier (the same mu). On tire its
-// Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps at one mu a fresh
-// barrier (a larger mu) takes over from the best iterate. On cub_wedge_like they solve it and
-// raise the worst element, and no fresh barrier follows. (Both with the default budget of 500
-// iterations; the shape phases stall at 300 and 214.)
+// The finish first goes on with the conjugate gradients' own barrier (the same mu). On
+// cube-clip-5 its Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps
+// at one mu a fresh barrier (a larger mu) takes over from the best iterate. On tire they solve it
+// and raise the worst element, and no fresh barrier follows. (Both with the default budget of 500
+// iterations; the shape phases hand over at 182 and 179.)
 BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and_recenters_out_of_reach,
-                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cub_wedge_like.vtk"}), name) {
+                     bdata::make({"mesquite/tets/cube-clip-5.vtk", "mesquite/tets/tire.vtk"}), name) {
     auto mesh = shared_mesh(name);
     pv::GlobalSolverOptions options;
     options.threads = 1;
@@ -326,7 +326,7 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
     BOOST_TEST(finish->best_worst_quality == std::prev(finish)->best_worst_quality);
     BOOST_TEST(summary.worst_after > finish->best_worst_quality);
     check_never_worse(summary);
-    if (std::string(name) == "mesquite/tets/tire.vtk") {
+    if (std::string(name) == "mesquite/tets/cube-clip-5.vtk") {
         BOOST_TEST_REQUIRE((fresh != h.end()));
         BOOST_TEST((fresh - finish) == 51);  // its first record, then 50 steps
         BOOST_TEST(std::all_of(finish, fresh, [&](const pv::IterationRecord& r) { return r.mu == finish->mu; }));
@@ -342,7 +342,7 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
 // elements' barrier terms would fall (damped_vertex_ascent, the default): the long steps that pay
 // for the bulk of the barrier no longer take the worst elements' neighbourhoods down with them.
 // On cube-clip-5 the best worst quality after 100 iterations is 0.2218 against 0.1713, the shape
-// phase stalls at 0.2309 against 0.2269, and the run ends at 0.2338399 against 0.2338256.
+// phase hands over higher, and the run ends higher.
 BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again) {
     auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), without = mesh;
     const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
@@ -368,19 +368,19 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
     check_fixed_unchanged(mesh, before);
 }
 
-// With fewer than twice the 50 steps left in the budget when the conjugate gradients stall (tire:
-// they stall at iteration 300), the fresh barrier goes first and alone.
+// With fewer than twice the 50 steps left in the budget when the conjugate gradients hand over
+// (tire: at iteration 179), the fresh barrier goes first and alone.
 BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk");
     pv::GlobalSolverOptions options;
     options.threads = 1;
-    options.termination.max_iterations = 340;
+    options.termination.max_iterations = 220;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     const auto& h = summary.history;
     const auto fresh = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
     BOOST_TEST_REQUIRE((fresh != h.end()));
     BOOST_TEST(fresh->phase == "finish_fresh");
-    BOOST_TEST(fresh->iteration == 300);
+    BOOST_TEST(fresh->iteration == 179);
     BOOST_TEST(std::none_of(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "finish"; }));
     BOOST_TEST(summary.worst_after > fresh->best_worst_quality);
     check_never_worse(summary);

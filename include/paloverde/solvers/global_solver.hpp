@@ -62,9 +62,10 @@ struct GlobalSolverOptions {
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;
     int newton_cg_iterations = 100;
-    // When the shape phase's conjugate gradients stall: Newton finishes from their best iterate,
-    // on a focus, with a fresh barrier (newton_tolerance and newton_cg_iterations as above), until
-    // it stalls too or the budget runs out. Only with log_barrier (its curvature), not while the
+    // When the shape phase's conjugate gradients stall, or creep (their worst quality and t rose
+    // by less than 100 times min_progress over three progress windows): Newton finishes from
+    // their best iterate, on a focus, with a fresh barrier (newton_tolerance and
+    // newton_cg_iterations as above), until it stalls too or the budget runs out. Only with log_barrier (its curvature), not while the
     // boundary slides (the surface's constraint is not in its Hessian).
     enum class Finish { None, Newton };
     Finish finish = Finish::Newton;
