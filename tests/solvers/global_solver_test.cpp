@@ -368,6 +368,26 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
     check_fixed_unchanged(mesh, before);
 }
 
+// Conjugate gradients that creep hand over to the Newton finish before they stall: on tire the
+// shape phase ends while its worst quality still rises by more than min_progress per window (the
+// stall test would go on for about 120 iterations more), and the run ends at or above the local
+// smoother's worst, reached about 190 iterations sooner than when the phase waited for its stall.
+BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk"), local = mesh;
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto& h = summary.history;
+    const auto finish = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
+    BOOST_TEST_REQUIRE((finish - h.begin()) > 12);
+    const auto window = static_cast<std::size_t>(options.termination.progress_window);
+    const double last = std::prev(finish)->best_worst_quality, before = std::prev(finish, 1 + window)->best_worst_quality;
+    BOOST_TEST(last - before > options.termination.min_progress * std::abs(last));  // not a stall
+    const auto smoothed = pv::LocalSolver().improve(local);
+    BOOST_TEST(summary.worst_after >= smoothed.worst_after);
+    check_never_worse(summary);
+}
+
 // With fewer than twice the 50 steps left in the budget when the conjugate gradients hand over
 // (tire: at iteration 179), the fresh barrier goes first and alone.
 BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) {
