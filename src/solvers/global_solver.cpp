@@ -994,9 +994,12 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         TerminationCriterion three = judged;
         three.progress_window = 3 * stop_.progress_window;
         const bool long_stall = detail::StallWindow(three, best_worst_).rose_too_little(best_history_);
+        // Over a window: the worst quality and t rose too little, the inverted count did not fall.
+        auto standing = [this](const detail::StallWindow& w) {
+            return w.rose_too_little(best_history_) && w.rose_too_little(measure_history_) && w.did_not_fall(bad_history_);
+        };
         const bool stalled = failures_ >= options_.max_failed_searches ||
-                             (progress.rose_too_little(best_history_) && progress.rose_too_little(measure_history_) &&
-                              progress.did_not_fall(bad_history_) && (progress.rose(stage_history_) || long_stall));
+                             (standing(progress) && (progress.rose(stage_history_) || long_stall));
         // A focus that stalls may be held by the elements just outside it: a wider one, as long
         // as the last widening paid (each costs a stall window on more elements).
         // Not before the Newton finish, which starts on a fresh focus, nor in it: there the wider
@@ -1040,8 +1043,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             creeping.min_progress *= kHandoverProgress;
             creeping.progress_window = 3 * stop_.progress_window;
             const detail::StallWindow slow(creeping, best_worst_);
-            if (slow.rose_too_little(best_history_) && slow.rose_too_little(measure_history_) &&
-                slow.did_not_fall(bad_history_) && slow.rose(stage_history_))
+            if (standing(slow) && slow.rose(stage_history_))
                 return end(TerminationReason::Converged,
                            "the worst quality rose too slowly for conjugate gradients; Newton steps take over");
         }

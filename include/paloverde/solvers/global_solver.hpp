@@ -65,8 +65,9 @@ struct GlobalSolverOptions {
     // When the shape phase's conjugate gradients stall, or creep (their worst quality and t rose
     // by less than 100 times min_progress over three progress windows): Newton finishes from
     // their best iterate, on a focus, with a fresh barrier (newton_tolerance and
-    // newton_cg_iterations as above), until it stalls too or the budget runs out. Only with log_barrier (its curvature), not while the
-    // boundary slides (the surface's constraint is not in its Hessian).
+    // newton_cg_iterations as above), until it stalls too or the budget runs out. Only with
+    // log_barrier (its curvature), not while the boundary slides (the surface's constraint is not
+    // in its Hessian).
     enum class Finish { None, Newton };
     Finish finish = Finish::Newton;
     // Shape phase (log_barrier, not the finish): a vertex the line search damped so that no element
