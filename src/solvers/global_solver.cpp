@@ -60,6 +60,9 @@ using detail::seconds_since;
 
 // Newton steps at one mu before its subproblem counts as out of reach.
 constexpr int kNewtonStepsAtOneMu = 50;
+// The finish starts a fresh barrier where the worst quality rose this many times the gap to t it
+// began with above t.
+constexpr double kLostGap = 4.0;
 
 // A shape phase the Newton finish follows hands over once its worst quality and t rose by less
 // than this many times min_progress over three progress windows (docs/global_solver.md, "The
@@ -306,6 +309,11 @@ private:
     std::vector<double> barrier_change_;
     std::vector<std::uint32_t> change_stamp_;
     std::uint32_t change_round_ = 0;
+    // Per element: log(q - t) at the iterate, valid where gap_stamp_ holds gap_round_ (one line
+    // search: the iterate, t and the focus stand still while its trials come and go).
+    std::vector<double> log_gap_;
+    std::vector<std::uint32_t> gap_stamp_;
+    std::uint32_t gap_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
     std::optional<std::uint64_t> best_focus_;  // the focus generation best_x_ was last kept in
@@ -316,6 +324,9 @@ private:
     bool restart_ = true;  // next direction is steepest ascent
     int failures_ = 0;     // line searches in a row that found no step
     int steps_at_mu_ = 0;
+    int quick_solves_ = 0;  // Newton subproblems in a row solved by their first step
+    // Where the phase began: the barrier's t and the worst quality's gap above it (0: no barrier).
+    double first_t_ = 0.0, first_gap_ = 0.0;
     // Per iteration: the best worst quality, the objective's progress measure, the inverted
     // count, and how many times mu has shrunk.
     std::vector<double> best_history_, measure_history_, bad_history_, stage_history_;
@@ -326,6 +337,11 @@ private:
     double barrier_mu() const {
         const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
         return barrier ? barrier->mu() : 0.0;
+    }
+    // The log-barrier's t; 0 for the other objectives.
+    double barrier_t() const {
+        const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
+        return barrier ? barrier->t() : 0.0;
     }
     // Newton directions (shape phase): the damping factor, adapted to how the last step went.
     detail::NewtonDirection newton_{work_};
@@ -352,6 +368,8 @@ void Phase::size_element_arrays() {
     element_stamp_.assign(m, 0);
     barrier_change_.resize(m);
     change_stamp_.assign(m, 0);
+    log_gap_.resize(m);
+    gap_stamp_.assign(m, 0);
 }
 
 void Phase::refocus() {
@@ -477,6 +495,7 @@ bool Phase::line_search(double objective, double max_direction) {
                               ? dynamic_cast<const LogBarrier*>(&objective_)
                               : nullptr;
     std::vector<VertexId> damped, once_damped;
+    ++gap_round_;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;
         // Only free vertices move: elsewhere trial_x_ holds x_ already (Phase::run, focus_on_moving).
@@ -569,15 +588,30 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
     const auto owned = work_.owned();
     ++change_round_;  // the changes of the last call are stale: another trial, maybe another t
     auto barrier_falls = [&](VertexId v) {
-        ExactSum change;
+        double sum = 0.0, magnitude = 0.0;
+        int terms = 0;
         for (ElementId e : mesh.elements_of(v))
             if (e < movable) {
                 if (change_stamp_[e] != change_round_) {
                     change_stamp_[e] = change_round_;
-                    barrier_change_[e] = std::log(trial_q_[e] - t) - std::log(q_[e] - t);
+                    if (gap_stamp_[e] != gap_round_) {
+                        gap_stamp_[e] = gap_round_;
+                        log_gap_[e] = std::log(q_[e] - t);
+                    }
+                    barrier_change_[e] = std::log(trial_q_[e] - t) - log_gap_[e];
                 }
-                change.add(barrier_change_[e]);
+                sum += barrier_change_[e];
+                magnitude += std::abs(barrier_change_[e]);
+                ++terms;
             }
+        // Rounding moves a plain sum of n terms by less than n 2^-52 times the sum of their
+        // magnitudes; beyond that its sign is the exact sum's, whatever the order. Only sums
+        // nearer zero (or not finite) are summed exactly.
+        if (std::isfinite(magnitude) && std::abs(sum) > std::ldexp(static_cast<double>(terms), -52) * magnitude)
+            return sum < 0.0;
+        ExactSum change;
+        for (ElementId e : mesh.elements_of(v))
+            if (e < movable) change.add(barrier_change_[e]);
         return change.value() < 0.0;
     };
     std::erase_if(once_damped, [&](VertexId v) { return !owned[v]; });
@@ -672,6 +706,9 @@ void Phase::save_checkpoint(int iteration) {
                      {"restart", restart_ ? 1.0 : 0.0},
                      {"failures", failures_},
                      {"steps_at_mu", steps_at_mu_},
+                     {"quick_solves", quick_solves_},
+                     {"first_t", first_t_},
+                     {"first_gap", first_gap_},
                      {"newton_damping", newton_damping_},
                      {"focus_base", focus_base_},
                      {"focus_top", focus_top_},
@@ -716,6 +753,11 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     failures_ = static_cast<int>(state.number("failures"));
     steps_at_mu_ = static_cast<int>(state.number("steps_at_mu"));
     if (state.numbers.contains("newton_damping")) newton_damping_ = state.number("newton_damping");
+    if (state.numbers.contains("quick_solves")) quick_solves_ = static_cast<int>(state.number("quick_solves"));
+    if (state.numbers.contains("first_gap")) {
+        first_t_ = state.number("first_t");
+        first_gap_ = state.number("first_gap");
+    }
     if (state.numbers.contains("shrunk_at")) shrunk_at_ = state.number("shrunk_at");
     objective_.restore_state(state.list("objective"));
     best_history_ = state.list("best_history");
@@ -788,6 +830,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         const Stats s = stats(q_);
         best_worst_ = s.worst;
         best_bad_ = s.bad;
+        if (barrier_mu() > 0.0) {
+            first_t_ = barrier_t();
+            first_gap_ = best_worst_ - first_t_;
+        }
         best_history_ = {best_worst_};
         measure_history_ = {objective_.progress_measure()};
         bad_history_ = {static_cast<double>(s.bad)};
@@ -923,6 +969,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // this mu: a fresh barrier recenters it (solve(), below) instead of a smaller mu.
             out_of_reach = capped && !converged && stage_.finish && !stage_.fresh;
             solved = converged || (capped && !out_of_reach);
+            if (solved || !accepted) quick_solves_ = accepted && converged && steps_at_mu_ == 1 ? quick_solves_ + 1 : 0;
         } else {
             // The shape phase's barrier subproblem is solved when a step gains little against
             // mu (F is in quality units; F / mu in the barrier's own): a fixed count of steps
@@ -941,7 +988,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                               : steps_at_mu_ >= options_.steps_per_mu;
         }
         if (!accepted || solved) {
-            objective_.advance();
+            // Newton steps near the end solve each subproblem at once, and a fixed shrink then
+            // approaches the optimum only linearly (flat-tet-sphere: 0.64 per step): after k such
+            // subproblems in a row mu shrinks k times, so the path is followed ever faster.
+            for (int k = 0; k < std::max(1, newton ? quick_solves_ : 0); ++k) objective_.advance();
             steps_at_mu_ = 0;
             restart_ = true;
         }
@@ -976,6 +1026,18 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
         if (out_of_reach) {
             PhaseResult result = end(TerminationReason::Converged, "the barrier's subproblem is out of Newton's reach");
+            result.recenter = true;
+            return result;
+        }
+        // One Newton step can lift the worst elements far above t (fandisk-9M with barrier_shrink
+        // 0.88: by five times the gap the finish began with). The bulk then holds t, and the steps
+        // that follow trade the worst elements for it (500 iterations below the best iterate). A
+        // fresh barrier from the best iterate weights the worst elements again. Measured from t or
+        // from where t began, whichever is higher: each such restart needs the best worst quality
+        // to have risen by more than three times the gap, so restarts cannot cycle.
+        if (stage_.finish && first_gap_ > 0.0 && best_worst_ - std::max(barrier_t(), first_t_) > kLostGap * first_gap_) {
+            PhaseResult result = end(TerminationReason::Converged,
+                                     "the worst quality rose far above the barrier's t; a fresh barrier follows");
             result.recenter = true;
             return result;
         }
@@ -1249,15 +1311,20 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                          .run(resume_finish ? &*resume : nullptr);
         // Far from that barrier's central path, a fresh barrier from the best iterate (mu from
         // the qualities, as at the start), under which the worst elements can rearrange.
-        if (result.recenter && shape_iterations() >= options.termination.max_iterations) {
-            result = {TerminationReason::IterationLimit,
-                      detail::budget_message(TerminationReason::IterationLimit, options.termination, "iterations")};
-        } else if (resume_fresh || result.recenter || (finishing && !first_part)) {
+        // Again wherever a fresh barrier lost its worst elements (Phase::run).
+        bool fresh_next = resume_fresh || result.recenter || (finishing && !first_part);
+        for (bool resuming = resume_fresh; fresh_next; resuming = false) {
+            if (!resuming && shape_iterations() >= options.termination.max_iterations) {
+                result = {TerminationReason::IterationLimit,
+                          detail::budget_message(TerminationReason::IterationLimit, options.termination, "iterations")};
+                break;
+            }
             auto fresh = make_objective(options.objective, options.objective_options);
             result = Phase(work, xyz, *metric, *fresh, options.termination, options,
                            Stage{.finish = true, .iterations_before = shape_iterations(), .fresh = true}, summary, observer,
                            start, checkpointer)
-                         .run(resume_fresh ? &*resume : nullptr);
+                         .run(resuming ? &*resume : nullptr);
+            fresh_next = result.recenter;
         }
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");

@@ -204,6 +204,21 @@ BOOST_AUTO_TEST_CASE(the_newton_finish_gives_the_serial_answer) {
     for (std::size_t i = 0; i < serial.history.size(); ++i) BOOST_TEST(distributed.history[i].moved == serial.history[i].moved);
 }
 
+// A finish that hands over to a fresh barrier because its worst element rose far above t (tire
+// with min_progress 0.1: the shape phase ends early and the finish climbs faster than t follows)
+// takes the serial steps too, and so does the fresh barrier after it.
+BOOST_AUTO_TEST_CASE(a_fresh_barrier_after_the_worst_rose_far_above_t_gives_the_serial_answer) {
+    pv::GlobalSolverOptions options;
+    options.termination.min_progress = 0.1;
+    const auto [serial, distributed] = serial_and_distributed(pv::test::shared_mesh("mesquite/tets/tire.vtk"), options);
+    const auto& h = serial.history;
+    const auto finish = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "finish"; });
+    const auto fresh = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "finish_fresh"; });
+    BOOST_TEST_REQUIRE((fresh != h.end()));
+    BOOST_TEST((fresh - finish) < 51);  // not after the first part's 50 steps
+    BOOST_TEST(distributed.history.size() == h.size());
+}
+
 // Newton directions (each a truncated CG solve over Hessian products through the halo) take the
 // same steps on any number of ranks as serially, on a mesh that is untangled first.
 BOOST_AUTO_TEST_CASE(newton_directions_give_the_serial_answer) {

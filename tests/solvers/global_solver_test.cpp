@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
@@ -24,6 +26,17 @@ using paloverde::test::shared_mesh;
 
 namespace {
 
+// The first record of a phase in a run's history ("shape", "finish", "finish_fresh"; end() if none).
+std::vector<pv::IterationRecord>::const_iterator first_in(const pv::Summary& summary, const std::string& phase) {
+    return std::find_if(summary.history.begin(), summary.history.end(),
+                        [&](const pv::IterationRecord& r) { return r.phase == phase; });
+}
+
+// The first record after the shape phase (end() if none).
+std::vector<pv::IterationRecord>::const_iterator shape_end(const pv::Summary& summary) {
+    return std::find_if(summary.history.begin(), summary.history.end(),
+                        [](const pv::IterationRecord& r) { return r.phase != "shape"; });
+}
 
 }  // namespace
 
@@ -291,8 +304,7 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
     options.finish = pv::GlobalSolverOptions::Finish::None;
     const auto stalled = pv::GlobalSolver(options).improve(without);
     BOOST_TEST_MESSAGE(name << ": " << stalled.brief_report() << "; with the finish " << finished.brief_report());
-    const auto first = std::find_if(finished.history.begin(), finished.history.end(),
-                                    [](const pv::IterationRecord& r) { return r.phase == "finish"; });
+    const auto first = first_in(finished, "finish");
     BOOST_TEST_REQUIRE((first != finished.history.end()));
     // The finish starts from the conjugate gradients' best iterate and ends above it, and above
     // the run without it (whose conjugate gradients widen their focus where they stall instead).
@@ -317,10 +329,7 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
     options.threads = 1;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     const auto& h = summary.history;
-    auto first_of = [&h](const char* phase) {
-        return std::find_if(h.begin(), h.end(), [&](const pv::IterationRecord& r) { return r.phase == phase; });
-    };
-    const auto finish = first_of("finish"), fresh = first_of("finish_fresh");
+    const auto finish = first_in(summary, "finish"), fresh = first_in(summary, "finish_fresh");
     BOOST_TEST_REQUIRE((finish != h.end()));
     BOOST_TEST(finish->mu == std::prev(finish)->mu);
     BOOST_TEST(finish->best_worst_quality == std::prev(finish)->best_worst_quality);
@@ -341,8 +350,9 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
 // A vertex the line search damped so that nothing blocks is damped further while its own
 // elements' barrier terms would fall (damped_vertex_ascent, the default): the long steps that pay
 // for the bulk of the barrier no longer take the worst elements' neighbourhoods down with them.
-// On cube-clip-5 the best worst quality after 100 iterations is 0.2218 against 0.1713, the shape
-// phase hands over higher, and the run ends higher.
+// On cube-clip-5 the best worst quality after 100 iterations is 0.2218 against 0.1713 and the shape
+// phase hands over higher; the Newton finish then carries both runs to within 1e-5 of each other
+// (0.2338337 against 0.2338413), so the end is only required not to be lower by more than that.
 BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again) {
     auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), without = mesh;
     const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
@@ -352,16 +362,13 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
     options.damped_vertex_ascent = false;
     const auto plain = pv::GlobalSolver(options).improve(without);
     BOOST_TEST_MESSAGE("cube-clip-5: " << ascending.brief_report() << "; without " << plain.brief_report());
-    auto shape_end = [](const pv::Summary& s) {
-        return std::find_if(s.history.begin(), s.history.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
-    };
     BOOST_TEST_REQUIRE(ascending.history.size() > 100);
     BOOST_TEST_REQUIRE(plain.history.size() > 100);
     BOOST_TEST(ascending.history[100].best_worst_quality > plain.history[100].best_worst_quality);
     BOOST_TEST_REQUIRE((shape_end(ascending) != ascending.history.end()));
     BOOST_TEST_REQUIRE((shape_end(plain) != plain.history.end()));
     BOOST_TEST(shape_end(ascending)->best_worst_quality > shape_end(plain)->best_worst_quality);
-    BOOST_TEST(ascending.worst_after > plain.worst_after);
+    BOOST_TEST(ascending.worst_after > plain.worst_after - 1e-5);
     BOOST_TEST(ascending.after.inverted == 0);
     check_never_worse(ascending);
     check_never_worse(plain);
@@ -378,7 +385,7 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     options.threads = 1;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     const auto& h = summary.history;
-    const auto finish = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
+    const auto finish = shape_end(summary);
     BOOST_TEST_REQUIRE((finish - h.begin()) > 12);
     const auto window = static_cast<std::size_t>(options.termination.progress_window);
     const double last = std::prev(finish)->best_worst_quality, before = std::prev(finish, 1 + window)->best_worst_quality;
@@ -397,12 +404,58 @@ BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) 
     options.termination.max_iterations = 220;
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     const auto& h = summary.history;
-    const auto fresh = std::find_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase != "shape"; });
+    const auto fresh = shape_end(summary);
     BOOST_TEST_REQUIRE((fresh != h.end()));
     BOOST_TEST(fresh->phase == "finish_fresh");
     BOOST_TEST(fresh->iteration == 179);
-    BOOST_TEST(std::none_of(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "finish"; }));
+    BOOST_TEST((first_in(summary, "finish") == h.end()));
     BOOST_TEST(summary.worst_after > fresh->best_worst_quality);
+    check_never_worse(summary);
+}
+
+// Where the finish's worst element rises far above the barrier's t (four times the gap it began
+// with), t no longer weighs the worst elements and a fresh barrier starts from the best iterate.
+// On fandisk-9M with barrier_shrink 0.88 this lifts the result from 0.18682 to 0.19100; here
+// tire's shape phase is ended early (min_progress 0.1), its finish climbs from 0.1687 faster than
+// its fixed mu lets t follow, and hands over to a fresh barrier at iteration 35, before its 50
+// steps (without the rule the first part stalls at 40 on 0.2008; with it the run ends on 0.2188).
+BOOST_AUTO_TEST_CASE(the_finish_starts_a_fresh_barrier_where_the_worst_rose_far_above_t) {
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    options.termination.min_progress = 0.1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE("tire, min_progress 0.1: " << summary.brief_report());
+    const auto& h = summary.history;
+    const auto finish = first_in(summary, "finish"), fresh = first_in(summary, "finish_fresh");
+    BOOST_TEST_REQUIRE((finish != h.end()));
+    BOOST_TEST_REQUIRE((fresh != h.end()));
+    BOOST_TEST((fresh - finish) < 51);  // before the first part's 50 steps at one mu
+    const auto last = std::prev(fresh);
+    BOOST_TEST(last->best_worst_quality - last->t > 4.0 * (finish->best_worst_quality - finish->t));
+    BOOST_TEST(summary.worst_after > last->best_worst_quality);
+    BOOST_TEST(summary.after.inverted == 0);
+    check_never_worse(summary);
+}
+
+// Near its end the finish's Newton steps solve each barrier subproblem with their first step.
+// After k such subproblems in a row mu shrinks k times, so the finish follows the central path
+// ever faster instead of linearly. On flat-tet-sphere it reaches the max-min point the local
+// smoother finds (0.18552040067497, to the last bits; 2e-10 below with one shrink per subproblem).
+BOOST_AUTO_TEST_CASE(the_finish_shrinks_mu_faster_while_newton_solves_each_subproblem_at_once) {
+    auto mesh = shared_mesh("mesquite/tets/flat-tet-sphere.vtk"), local = mesh;
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto smoothed = pv::LocalSolver().improve(local);
+    BOOST_TEST_MESSAGE("flat-tet-sphere: " << summary.brief_report() << "; local " << smoothed.brief_report());
+    BOOST_TEST(summary.worst_after > smoothed.worst_after - 1e-15);
+    const auto& h = summary.history;
+    const double shrink = options.objective_options.barrier_shrink;
+    bool faster = false;
+    for (std::size_t i = 1; i < h.size(); ++i)
+        faster = faster || (h[i].phase != "shape" && h[i].phase == h[i - 1].phase && h[i].mu < 0.99 * shrink * h[i - 1].mu);
+    BOOST_TEST(faster);
     check_never_worse(summary);
 }
 
