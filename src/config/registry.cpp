@@ -274,8 +274,10 @@ Tables::Tables() {
                 {{"none", GlobalSolverOptions::Finish::None}, {"newton", GlobalSolverOptions::Finish::Newton}},
                 "Shape phase (conjugate_gradient and steepest_ascent, log_barrier; not while the boundary slides): newton: "
                 "where it stalls, truncated Newton steps go on from its best iterate on a new focus, with its barrier, or "
-                "a fresh one where 50 steps cannot solve that barrier's subproblem or the budget leaves no room for them, "
-                "until they stall too (judged per gradient pass); none: stop there.")
+                "a fresh one where 50 steps cannot solve that barrier's subproblem or the budget leaves no room for them "
+                "(and again from the best iterate where the worst quality rose far above a barrier's t), until they "
+                "stall too (judged per gradient pass; mu shrinks faster while Newton solves each subproblem in one "
+                "step); none: stop there.")
         .flag("damped_vertex_ascent", &GlobalSolverOptions::damped_vertex_ascent,
               "Shape phase (log_barrier, not the newton finish): a vertex the line search damped so that no element "
               "blocks is damped further while its own elements' barrier terms are lower than at the iterate.")
