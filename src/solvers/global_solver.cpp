@@ -1310,8 +1310,8 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                            Stage{.finish = true, .iterations_before = shape_iterations()}, summary, observer, start, checkpointer)
                          .run(resume_finish ? &*resume : nullptr);
         // Far from that barrier's central path, a fresh barrier from the best iterate (mu from
-        // the qualities, as at the start), under which the worst elements can rearrange.
-        // Again wherever a fresh barrier lost its worst elements (Phase::run).
+        // the qualities, as at the start), under which the worst elements can rearrange; and
+        // another one whenever a part's worst elements rose far above its t (Phase::run).
         bool fresh_next = resume_fresh || result.recenter || (finishing && !first_part);
         for (bool resuming = resume_fresh; fresh_next; resuming = false) {
             if (!resuming && shape_iterations() >= options.termination.max_iterations) {
