@@ -106,16 +106,22 @@ struct Frozen {
 
 // Figures of the qualities `counted` (of counted elements) that are not +infinity.
 Frozen frozen_stats(const Reducer& reducer, std::span<const double> counted) {
+    constexpr double kOut = std::numeric_limits<double>::infinity();
     Frozen f;
-    std::array<ExactSum, 3> sums;
     std::int64_t count = 0, bad = 0;  // counted as integers, then summed exactly like the qualities
+    double largest = 0.0;
     for (double q : counted) {
-        if (q == std::numeric_limits<double>::infinity()) continue;
+        if (q == kOut) continue;
         f.worst = std::min(f.worst, q);
-        sums[0].add(q);
+        largest = std::max(largest, std::abs(q));
         ++count;
         bad += q <= 0.0;
     }
+    largest = reducer.max(largest);
+    // The qualities' sum as quality_stats takes it (only the mean reports it).
+    std::array<ExactSum, 3> sums{detail::bounded_sums<1>(counted.size(), {largest}, [&](std::size_t i, auto& acc) {
+        if (counted[i] != kOut) acc[0].add(counted[i]);
+    })[0]};
     sums[1].add(static_cast<double>(count));
     sums[2].add(static_cast<double>(bad));
     reducer.sum(sums);
@@ -156,6 +162,15 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
     sums[0].add(frozen.sum);
     s.mean = sums[0].value() / std::max(1.0, work.global_movable() + frozen.count);
     return s;
+}
+
+// The worst of the qualities `all` that this process counts (NaN skipped), over all processes:
+// quality_stats' worst alone.
+double worst_counted(const detail::Workspace& work, std::span<const double> all, std::vector<double>& buffer) {
+    double worst = std::numeric_limits<double>::infinity();
+    for (double v : work.counted(all, buffer))
+        if (v < worst) worst = v;
+    return work.reducer().min(worst);
 }
 
 // Everything that changes the result, for the checkpoint's fingerprint.
@@ -357,6 +372,9 @@ private:
     long focus_vertices_ = 0;  // free vertices of the focus, over all processes
     Frozen frozen_;
     std::vector<double> whole_q_;
+    // The whole mesh's qualities when this phase made the focus of generation focus_start_.
+    std::vector<double> focus_start_q_;
+    std::optional<std::uint64_t> focus_start_;
 };
 
 void Phase::size_element_arrays() {
@@ -373,18 +391,24 @@ void Phase::size_element_arrays() {
 }
 
 void Phase::refocus() {
-    // Not yet focused (the phase's start), q_ rates the whole mesh at x_ already.
-    if (work_.focused()) {
+    if (work_.focused() && focus_start_ == work_.focus_generation()) {
+        // Since this phase made the focus only its free vertices moved: the elements outside it
+        // keep the qualities they had then, and the focus's own are q_ (the bits a whole pass gives).
+        whole_q_.swap(focus_start_q_);  // focus_on_moving sets focus_start_q_ again
+        const auto elements = work_.focus_elements();
+        for (std::size_t i = 0; i < elements.size(); ++i) whole_q_[static_cast<std::size_t>(elements[i])] = q_[i];
+        work_.unfocus();
+    } else if (work_.focused()) {
         work_.unfocus();
         whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
         work_.evaluate(metric_, x_, whole_q_);
         ++summary_.quality_passes;
     } else {
-        whole_q_ = q_;
+        whole_q_ = q_;  // not yet focused (the phase's start): q_ rates the whole mesh at x_
     }
     frozen_ = {};
     const Mesh& mesh = work_.mesh();
-    focus_base_ = quality_stats(work_, whole_q_, counted_).worst;
+    focus_base_ = worst_counted(work_, whole_q_, counted_);
     focus_top_ = focus_base_ + band_ * (metric_.ideal_value() - focus_base_);
     // A vertex moves when one of its elements lies in the band. The owner holds every element of
     // its vertices, so its decision is complete; ghosts take it from the halo.
@@ -402,12 +426,14 @@ void Phase::refocus() {
     from_owners();
     // And their neighbours: a band vertex hemmed in by elements whose other corners stand still
     // stalls the focus (fandisk-100k: 0.2146 against 0.2248 for the whole mesh).
-    const std::vector<std::uint8_t> band = moving_;
-    for (ElementId e = 0; e < work_.movable_elements(); ++e) {
-        const auto corners = mesh.element(e);
-        if (std::any_of(corners.begin(), corners.end(), [&](VertexId v) { return band[v] != 0; }))
-            for (VertexId v : corners) moving_[v] = 1;
-    }
+    // (Through the band vertices' own elements: a focus is a small part of a large mesh.)
+    std::vector<VertexId> band;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (moving_[v]) band.push_back(v);
+    for (VertexId v : band)
+        for (ElementId e : mesh.elements_of(v))
+            if (e < work_.movable_elements())
+                for (VertexId w : mesh.element(e)) moving_[w] = 1;
     from_owners();
     focus_on_moving(true);
 }
@@ -425,12 +451,11 @@ void Phase::focus_on_moving(bool whole_rated) {
         whole_q_.resize(static_cast<std::size_t>(work_.movable_elements()));
         work_.evaluate(metric_, x_, whole_q_);
     }
-    for (ElementId e = 0; e < work_.movable_elements(); ++e)
-        for (VertexId v : whole.element(e))
-            if (moving_[v] && whole.can_move(v)) {
-                whole_q_[e] = std::numeric_limits<double>::infinity();
-                break;
-            }
+    focus_start_q_ = whole_q_;  // what the next refocus starts from
+    for (VertexId v = 0; v < whole.num_vertices(); ++v)
+        if (moving_[v] && whole.can_move(v))
+            for (ElementId e : whole.elements_of(v))
+                if (e < work_.movable_elements()) whole_q_[e] = std::numeric_limits<double>::infinity();
     const auto still = work_.counted(whole_q_, counted_);
     frozen_ = frozen_stats(reducer_, still);
     // The barrier's t goes on weighing them: t where the whole mesh puts it, as if it all moved.
@@ -438,6 +463,7 @@ void Phase::focus_on_moving(bool whole_rated) {
     // single element drives each step (fandisk-9M: 0.145 after 500 iterations, docs/global_solver.md).
     objective_.hold_still(still, reducer_);
     work_.focus(moving_);
+    focus_start_ = work_.focus_generation();
     const Mesh& focus = work_.mesh();
     const auto owned = work_.owned();
     double count = 0.0;

@@ -273,19 +273,27 @@ std::vector<VertexId> Workspace::free_vertices_of(const Mesh& mesh) {
 void Workspace::focus(std::span<const std::uint8_t> moving) {
     unfocus();
     const VertexId n = mesh_.num_vertices();
-    auto moves = [&](VertexId v) { return moving[v] != 0 && mesh_.can_move(v); };
+    const int k = mesh_.corners();
     Focus f;
-    std::vector<VertexId> connectivity;
-    std::vector<GlobalId> positions;
-    for (ElementId e = 0; e < movable_; ++e) {
-        const auto corners = mesh_.element(e);
-        if (std::none_of(corners.begin(), corners.end(), moves)) continue;
-        f.elements.push_back(e);
-        connectivity.insert(connectivity.end(), corners.begin(), corners.end());
-        positions.push_back(element_order_[e]);
+    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(n));  // nonzero: the vertex moves
+    for (VertexId v = 0; v < n; ++v)
+        freedom[v] = moving[v] != 0 ? static_cast<std::uint8_t>(mesh_.degrees_of_freedom(v)) : 0;
+    // The elements of the moving vertices, in order: marked through the vertices (a focus is a
+    // small part of a large mesh), then listed.
+    std::vector<std::uint8_t> in_focus(static_cast<std::size_t>(movable_), 0);
+    for (VertexId v = 0; v < n; ++v)
+        if (freedom[v] != 0)
+            for (ElementId e : mesh_.elements_of(v))
+                if (e < movable_) in_focus[e] = 1;
+    for (ElementId e = 0; e < movable_; ++e)
+        if (in_focus[e]) f.elements.push_back(e);
+    std::vector<VertexId> connectivity(f.elements.size() * static_cast<std::size_t>(k));
+    std::vector<GlobalId> positions(f.elements.size());
+    for (std::size_t i = 0; i < f.elements.size(); ++i) {
+        const auto corners = mesh_.element(f.elements[i]);
+        for (int c = 0; c < k; ++c) connectivity[i * k + c] = corners[c];  // std::copy calls memmove
+        positions[i] = element_order_[f.elements[i]];
     }
-    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(n));
-    for (VertexId v = 0; v < n; ++v) freedom[v] = moves(v) ? static_cast<std::uint8_t>(mesh_.degrees_of_freedom(v)) : 0;
     f.mesh = Mesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
                   std::move(connectivity));
     f.mesh.set_degrees_of_freedom(std::move(freedom));
