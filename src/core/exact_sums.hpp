@@ -2,6 +2,7 @@
 // Exact sums over index ranges, split among threads: each thread keeps its own accumulators,
 // and since the accumulation is exact the combined result does not depend on the thread count
 // (nor, once reduced, on the number of processes).
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -136,6 +137,35 @@ std::array<ExactSum, K> bounded_sums(std::size_t n, const std::array<double, K>&
             mine[k].empty();
             mine[k].sum.add_to(total[k]);
         }
+    }
+    return total;
+}
+
+// As bounded_sums, with the terms made a block at a time: fill(first, count, terms) writes the
+// k-th term of index first + i to terms[k][i], for i < count (at most kBlock). A fill that is a
+// plain loop vectorizes, where terms handed over one at a time do not. The same sums, bit for bit.
+template <int K, class Fill>
+std::array<ExactSum, K> bounded_block_sums(std::size_t n, const std::array<double, K>& bounds, Fill fill) {
+    constexpr std::size_t kBlock = 256;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    std::array<ExactSum, K> total{};
+#pragma omp parallel if (n > kParallelThreshold)
+    {
+        auto mine = [&]<std::size_t... k>(std::index_sequence<k...>) {
+            return std::array<BoundedSum, K>{BoundedSum(bounds[k])...};
+        }(std::make_index_sequence<K>{});
+        alignas(32) std::array<std::array<double, kBlock>, K> terms;
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t b = 0; b < static_cast<std::ptrdiff_t>(blocks); ++b) {
+            const std::size_t first = static_cast<std::size_t>(b) * kBlock;
+            const std::size_t count = std::min(kBlock, n - first);
+            std::array<double*, K> out;
+            for (int k = 0; k < K; ++k) out[k] = terms[k].data();
+            fill(first, count, out);
+            for (int k = 0; k < K; ++k) mine[k].add_all(terms[k].data(), count);
+        }
+#pragma omp critical(paloverde_exact_sums)
+        for (int k = 0; k < K; ++k) mine[k].add_to(total[k]);
     }
     return total;
 }

@@ -108,11 +108,16 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     for (int iteration = 0; iteration < 100 && lo < hi; ++iteration) {
         const double gap = std::exp(s);
         // 1/gap bounds every term of S (qmin is the global minimum): the fast bounded sums do.
-        auto sums = detail::bounded_sums<2>(q.size(), {1.0 / gap, 1.0 / (gap * gap)}, [&](std::size_t i, auto& acc) {
-            const double r = 1.0 / ((q[i] - qmin) + gap);
-            acc[0].add(r);
-            acc[1].add(r * r);
-        });
+        auto sums = detail::bounded_block_sums<2>(
+            q.size(), {1.0 / gap, 1.0 / (gap * gap)}, [&](std::size_t first, std::size_t count, const auto& terms) {
+                const double* qi = q.data() + first;
+                double* __restrict r = terms[0];
+                double* __restrict squares = terms[1];
+                for (std::size_t i = 0; i < count; ++i) {
+                    r[i] = 1.0 / ((qi[i] - qmin) + gap);
+                    squares[i] = r[i] * r[i];
+                }
+            });
         reducer.sum(sums);
         double sum = sums[0].value(), squares = sums[1].value();
         // The still elements' terms: the same bins on every process, so the same numbers.
@@ -212,9 +217,10 @@ double LogBarrier::value(std::span<const double> q, const Reducer& reducer) cons
     low = reducer.min(low);
     high = reducer.max(high);
     const double bound = std::max(std::abs(std::log(low - t_)), std::abs(std::log(high - t_)));
-    const double sum = reducer.total(detail::bounded_sums<1>(q.size(), {bound}, [&](std::size_t i, auto& acc) {
-        acc[0].add(std::log(q[i] - t_));
-    })[0]);
+    const double sum = reducer.total(
+        detail::bounded_block_sums<1>(q.size(), {bound}, [&](std::size_t first, std::size_t count, const auto& terms) {
+            for (std::size_t i = 0; i < count; ++i) terms[0][i] = std::log(q[first + i] - t_);
+        })[0]);
     return std::isnan(sum) ? -std::numeric_limits<double>::infinity() : t_ + mu_ * sum;
 }
 
