@@ -2,6 +2,7 @@
 // and merged, and must be exact where rounding would lose everything.
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -195,6 +196,41 @@ BOOST_AUTO_TEST_CASE(bounded_sums_of_whole_buffers_equal_those_of_single_terms) 
             BOOST_TEST(std::isnan(in_runs(finite, simd).value()));
         }
         std::shuffle(terms.begin(), terms.end(), random);
+    }
+}
+
+// Terms made a block at a time give bounded_sums' sums bit for bit: any length (blocks of 256
+// and a partial last one), two sums at once, terms past the bound, and NaN.
+BOOST_AUTO_TEST_CASE(bounded_block_sums_equal_bounded_sums) {
+    std::mt19937_64 random(13);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-70, 2);
+    const std::array<double, 2> bounds{2.5, 6.25};
+    for (std::size_t n : {0, 1, 255, 256, 257, 5000, 100003}) {
+        std::vector<double> x(n);
+        for (double& t : x) t = std::ldexp(mantissa(random), exponent(random));  // some past the bound
+        auto single = [&] {
+            return pv::detail::bounded_sums<2>(n, bounds, [&](std::size_t i, auto& acc) {
+                acc[0].add(x[i]);
+                acc[1].add(x[i] * x[i]);
+            });
+        };
+        auto blocks = [&] {
+            return pv::detail::bounded_block_sums<2>(n, bounds, [&](std::size_t first, std::size_t count, const auto& terms) {
+                BOOST_TEST(count <= 256u);
+                for (std::size_t i = 0; i < count; ++i) {
+                    terms[0][i] = x[first + i];
+                    terms[1][i] = x[first + i] * x[first + i];
+                }
+            });
+        };
+        const auto a = single(), b = blocks();
+        BOOST_TEST(a[0].value() == b[0].value());
+        BOOST_TEST(a[1].value() == b[1].value());
+        if (n > 300) {
+            x[n / 2] = std::nan("");
+            BOOST_TEST(std::isnan(blocks()[0].value()));
+        }
     }
 }
 
