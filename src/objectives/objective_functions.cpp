@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/exact_sums.hpp"
+#include "core/fast_log.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 
@@ -219,7 +220,8 @@ double LogBarrier::value(std::span<const double> q, const Reducer& reducer) cons
     const double bound = std::max(std::abs(std::log(low - t_)), std::abs(std::log(high - t_)));
     const double sum = reducer.total(
         detail::bounded_block_sums<1>(q.size(), {bound}, [&](std::size_t first, std::size_t count, const auto& terms) {
-            for (std::size_t i = 0; i < count; ++i) terms[0][i] = std::log(q[first + i] - t_);
+            for (std::size_t i = 0; i < count; ++i) terms[0][i] = q[first + i] - t_;
+            detail::log_all(terms[0], terms[0], count);
         })[0]);
     return std::isnan(sum) ? -std::numeric_limits<double>::infinity() : t_ + mu_ * sum;
 }

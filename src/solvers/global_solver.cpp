@@ -8,6 +8,7 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "core/fast_log.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
 #include "checkpointer.hpp"
@@ -622,9 +623,9 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
                     change_stamp_[e] = change_round_;
                     if (gap_stamp_[e] != gap_round_) {
                         gap_stamp_[e] = gap_round_;
-                        log_gap_[e] = std::log(q_[e] - t);
+                        log_gap_[e] = detail::log_one(q_[e] - t);
                     }
-                    barrier_change_[e] = std::log(trial_q_[e] - t) - log_gap_[e];
+                    barrier_change_[e] = detail::log_one(trial_q_[e] - t) - log_gap_[e];
                 }
                 sum += barrier_change_[e];
                 magnitude += std::abs(barrier_change_[e]);
