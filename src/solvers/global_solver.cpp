@@ -120,9 +120,13 @@ Frozen frozen_stats(const Reducer& reducer, std::span<const double> counted) {
     }
     largest = reducer.max(largest);
     // The qualities' sum as quality_stats takes it (only the mean reports it).
-    std::array<ExactSum, 3> sums{detail::bounded_sums<1>(counted.size(), {largest}, [&](std::size_t i, auto& acc) {
-        if (counted[i] != kOut) acc[0].add(counted[i]);
-    })[0]};
+    std::array<ExactSum, 3> sums{detail::bounded_block_sums<1>(
+        counted.size(), {largest}, [&](std::size_t first, std::size_t count, const auto& terms) {
+            for (std::size_t i = 0; i < count; ++i) {
+                const double q = counted[first + i];
+                terms[0][i] = q != kOut ? q : 0.0;  // a zero term adds nothing
+            }
+        })[0]};
     sums[1].add(static_cast<double>(count));
     sums[2].add(static_cast<double>(bad));
     reducer.sum(sums);
@@ -151,9 +155,10 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
     }
     largest = reducer.max(largest);
     // The qualities' sum, then the two counts: one reduction for all three.
-    std::array<ExactSum, 3> sums{detail::bounded_sums<1>(q.size(), {largest}, [&](std::size_t i, auto& acc) {
-        if (!std::isnan(q[i])) acc[0].add(q[i]);
-    })[0]};
+    std::array<ExactSum, 3> sums{
+        detail::bounded_block_sums<1>(q.size(), {largest}, [&](std::size_t first, std::size_t count, const auto& terms) {
+            for (std::size_t i = 0; i < count; ++i) terms[0][i] = std::isnan(q[first + i]) ? 0.0 : q[first + i];
+        })[0]};
     sums[1].add(static_cast<double>(s.bad));
     sums[2].add(static_cast<double>(s.nan));
     reducer.sum(sums);
