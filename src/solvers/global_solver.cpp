@@ -121,8 +121,8 @@ Frozen frozen_stats(const Reducer& reducer, std::span<const double> counted) {
     largest = reducer.max(largest);
     // The qualities' sum as quality_stats takes it (only the mean reports it).
     std::array<ExactSum, 3> sums{detail::bounded_block_sums<1>(
-        counted.size(), {largest}, [&](std::size_t first, std::size_t count, const auto& terms) {
-            for (std::size_t i = 0; i < count; ++i) {
+        counted.size(), {largest}, [&](std::size_t first, std::size_t length, const auto& terms) {
+            for (std::size_t i = 0; i < length; ++i) {
                 const double q = counted[first + i];
                 terms[0][i] = q != kOut ? q : 0.0;  // a zero term adds nothing
             }
