@@ -131,8 +131,8 @@ BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_newton_finish_ends_as_the_uninter
 }
 
 // A finish part that ends because its worst element rose far above t hands over to a fresh
-// barrier (tire with min_progress 0.1: the finish from 30, the fresh barrier from 35; the
-// checkpoints of iterations 30 and 40): the gap and t the part began with are in the checkpoint,
+// barrier (tire with min_progress 0.1: the finish from 30, the fresh barrier from 35; resumed
+// from a checkpoint taken in each): the gap and t the part began with are in the checkpoint,
 // and so is the count of subproblems solved at once.
 BOOST_AUTO_TEST_CASE(global_run_resumed_around_a_restarted_barrier_ends_as_the_uninterrupted_run) {
     pv::GlobalSolverOptions options;
