@@ -37,6 +37,7 @@ void GlobalSolverOptions::validate() const {
     if (!(gain_tolerance >= 0.0) || !std::isfinite(gain_tolerance))
         throw OptionError("gain_tolerance must be a number >= 0 (0: mu shrinks after steps_per_mu steps)");
     if (!(focus_band > 0.0 && focus_band <= 1.0)) throw OptionError("focus_band must be in (0, 1]");
+    if (!(finish_band > 0.0 && finish_band <= 1.0)) throw OptionError("finish_band must be in (0, 1]");
     if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
         throw OptionError("newton_tolerance must be a positive number");
     if (newton_cg_iterations < 1) throw OptionError("newton_cg_iterations must be >= 1");
@@ -196,6 +197,7 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("gain_tolerance", o.gain_tolerance)("damped_vertex_ascent", o.damped_vertex_ascent)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     if (o.focus_band < 1.0) t("focus_band", o.focus_band);
+    if (o.finish_band < 1.0) t("finish_band", o.finish_band);
     const bool finish = o.finish == GlobalSolverOptions::Finish::Newton;
     if (finish) t("finish", "newton");
     if (o.direction == GlobalSolverOptions::Direction::Newton || finish)
@@ -836,7 +838,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     // 0.2302 on the whole mesh after 500 iterations): they keep the whole mesh. The finish, from
     // where conjugate gradients stalled, focuses like them.
     focusing_ = !untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0;
-    band_ = options_.focus_band;
+    band_ = stage_.finish ? options_.finish_band * options_.focus_band : options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();
     shrunk_at_ = std::numeric_limits<double>::lowest();
     size_element_arrays();
