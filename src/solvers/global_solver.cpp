@@ -836,7 +836,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     once_damped_mark_.assign(n3 / 3, 0);
     // Newton's directions from the start come out worse on a focus (fandisk-100k: 0.0895 against
     // 0.2302 on the whole mesh after 500 iterations): they keep the whole mesh. The finish, from
-    // where conjugate gradients stalled, focuses like them.
+    // where conjugate gradients stalled, focuses like them (on finish_band of their band).
     focusing_ = !untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0;
     band_ = stage_.finish ? options_.finish_band * options_.focus_band : options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();

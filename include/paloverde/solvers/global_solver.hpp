@@ -58,12 +58,12 @@ struct GlobalSolverOptions {
     // the whole mesh. 1: the whole mesh (and always with direction newton, whose directions from
     // the start measured worse on a focus; the finish focuses).
     double focus_band = 0.03;
-    // The Newton finish's band, as a fraction of focus_band, in (0, 1]. Where the conjugate
-    // gradients stall the qualities have piled up above the worst, and the whole band holds far
-    // more vertices than the few worst elements the Newton steps work on: 1/3 cuts fandisk-9M's
-    // finish from 27 s to half a second, to the same result, but finishes whose fresh barrier runs
-    // into the iteration budget can end about 1% lower (docs/global_solver.md, "The finish's
-    // focus": why it is not the default).
+    // The Newton finish's band, as a fraction of focus_band (< 1: with 1 nothing focuses), in
+    // (0, 1]. Where the conjugate gradients stall the qualities have piled up above the worst, and
+    // the whole band holds far more vertices than the few worst elements the Newton steps work on:
+    // 1/3 cuts fandisk-9M's finish from 27 s to half a second, to the same result, but finishes
+    // whose fresh barrier runs into the iteration budget can end about 1% lower
+    // (docs/global_solver.md, "The finish's focus": why it is not the default).
     double finish_band = 1.0;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
