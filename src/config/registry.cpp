@@ -267,9 +267,9 @@ Tables::Tables() {
               "Focused, the barrier's t still weighs the elements held still, and its automatic start lies no more "
               "than the band below the worst quality.")
         .real("finish_band", &GlobalSolverOptions::finish_band,
-              "The newton finish's focus band, as a fraction of focus_band, in (0, 1]. 1/3 makes the finish of a "
-              "large mesh many times faster (fandisk-9M: 27 s to half a second, the same result), but finishes "
-              "whose fresh barrier runs into the iteration budget can end about 1% lower.")
+              "The newton finish's focus band, as a fraction of focus_band, in (0, 1]; 1: the shape phase's band. A "
+              "third makes the finish of a large mesh many times faster (fandisk-9M: 27 s to half a second, the same "
+              "result).")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton and the newton finish: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,

@@ -162,6 +162,18 @@ void LogBarrier::limit_first_gap(double fraction, double ideal) {
     ideal_ = ideal;
 }
 
+void LogBarrier::keep_t(std::span<const double> q, const Reducer& reducer) {
+    if (mu_ <= 0.0) return;
+    const double qmin = std::min(reducer.min(local_min(q)), still_quality_.empty() ? std::numeric_limits<double>::infinity()
+                                                                                    : still_quality_.front());
+    if (!(t_ < qmin)) return;  // no room below the worst: update() solves for t at this mu
+    double sum = reducer.total(
+        detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(1.0 / (q[i] - t_)); })[0]);
+    for (std::size_t b = 0; b < still_quality_.size(); ++b) sum += still_count_[b] / (still_quality_[b] - t_);
+    mu_ = 1.0 / sum;
+    gap_ratio_ = (qmin - t_) / mu_;
+}
+
 void LogBarrier::hold_still(std::span<const double> q, const Reducer& reducer) {
     still_quality_.clear();
     still_count_.clear();

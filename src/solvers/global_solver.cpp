@@ -197,9 +197,8 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("gain_tolerance", o.gain_tolerance)("damped_vertex_ascent", o.damped_vertex_ascent)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     if (o.focus_band < 1.0) t("focus_band", o.focus_band);
-    if (o.finish_band < 1.0) t("finish_band", o.finish_band);
     const bool finish = o.finish == GlobalSolverOptions::Finish::Newton;
-    if (finish) t("finish", "newton");
+    if (finish) t("finish", "newton")("finish_band", o.finish_band);
     if (o.direction == GlobalSolverOptions::Direction::Newton || finish)
         t("newton_tolerance", o.newton_tolerance)("newton_cg_iterations", o.newton_cg_iterations);
     return t.text();
@@ -294,6 +293,12 @@ private:
     void size_element_arrays();
     // Focus on the elements below the band above the whole mesh's worst quality (focus_band).
     void refocus();
+    // The finish's fresh barrier weighs its focus alone: there t and mu come from the few worst
+    // elements. On fandisk-9M the still elements' terms (9.4 million) held t far below the worst
+    // elements, which the steps then traded for the rest, or after one shrink of mu within 2e-7 of
+    // the worst, where the steps crept (docs/global_solver.md, "The fresh barrier weighs its focus
+    // alone").
+    bool focus_alone() const { return focusing_ && stage_.fresh; }
     // Focus on the elements around the vertices flagged in moving_ (frozen_: the others).
     // whole_rated: whole_q_ holds the whole mesh's qualities at x_ already (refocus).
     void focus_on_moving(bool whole_rated = false);
@@ -469,7 +474,8 @@ void Phase::focus_on_moving(bool whole_rated) {
     // The barrier's t goes on weighing them: t where the whole mesh puts it, as if it all moved.
     // From the focus's terms alone t rose to within about one mu of the worst quality, where a
     // single element drives each step (fandisk-9M: 0.145 after 500 iterations, docs/global_solver.md).
-    objective_.hold_still(still, reducer_);
+    // Not the finish's fresh barrier: it weighs its focus alone.
+    objective_.hold_still(focus_alone() ? std::span<const double>{} : still, reducer_);
     work_.focus(moving_);
     focus_start_ = work_.focus_generation();
     const Mesh& focus = work_.mesh();
@@ -852,11 +858,12 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         work_.evaluate(metric_, x_, q_);
         ++summary_.quality_passes;
         // The barrier's first mu comes from the whole mesh, focused or not: the focus's fewer
-        // terms would choose a looser barrier, under which its elements sink toward t. Focused,
-        // it starts no looser than the band.
+        // terms would choose a looser barrier, under which conjugate gradients let its elements
+        // sink toward t. Focused, it starts no looser than the band. (The finish's fresh barrier
+        // weighs its focus alone, Newton steps following its central path: its mu comes from it.)
         if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focusing_)
             barrier->limit_first_gap(band_, metric_.ideal_value());
-        objective_.update(work_.counted(q_, counted_), reducer_);
+        if (!focus_alone()) objective_.update(work_.counted(q_, counted_), reducer_);
         if (focusing_) {
             refocus();
             objective_.update(work_.counted(q_, counted_), reducer_);
@@ -1159,6 +1166,9 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // Half way up the band, the elements above it start to matter: a new focus.
         if (focusing_ && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {
             refocus();
+            // A barrier over its focus alone keeps its t, and the weight on the worst, as the focus grows.
+            if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focus_alone())
+                barrier->keep_t(work_.counted(q_, counted_), reducer_);
             objective_.update(work_.counted(q_, counted_), reducer_);
             objective = objective_value(q_);
             objective_.weights(q_, weight_);

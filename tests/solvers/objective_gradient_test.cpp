@@ -255,4 +255,27 @@ BOOST_AUTO_TEST_CASE(barrier_t_weighs_the_still_elements) {
     BOOST_TEST(std::abs(focused.t() - alone.t()) <= 1e-9 * gap);
 }
 
+// A barrier over a focus alone (the finish's fresh barrier): when the focus takes in more elements,
+// keep_t sets mu so that t stays where it was; with mu kept, t would sink far below the worst.
+BOOST_AUTO_TEST_CASE(barrier_keeps_t_when_its_focus_grows) {
+    std::vector<double> small, large;
+    for (int i = 0; i < 2000; ++i) {
+        const double q = 0.2 + 0.1 * std::sqrt(i / 2000.0);
+        if (i < 100) small.push_back(q);
+        large.push_back(q);
+    }
+    const pv::Reducer serial;
+    pv::LogBarrier barrier;
+    barrier.update(small, serial);
+    const double t = barrier.t(), mu = barrier.mu(), gap = 0.2 - t;
+    BOOST_TEST(gap > 0.0);
+    pv::LogBarrier kept_mu(0.8, mu);
+    kept_mu.update(large, serial);
+    BOOST_TEST(0.2 - kept_mu.t() > 2.0 * gap);
+    barrier.keep_t(large, serial);
+    BOOST_TEST(barrier.mu() < 0.5 * mu);
+    barrier.update(large, serial);
+    BOOST_TEST(std::abs(barrier.t() - t) <= 1e-9 * gap);
+}
+
 BOOST_AUTO_TEST_SUITE_END()

@@ -88,6 +88,11 @@ public:
     // the worst would only pull t, and with it the worst element, down (tire: no better element
     // in the first 20 iterations).
     void limit_first_gap(double fraction, double ideal);
+    // Sets mu so that t stays where it stands for these terms (before an automatic first mu:
+    // nothing). A barrier over a focus alone keeps its t, and the weight on its worst elements,
+    // when the focus changes: with mu kept, ten times the terms would put t ten times farther
+    // below the worst (the gap is about mu times the terms near it). Collective.
+    void keep_t(std::span<const double> counted, const Reducer& reducer);
 
     double mu() const { return mu_; }
     double t() const { return t_; }

