@@ -395,7 +395,7 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     check_never_worse(summary);
 }
 
-// finish_band 1/3: the finish works on the few worst elements. Where the conjugate gradients
+// finish_band 1/3 (the default): the finish works on the few worst elements. Where the conjugate gradients
 // stalled the qualities have piled up above the worst, and the whole band holds far more vertices
 // (tire: 98, against the shape phase's last 142; with a third of it 53; fandisk-9M: 135,957
 // against 53, its Newton steps 1.5 s against under a millisecond). The result is no worse.
