@@ -1166,7 +1166,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // Half way up the band, the elements above it start to matter: a new focus.
         if (focusing_ && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {
             refocus();
-            // A barrier over its focus alone keeps its t, and the weight on the worst, as the focus grows.
+            // A barrier over its focus alone keeps its t, and the weight on the worst, as its focus changes.
             if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focus_alone())
                 barrier->keep_t(work_.counted(q_, counted_), reducer_);
             objective_.update(work_.counted(q_, counted_), reducer_);
