@@ -37,9 +37,7 @@ LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
 
 void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     // The still elements count as terms of S below, at their bins' middles: t stays below them.
-    const double qmin =
-        std::min(reducer.min(local_min(q)), still_quality_.empty() ? std::numeric_limits<double>::infinity()
-                                                                    : still_quality_.front());
+    const double qmin = worst(q, reducer);
     ExactSum count;
     count.add(static_cast<double>(q.size()));
     const double moving = reducer.total(count);
@@ -162,10 +160,14 @@ void LogBarrier::limit_first_gap(double fraction, double ideal) {
     ideal_ = ideal;
 }
 
+double LogBarrier::worst(std::span<const double> q, const Reducer& reducer) const {
+    const double still = still_quality_.empty() ? std::numeric_limits<double>::infinity() : still_quality_.front();
+    return std::min(reducer.min(local_min(q)), still);
+}
+
 void LogBarrier::keep_t(std::span<const double> q, const Reducer& reducer) {
     if (mu_ <= 0.0) return;
-    const double qmin = std::min(reducer.min(local_min(q)), still_quality_.empty() ? std::numeric_limits<double>::infinity()
-                                                                                    : still_quality_.front());
+    const double qmin = worst(q, reducer);
     if (!(t_ < qmin)) return;  // no room below the worst: update() solves for t at this mu
     double sum = reducer.total(
         detail::exact_sums<1>(q.size(), [&](std::size_t i, auto& acc) { acc[0].add(1.0 / (q[i] - t_)); })[0]);

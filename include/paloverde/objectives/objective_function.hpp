@@ -99,6 +99,8 @@ public:
 
 private:
     double automatic_active(double elements) const;
+    // The lowest quality the barrier weighs: of these terms and the still elements. Collective.
+    double worst(std::span<const double> counted, const Reducer& reducer) const;
 
     double shrink_;
     double initial_active_;
