@@ -69,7 +69,8 @@ struct GlobalSolverOptions {
     double newton_tolerance = 0.1;
     int newton_cg_iterations = 100;
     // When the shape phase's conjugate gradients stall, or creep (their worst quality and t rose
-    // by less than 100 times min_progress over three progress windows): Newton finishes from
+    // by less than 100 times min_progress over three progress windows, or 1000 times where their
+    // steps gained less than a mu each): Newton finishes from
     // their best iterate, on a focus, with a fresh barrier (newton_tolerance and
     // newton_cg_iterations as above), until it stalls too or the budget runs out. Only with
     // log_barrier (its curvature), not while the boundary slides (the surface's constraint is not
