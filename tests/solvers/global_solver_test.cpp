@@ -428,7 +428,7 @@ BOOST_AUTO_TEST_CASE(finish_band_focuses_the_finish_on_a_fraction_of_the_band) {
 }
 
 // With fewer than twice the 50 steps left in the budget when the conjugate gradients hand over
-// (tire: at iteration 179, as the same run with the whole budget tells), the fresh barrier goes
+// (tire: at iteration 140, as the same run with the whole budget tells), the fresh barrier goes
 // first and alone.
 BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk"), budgeted = mesh;
