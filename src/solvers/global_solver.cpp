@@ -80,6 +80,15 @@ constexpr double kHandoverProgress = 100.0;
 // there ended on 0.168, not 0.191.
 constexpr double kCalmHandoverProgress = 1000.0;
 constexpr double kCalmGain = 1.0;
+// The shape phase's subproblem at one mu also counts as solved, for the max-min problem, once the
+// worst element has held less than this share of the barrier's weight for a whole progress
+// window: mu is then so large that t sits far below the worst, the steps work the many elements
+// above t (each a term like the worst) and trade the worst ones for them. On cub_wedge_like one mu
+// held for 60 iterations with the worst element's weight near 1/2900 (docs/global_solver.md, "A
+// barrier that let its worst element go"); the next mu put t within six mu of the worst, which
+// then rose fast. Not on a phase's first mu, which the automatic start placed to weigh many
+// elements alike.
+constexpr double kLeastWorstWeight = 0.01;
 
 struct PhaseResult {
     TerminationReason reason;
@@ -361,6 +370,7 @@ private:
     bool restart_ = true;  // next direction is steepest ascent
     int failures_ = 0;     // line searches in a row that found no step
     int steps_at_mu_ = 0;
+    int let_go_steps_ = 0;  // steps in a row at this mu with the worst element's weight under kLeastWorstWeight
     int quick_solves_ = 0;  // Newton subproblems in a row solved by their first step
     // Where the phase began: the barrier's t and the worst quality's gap above it (0: no barrier).
     double first_t_ = 0.0, first_gap_ = 0.0;
@@ -757,6 +767,7 @@ void Phase::save_checkpoint(int iteration) {
                      {"restart", restart_ ? 1.0 : 0.0},
                      {"failures", failures_},
                      {"steps_at_mu", steps_at_mu_},
+                     {"let_go_steps", let_go_steps_},
                      {"quick_solves", quick_solves_},
                      {"first_t", first_t_},
                      {"first_gap", first_gap_},
@@ -804,6 +815,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     restart_ = state.number("restart") != 0.0;
     failures_ = static_cast<int>(state.number("failures"));
     steps_at_mu_ = static_cast<int>(state.number("steps_at_mu"));
+    let_go_steps_ = state.numbers.contains("let_go_steps") ? static_cast<int>(state.number("let_go_steps")) : 0;
     if (state.numbers.contains("newton_damping")) newton_damping_ = state.number("newton_damping");
     if (state.numbers.contains("quick_solves")) quick_solves_ = static_cast<int>(state.number("quick_solves"));
     if (state.numbers.contains("first_gap")) {
@@ -1041,8 +1053,13 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // paid, else the phase ends.
             // At least steps_per_mu steps at each mu: a step blocked by some element also gains
             // little, and shrinking mu at each such step would run away.
+            // Or where the barrier let its worst element go (kLeastWorstWeight).
             ++steps_at_mu_;
-            solved = adaptive ? steps_at_mu_ >= options_.steps_per_mu && accepted && gain_ < options_.gain_tolerance * barrier_mu()
+            const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
+            let_go_steps_ = barrier && barrier->worst_weight() < kLeastWorstWeight ? let_go_steps_ + 1 : 0;
+            const bool let_go = let_go_steps_ >= stop_.progress_window && stage_history_.back() > 0.0;
+            solved = adaptive ? steps_at_mu_ >= options_.steps_per_mu && accepted &&
+                                    (gain_ < options_.gain_tolerance * barrier_mu() || let_go)
                               : steps_at_mu_ >= options_.steps_per_mu;
         }
         if (!accepted || solved) {
@@ -1051,6 +1068,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // subproblems in a row mu shrinks k times, so the path is followed ever faster.
             for (int k = 0; k < std::max(1, newton ? quick_solves_ : 0); ++k) objective_.advance();
             steps_at_mu_ = 0;
+            let_go_steps_ = 0;
             restart_ = true;
         }
         objective_.update(work_.counted(q_, counted_), reducer_);
@@ -1142,6 +1160,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         } else if (shrink) {
             objective_.advance();
             steps_at_mu_ = 0;
+            let_go_steps_ = 0;
             shrunk_at_ = best_worst_;
             restart_ = true;
             restart_histories();

@@ -321,7 +321,7 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
 // cube-clip-5 its Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps
 // at one mu a fresh barrier (a larger mu) takes over from the best iterate. On tire they solve it
 // and raise the worst element, and no fresh barrier follows. (Both with the default budget of 500
-// iterations; the shape phases hand over at 182 and 179.)
+// iterations; the shape phases hand over at 131 and 137.)
 BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and_recenters_out_of_reach,
                      bdata::make({"mesquite/tets/cube-clip-5.vtk", "mesquite/tets/tire.vtk"}), name) {
     auto mesh = shared_mesh(name);
@@ -350,9 +350,10 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
 // A vertex the line search damped so that nothing blocks is damped further while its own
 // elements' barrier terms would fall (damped_vertex_ascent, the default): the long steps that pay
 // for the bulk of the barrier no longer take the worst elements' neighbourhoods down with them.
-// On cube-clip-5 the best worst quality after 100 iterations is 0.2218 against 0.1713 and the shape
-// phase hands over higher; the Newton finish then carries both runs to within 1e-5 of each other
-// (0.2338337 against 0.2338413), so the end is only required not to be lower by more than that.
+// On cube-clip-5 the best worst quality after 100 iterations is 0.2246 against 0.1713 and the shape
+// phase hands over far sooner (iteration 131 on 0.2248 against 316 on 0.2269); the Newton finish
+// then carries both runs to within 1e-5 of each other (0.2338228 against 0.2338315), so the end is
+// only required not to be lower by more than that.
 BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again) {
     auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), without = mesh;
     const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
@@ -367,7 +368,7 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
     BOOST_TEST(ascending.history[100].best_worst_quality > plain.history[100].best_worst_quality);
     BOOST_TEST_REQUIRE((shape_end(ascending) != ascending.history.end()));
     BOOST_TEST_REQUIRE((shape_end(plain) != plain.history.end()));
-    BOOST_TEST(shape_end(ascending)->best_worst_quality > shape_end(plain)->best_worst_quality);
+    BOOST_TEST(shape_end(ascending)->iteration + 100 < shape_end(plain)->iteration);
     BOOST_TEST(ascending.worst_after > plain.worst_after - 1e-5);
     BOOST_TEST(ascending.after.inverted == 0);
     check_never_worse(ascending);
@@ -381,8 +382,9 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
 // smoother's worst, reached about 230 iterations sooner than when the phase waited for its stall.
 // Where the steps gain less than a mu each (the barrier's subproblems solved at every step) while
 // the worst element creeps, the phase hands over at ten times the pace of the 100 times
-// min_progress rule: on tire at iteration 140, where the worst still rose by 2e-4 over the last
-// three windows (the 100 rule alone goes on to 179).
+// min_progress rule: on tire at iteration 137, where the worst still rose by 1.7e-4 over the last
+// three windows (before the let-go rule of kLeastWorstWeight: at 140, and the 100 rule alone went
+// on to 179).
 BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk"), local = mesh;
     pv::GlobalSolverOptions options;
@@ -403,6 +405,38 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     double gains = 0.0;  // in units of mu
     for (auto r = std::prev(last, 3 * window - 1); r != finish; ++r) gains += r->gain / r->mu;
     BOOST_TEST(gains < static_cast<double>(3 * window));
+    BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
+    check_never_worse(summary);
+}
+
+// Where mu is so large that t sits far below the worst element, the barrier weighs the many
+// elements near t like the worst and its steps trade the worst ones for them: after a progress
+// window of steps in which the worst element held under 1% of the weight (mu / (worst - t)), mu
+// shrinks (docs/global_solver.md, "A barrier that let its worst element go"). On cub_wedge_like
+// one mu used to hold for 60 iterations, 36 of them in a row with the worst under 1%; the phase's
+// first mu is left alone (the automatic start weighs many elements alike on purpose).
+BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
+    auto mesh = shared_mesh("mesquite/tets/cub_wedge_like.vtk"), local = mesh;
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto& h = summary.history;
+    const int window = options.termination.progress_window;
+    int longest = 0, run = 0, stages = 0;
+    for (std::size_t i = 1; i < h.size() && h[i].phase == "shape"; ++i) {
+        if (h[i].mu != h[i - 1].mu) {
+            ++stages;
+            run = 0;
+        }
+        // The record after a step holds the weight the next step is judged on.
+        const bool let_go = h[i].mu / (h[i].worst_quality - h[i].t) < 0.01;
+        run = let_go ? run + 1 : 0;
+        if (stages > 0) longest = std::max(longest, run);
+    }
+    BOOST_TEST_MESSAGE("cub_wedge_like: " << stages << " smaller mus, at most " << longest
+                                          << " steps in a row with the worst element under 1%");
+    BOOST_TEST(stages > 3);
+    BOOST_TEST(longest <= window);
     BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
     check_never_worse(summary);
 }
@@ -428,7 +462,7 @@ BOOST_AUTO_TEST_CASE(finish_band_focuses_the_finish_on_a_fraction_of_the_band) {
 }
 
 // With fewer than twice the 50 steps left in the budget when the conjugate gradients hand over
-// (tire: at iteration 140, as the same run with the whole budget tells), the fresh barrier goes
+// (tire: at iteration 137, as the same run with the whole budget tells), the fresh barrier goes
 // first and alone.
 BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk"), budgeted = mesh;

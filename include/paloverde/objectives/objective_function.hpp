@@ -96,6 +96,9 @@ public:
 
     double mu() const { return mu_; }
     double t() const { return t_; }
+    // The worst element's weight mu / (worst - t) at the last t solve (the weights sum to 1): how
+    // much of the barrier's pull the worst element has. 1 before the first solve.
+    double worst_weight() const { return gap_ratio_ > 0.0 ? 1.0 / gap_ratio_ : 1.0; }
 
 private:
     double automatic_active(double elements) const;
