@@ -391,6 +391,11 @@ private:
         const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
         return barrier ? barrier->t() : 0.0;
     }
+    // The log-barrier's weight on its worst element; 1 for the other objectives.
+    double barrier_worst_weight() const {
+        const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
+        return barrier ? barrier->worst_weight() : 1.0;
+    }
     // Newton directions (shape phase): the damping factor, adapted to how the last step went.
     detail::NewtonDirection newton_{work_};
     double newton_damping_ = 1e-2;
@@ -1055,8 +1060,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             // little, and shrinking mu at each such step would run away.
             // Or where the barrier let its worst element go (kLeastWorstWeight).
             ++steps_at_mu_;
-            const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
-            let_go_steps_ = barrier && barrier->worst_weight() < kLeastWorstWeight ? let_go_steps_ + 1 : 0;
+            let_go_steps_ = barrier_worst_weight() < kLeastWorstWeight ? let_go_steps_ + 1 : 0;
             const bool let_go = let_go_steps_ >= stop_.progress_window && stage_history_.back() > 0.0;
             solved = adaptive ? steps_at_mu_ >= options_.steps_per_mu && accepted &&
                                     (gain_ < options_.gain_tolerance * barrier_mu() || let_go)
