@@ -38,6 +38,28 @@ std::vector<pv::IterationRecord>::const_iterator shape_end(const pv::Summary& su
                         [](const pv::IterationRecord& r) { return r.phase != "shape"; });
 }
 
+// The first record whose best worst quality reached the local smoother's final worst on `input`
+// (end() if none).
+std::vector<pv::IterationRecord>::const_iterator reaching_local(const pv::Summary& summary, pv::Mesh input) {
+    const double local_worst = pv::LocalSolver().improve(input).worst_after;
+    return std::find_if(summary.history.begin(), summary.history.end(),
+                        [&](const pv::IterationRecord& r) { return r.best_worst_quality >= local_worst - 1e-12; });
+}
+
+// The global solver with its default options, on one thread.
+pv::Summary improved_by_default(pv::Mesh& mesh) {
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    return pv::GlobalSolver(options).improve(mesh);
+}
+
+// What the steps of the records [first, last) gained, in units of their mu.
+double gains_in_mu(std::vector<pv::IterationRecord>::const_iterator first, std::vector<pv::IterationRecord>::const_iterator last) {
+    double gains = 0.0;
+    for (; first != last; ++first) gains += first->gain / first->mu;
+    return gains;
+}
+
 }  // namespace
 
 BOOST_AUTO_TEST_SUITE(global_solver)
@@ -318,15 +340,17 @@ BOOST_DATA_TEST_CASE(the_newton_finish_raises_the_worst_element_where_conjugate_
 }
 
 // The finish first goes on with the conjugate gradients' own barrier (the same mu). On
-// cube-clip-5 its Newton steps cannot solve that barrier's subproblem: after the cap of 50 steps
-// at one mu a fresh barrier (a larger mu) takes over from the best iterate. On tire they solve it
-// and raise the worst element, and no fresh barrier follows. (Both with the default budget of 500
-// iterations; the shape phases hand over at 131 and 137.)
+// cube-clip-5 without the damped-vertex ascent its Newton steps cannot solve that barrier's
+// subproblem: after the cap of 50 steps at one mu a fresh barrier (a larger mu) takes over from
+// the best iterate. On tire they solve it and raise the worst element, and no fresh barrier
+// follows. (Both with the default budget of 500 iterations; the shape phases hand over at 325 and
+// 137. With the ascent, cube-clip-5's hands over at 114, from where the first part converges.)
 BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and_recenters_out_of_reach,
                      bdata::make({"mesquite/tets/cube-clip-5.vtk", "mesquite/tets/tire.vtk"}), name) {
     auto mesh = shared_mesh(name);
     pv::GlobalSolverOptions options;
     options.threads = 1;
+    options.damped_vertex_ascent = std::string(name) == "mesquite/tets/tire.vtk";
     const auto summary = pv::GlobalSolver(options).improve(mesh);
     const auto& h = summary.history;
     const auto finish = first_in(summary, "finish"), fresh = first_in(summary, "finish_fresh");
@@ -350,9 +374,9 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
 // A vertex the line search damped so that nothing blocks is damped further while its own
 // elements' barrier terms would fall (damped_vertex_ascent, the default): the long steps that pay
 // for the bulk of the barrier no longer take the worst elements' neighbourhoods down with them.
-// On cube-clip-5 the best worst quality after 100 iterations is 0.2246 against 0.1713 and the shape
-// phase hands over far sooner (iteration 131 on 0.2248 against 316 on 0.2269); the Newton finish
-// then carries both runs to within 1e-5 of each other (0.2338228 against 0.2338315), so the end is
+// On cube-clip-5 the best worst quality after 100 iterations is 0.2319 against 0.1166 and the shape
+// phase hands over far sooner (iteration 114 on 0.2320 against 325 on 0.2283); the Newton finish
+// then carries both runs to within 1e-4 of each other (0.2337638 against 0.2338321), so the end is
 // only required not to be lower by more than that.
 BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again) {
     auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), without = mesh;
@@ -369,7 +393,7 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
     BOOST_TEST_REQUIRE((shape_end(ascending) != ascending.history.end()));
     BOOST_TEST_REQUIRE((shape_end(plain) != plain.history.end()));
     BOOST_TEST(shape_end(ascending)->iteration + 100 < shape_end(plain)->iteration);
-    BOOST_TEST(ascending.worst_after > plain.worst_after - 1e-5);
+    BOOST_TEST(ascending.worst_after > plain.worst_after - 1e-4);
     BOOST_TEST(ascending.after.inverted == 0);
     check_never_worse(ascending);
     check_never_worse(plain);
@@ -387,24 +411,21 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
 // on to 179).
 BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk"), local = mesh;
-    pv::GlobalSolverOptions options;
-    options.threads = 1;
-    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto summary = improved_by_default(mesh);
+    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
     const auto& h = summary.history;
     const auto finish = shape_end(summary);
-    const auto window = static_cast<std::ptrdiff_t>(options.termination.progress_window);
+    const auto window = static_cast<std::ptrdiff_t>(limits.progress_window);
     BOOST_TEST_REQUIRE((finish - h.begin()) > 3 * window + 1);
     BOOST_TEST_REQUIRE(finish->phase == "finish");
     const auto last = std::prev(finish);
     auto rise_over = [&](std::ptrdiff_t n) { return last->best_worst_quality - std::prev(last, n)->best_worst_quality; };
-    const double min_progress = options.termination.min_progress;
+    const double min_progress = limits.min_progress;
     BOOST_TEST_MESSAGE("tire: handover at " << finish->iteration << ", the worst rose " << rise_over(3 * window)
                                             << " over three windows");
     BOOST_TEST(rise_over(window) > min_progress * last->best_worst_quality);  // not a stall
     BOOST_TEST(rise_over(3 * window) > 100.0 * min_progress * last->best_worst_quality);  // a calm creep
-    double gains = 0.0;  // in units of mu
-    for (auto r = std::prev(last, 3 * window - 1); r != finish; ++r) gains += r->gain / r->mu;
-    BOOST_TEST(gains < static_cast<double>(3 * window));
+    BOOST_TEST(gains_in_mu(std::prev(last, 3 * window - 1), finish) < static_cast<double>(3 * window));
     BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
     check_never_worse(summary);
 }
@@ -414,14 +435,14 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
 // window of steps in which the worst element held under 1% of the weight (mu / (worst - t)), mu
 // shrinks (docs/global_solver.md, "A barrier that let its worst element go"). On cub_wedge_like
 // one mu used to hold for 60 iterations, 36 of them in a row with the worst under 1%; the phase's
-// first mu is left alone (the automatic start weighs many elements alike on purpose).
+// first mu only where the worst also rose away from t (the automatic start weighs many elements
+// alike on purpose; the next test).
 BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
     auto mesh = shared_mesh("mesquite/tets/cub_wedge_like.vtk"), local = mesh;
-    pv::GlobalSolverOptions options;
-    options.threads = 1;
-    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto summary = improved_by_default(mesh);
+    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
     const auto& h = summary.history;
-    const int window = options.termination.progress_window;
+    const int window = limits.progress_window;
     int longest = 0, run = 0, stages = 0;
     for (std::size_t i = 1; i < h.size() && h[i].phase == "shape"; ++i) {
         if (h[i].mu != h[i - 1].mu) {
@@ -438,6 +459,61 @@ BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
     BOOST_TEST(stages > 3);
     BOOST_TEST(longest <= window);
     BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
+    check_never_worse(summary);
+}
+
+// The phase's first mu is spared that rule while the automatic start's weighting holds, but not
+// once the worst element rose away from a t that stayed: on cube-clip-5 the worst's gap above t
+// grows from 0.030 to 0.074 over the first ten steps (its weight from 1/700 to 1/1,800), and the
+// first mu now ends at step 10 instead of 17; the local smoother's worst comes at iteration 42
+// instead of 59.
+BOOST_AUTO_TEST_CASE(the_first_mu_shrinks_once_the_worst_rose_away_from_t) {
+    auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), local = mesh;
+    const auto summary = improved_by_default(mesh);
+    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const auto& h = summary.history;
+    const int window = limits.progress_window;
+    const auto first_other = std::find_if(h.begin(), h.end(), [&](const pv::IterationRecord& r) { return r.mu != h.front().mu; });
+    BOOST_TEST_REQUIRE((first_other != h.end()));
+    BOOST_TEST(first_other->iteration <= window);
+    const double first_gap = h.front().worst_quality - h.front().t;
+    for (auto r = std::next(h.begin()); r != first_other; ++r) {
+        BOOST_TEST(r->worst_quality - r->t > first_gap);
+        BOOST_TEST(r->mu / (r->worst_quality - r->t) < 0.01);
+    }
+    const auto reached = reaching_local(summary, local);
+    BOOST_TEST_REQUIRE((reached != h.end()));
+    BOOST_TEST_MESSAGE("cube-clip-5: the first mu ends at " << first_other->iteration << ", the local smoother's worst at "
+                                                            << reached->iteration);
+    BOOST_TEST(reached->iteration < 50);
+    check_never_worse(summary);
+}
+
+// Where the steps gain a few mu each while the worst quality stands still, conjugate gradients
+// hand over after a single progress window (kQuickHandoverProgress, kQuickGain): on cub_wedge_like
+// one mu held from iteration 55 to 89, the worst within 2e-5 from 75 on; the shape phase now
+// hands over at 87 instead of 113, and the local smoother's worst comes at 94 instead of 120.
+BOOST_AUTO_TEST_CASE(a_shape_phase_whose_steps_gain_little_hands_over_after_one_window) {
+    auto mesh = shared_mesh("mesquite/tets/cub_wedge_like.vtk"), local = mesh;
+    const auto summary = improved_by_default(mesh);
+    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const auto& h = summary.history;
+    const auto finish = shape_end(summary);
+    const auto window = static_cast<std::ptrdiff_t>(limits.progress_window);
+    BOOST_TEST_REQUIRE((finish != h.end()));
+    BOOST_TEST_REQUIRE((finish - h.begin()) > window + 1);
+    const auto last = std::prev(finish);
+    BOOST_TEST_MESSAGE("cub_wedge_like: handover at " << finish->iteration);
+    BOOST_TEST(finish->iteration < 100);
+    const auto before = std::prev(last, window);
+    BOOST_TEST(before->mu == last->mu);  // no smaller mu in the window: the three-window rules wait for one
+    BOOST_TEST(last->best_worst_quality - before->best_worst_quality <
+               30.0 * limits.min_progress * last->best_worst_quality);
+    BOOST_TEST(gains_in_mu(std::next(before), finish) < 10.0 * static_cast<double>(window));
+    const auto reached = reaching_local(summary, local);
+    BOOST_TEST_REQUIRE((reached != h.end()));
+    BOOST_TEST(reached->iteration < 105);
+    BOOST_TEST(summary.worst_after >= reached->best_worst_quality);
     check_never_worse(summary);
 }
 
@@ -513,8 +589,11 @@ BOOST_AUTO_TEST_CASE(the_finish_starts_a_fresh_barrier_where_the_worst_rose_far_
 // weighs its focus alone"): its mu comes from the focus's terms, and a refocus keeps its t. With
 // the still elements' terms too, mu times the element count would stay below 1 - t (no term is less
 // than 1 / (1 - t)): tire's fresh barrier (min_progress 0.1, as above) starts at 5.9 against 0.83.
-// Without keep_t its first refocus (44 to 92 vertices) dropped t by 0.19, and the run ended on
-// 0.190 instead of 0.219.
+// Where Newton steps lifted the focus past a still element (the whole mesh's worst below t: here
+// at the refocuses of iterations 15, 16 and 17), the refocus that takes it in cannot keep t;
+// keep_t then keeps t's gap below that element (objective_gradient_test), and one step later t
+// stands within 0.01 of it. Without keep_t the first refocus (44 to 92 vertices, before the
+// one-window handover) dropped t by 0.19, and the run ended on 0.190 instead of 0.219.
 BOOST_AUTO_TEST_CASE(the_fresh_barrier_weighs_its_focus_alone_and_keeps_t_on_a_refocus) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk");
     const auto elements = static_cast<double>(mesh.num_elements());
@@ -532,10 +611,12 @@ BOOST_AUTO_TEST_CASE(the_fresh_barrier_weighs_its_focus_alone_and_keeps_t_on_a_r
         const auto next = std::next(r);
         if (next->iteration != r->iteration && next->moved > r->moved) {
             ++wider;
-            BOOST_TEST(next->t >= r->t);
+            if (r->worst_quality > r->t) BOOST_TEST(next->t >= r->t);
+            else BOOST_TEST(next->t > r->worst_quality - 0.01);  // a gap of at most 0.01 below it, then one step
         }
     }
     BOOST_TEST(wider > 0);
+    BOOST_TEST(summary.worst_after > 0.219);
     check_never_worse(summary);
 }
 

@@ -255,15 +255,22 @@ BOOST_AUTO_TEST_CASE(barrier_t_weighs_the_still_elements) {
     BOOST_TEST(std::abs(focused.t() - alone.t()) <= 1e-9 * gap);
 }
 
+// Qualities from 0.2 up: a focus's 100 lowest, and the 2,000 of a wider one.
+struct GrowingFocus {
+    std::vector<double> small, large;
+    GrowingFocus() {
+        for (int i = 0; i < 2000; ++i) {
+            const double q = 0.2 + 0.1 * std::sqrt(i / 2000.0);
+            if (i < 100) small.push_back(q);
+            large.push_back(q);
+        }
+    }
+};
+
 // A barrier over a focus alone (the finish's fresh barrier): when the focus takes in more elements,
 // keep_t sets mu so that t stays where it was; with mu kept, t would sink far below the worst.
 BOOST_AUTO_TEST_CASE(barrier_keeps_t_when_its_focus_grows) {
-    std::vector<double> small, large;
-    for (int i = 0; i < 2000; ++i) {
-        const double q = 0.2 + 0.1 * std::sqrt(i / 2000.0);
-        if (i < 100) small.push_back(q);
-        large.push_back(q);
-    }
+    const auto [small, large] = GrowingFocus();
     const pv::Reducer serial;
     pv::LogBarrier barrier;
     barrier.update(small, serial);
@@ -276,6 +283,28 @@ BOOST_AUTO_TEST_CASE(barrier_keeps_t_when_its_focus_grows) {
     BOOST_TEST(barrier.mu() < 0.5 * mu);
     barrier.update(large, serial);
     BOOST_TEST(std::abs(barrier.t() - t) <= 1e-9 * gap);
+}
+
+// The wider focus takes in an element below t (outside the focus it was not a term, and the focus's
+// own elements rose past it): t cannot stay, and keeps its gap below the new worst instead of
+// the root at the old mu, which many more terms put far below.
+BOOST_AUTO_TEST_CASE(barrier_keeps_its_gap_when_the_focus_brings_an_element_below_t) {
+    auto [small, large] = GrowingFocus();
+    const pv::Reducer serial;
+    pv::LogBarrier barrier;
+    barrier.update(small, serial);
+    const double gap = 0.2 - barrier.t(), mu = barrier.mu();
+    large.push_back(barrier.t() - 0.5 * gap);  // below t
+    const double worst = barrier.t() - 0.5 * gap;
+    pv::LogBarrier kept_mu(0.8, mu);
+    kept_mu.update(large, serial);
+    BOOST_TEST(worst - kept_mu.t() > 2.0 * gap);  // the root at the old mu
+    barrier.keep_t(large, serial);
+    BOOST_TEST(barrier.t() < worst);
+    BOOST_TEST(std::abs((worst - barrier.t()) - gap) <= 1e-12);
+    BOOST_TEST(barrier.mu() < mu);
+    barrier.update(large, serial);  // and the root at the new mu is that t
+    BOOST_TEST(std::abs(barrier.t() - (worst - gap)) <= 1e-9 * gap);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -91,7 +91,8 @@ public:
     // Sets mu so that t stays where it stands for these terms (before an automatic first mu:
     // nothing). A barrier over a focus alone keeps its t, and the weight on its worst elements,
     // when the focus changes: with mu kept, ten times the terms would put t ten times farther
-    // below the worst (the gap is about mu times the terms near it). Collective.
+    // below the worst (the gap is about mu times the terms near it). Where a term lies at or
+    // below t, t keeps its gap below the worst instead. Collective.
     void keep_t(std::span<const double> counted, const Reducer& reducer);
 
     double mu() const { return mu_; }
