@@ -38,20 +38,28 @@ std::vector<pv::IterationRecord>::const_iterator shape_end(const pv::Summary& su
                         [](const pv::IterationRecord& r) { return r.phase != "shape"; });
 }
 
+// The local smoother's final worst quality on `input`.
+double local_worst(pv::Mesh input) { return pv::LocalSolver().improve(input).worst_after; }
+
 // The first record whose best worst quality reached the local smoother's final worst on `input`
 // (end() if none).
-std::vector<pv::IterationRecord>::const_iterator reaching_local(const pv::Summary& summary, pv::Mesh input) {
-    const double local_worst = pv::LocalSolver().improve(input).worst_after;
+std::vector<pv::IterationRecord>::const_iterator reaching_local(const pv::Summary& summary, const pv::Mesh& input) {
+    const double local = local_worst(input);
     return std::find_if(summary.history.begin(), summary.history.end(),
-                        [&](const pv::IterationRecord& r) { return r.best_worst_quality >= local_worst - 1e-12; });
+                        [&](const pv::IterationRecord& r) { return r.best_worst_quality >= local - 1e-12; });
 }
 
-// The global solver with its default options, on one thread.
-pv::Summary improved_by_default(pv::Mesh& mesh) {
+// The global solver with its default options, on one thread, on a shared mesh (the input is
+// kept for the local smoother).
+struct DefaultRun {
     pv::GlobalSolverOptions options;
-    options.threads = 1;
-    return pv::GlobalSolver(options).improve(mesh);
-}
+    pv::Mesh input, mesh;
+    pv::Summary summary;
+    explicit DefaultRun(const std::string& name) : input(shared_mesh(name)), mesh(input) {
+        options.threads = 1;
+        summary = pv::GlobalSolver(options).improve(mesh);
+    }
+};
 
 // What the steps of the records [first, last) gained, in units of their mu.
 double gains_in_mu(std::vector<pv::IterationRecord>::const_iterator first, std::vector<pv::IterationRecord>::const_iterator last) {
@@ -410,9 +418,9 @@ BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_ag
 // three windows (before the let-go rule of kLeastWorstWeight: at 140, and the 100 rule alone went
 // on to 179).
 BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
-    auto mesh = shared_mesh("mesquite/tets/tire.vtk"), local = mesh;
-    const auto summary = improved_by_default(mesh);
-    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const DefaultRun run("mesquite/tets/tire.vtk");
+    const auto& summary = run.summary;
+    const pv::TerminationCriterion& limits = run.options.termination;
     const auto& h = summary.history;
     const auto finish = shape_end(summary);
     const auto window = static_cast<std::ptrdiff_t>(limits.progress_window);
@@ -426,7 +434,7 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
     BOOST_TEST(rise_over(window) > min_progress * last->best_worst_quality);  // not a stall
     BOOST_TEST(rise_over(3 * window) > 100.0 * min_progress * last->best_worst_quality);  // a calm creep
     BOOST_TEST(gains_in_mu(std::prev(last, 3 * window - 1), finish) < static_cast<double>(3 * window));
-    BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
+    BOOST_TEST(summary.worst_after >= local_worst(run.input));
     check_never_worse(summary);
 }
 
@@ -438,27 +446,27 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
 // first mu only where the worst also rose away from t (the automatic start weighs many elements
 // alike on purpose; the next test).
 BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
-    auto mesh = shared_mesh("mesquite/tets/cub_wedge_like.vtk"), local = mesh;
-    const auto summary = improved_by_default(mesh);
-    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const DefaultRun run("mesquite/tets/cub_wedge_like.vtk");
+    const auto& summary = run.summary;
+    const pv::TerminationCriterion& limits = run.options.termination;
     const auto& h = summary.history;
     const int window = limits.progress_window;
-    int longest = 0, run = 0, stages = 0;
+    int longest = 0, streak = 0, stages = 0;
     for (std::size_t i = 1; i < h.size() && h[i].phase == "shape"; ++i) {
         if (h[i].mu != h[i - 1].mu) {
             ++stages;
-            run = 0;
+            streak = 0;
         }
         // The record after a step holds the weight the next step is judged on.
         const bool let_go = h[i].mu / (h[i].worst_quality - h[i].t) < 0.01;
-        run = let_go ? run + 1 : 0;
-        if (stages > 0) longest = std::max(longest, run);
+        streak = let_go ? streak + 1 : 0;
+        if (stages > 0) longest = std::max(longest, streak);
     }
     BOOST_TEST_MESSAGE("cub_wedge_like: " << stages << " smaller mus, at most " << longest
                                           << " steps in a row with the worst element under 1%");
     BOOST_TEST(stages > 3);
     BOOST_TEST(longest <= window);
-    BOOST_TEST(summary.worst_after >= pv::LocalSolver().improve(local).worst_after);
+    BOOST_TEST(summary.worst_after >= local_worst(run.input));
     check_never_worse(summary);
 }
 
@@ -468,9 +476,9 @@ BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
 // first mu now ends at step 10 instead of 17; the local smoother's worst comes at iteration 42
 // instead of 59.
 BOOST_AUTO_TEST_CASE(the_first_mu_shrinks_once_the_worst_rose_away_from_t) {
-    auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), local = mesh;
-    const auto summary = improved_by_default(mesh);
-    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const DefaultRun run("mesquite/tets/cube-clip-5.vtk");
+    const auto& summary = run.summary;
+    const pv::TerminationCriterion& limits = run.options.termination;
     const auto& h = summary.history;
     const int window = limits.progress_window;
     const auto first_other = std::find_if(h.begin(), h.end(), [&](const pv::IterationRecord& r) { return r.mu != h.front().mu; });
@@ -481,7 +489,7 @@ BOOST_AUTO_TEST_CASE(the_first_mu_shrinks_once_the_worst_rose_away_from_t) {
         BOOST_TEST(r->worst_quality - r->t > first_gap);
         BOOST_TEST(r->mu / (r->worst_quality - r->t) < 0.01);
     }
-    const auto reached = reaching_local(summary, local);
+    const auto reached = reaching_local(summary, run.input);
     BOOST_TEST_REQUIRE((reached != h.end()));
     BOOST_TEST_MESSAGE("cube-clip-5: the first mu ends at " << first_other->iteration << ", the local smoother's worst at "
                                                             << reached->iteration);
@@ -494,9 +502,9 @@ BOOST_AUTO_TEST_CASE(the_first_mu_shrinks_once_the_worst_rose_away_from_t) {
 // one mu held from iteration 55 to 89, the worst within 2e-5 from 75 on; the shape phase now
 // hands over at 87 instead of 113, and the local smoother's worst comes at 94 instead of 120.
 BOOST_AUTO_TEST_CASE(a_shape_phase_whose_steps_gain_little_hands_over_after_one_window) {
-    auto mesh = shared_mesh("mesquite/tets/cub_wedge_like.vtk"), local = mesh;
-    const auto summary = improved_by_default(mesh);
-    const pv::TerminationCriterion limits = pv::GlobalSolverOptions().termination;
+    const DefaultRun run("mesquite/tets/cub_wedge_like.vtk");
+    const auto& summary = run.summary;
+    const pv::TerminationCriterion& limits = run.options.termination;
     const auto& h = summary.history;
     const auto finish = shape_end(summary);
     const auto window = static_cast<std::ptrdiff_t>(limits.progress_window);
@@ -510,7 +518,7 @@ BOOST_AUTO_TEST_CASE(a_shape_phase_whose_steps_gain_little_hands_over_after_one_
     BOOST_TEST(last->best_worst_quality - before->best_worst_quality <
                30.0 * limits.min_progress * last->best_worst_quality);
     BOOST_TEST(gains_in_mu(std::next(before), finish) < 10.0 * static_cast<double>(window));
-    const auto reached = reaching_local(summary, local);
+    const auto reached = reaching_local(summary, run.input);
     BOOST_TEST_REQUIRE((reached != h.end()));
     BOOST_TEST(reached->iteration < 105);
     BOOST_TEST(summary.worst_after >= reached->best_worst_quality);

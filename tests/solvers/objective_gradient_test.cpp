@@ -294,8 +294,8 @@ BOOST_AUTO_TEST_CASE(barrier_keeps_its_gap_when_the_focus_brings_an_element_belo
     pv::LogBarrier barrier;
     barrier.update(small, serial);
     const double gap = 0.2 - barrier.t(), mu = barrier.mu();
-    large.push_back(barrier.t() - 0.5 * gap);  // below t
-    const double worst = barrier.t() - 0.5 * gap;
+    const double worst = barrier.t() - 0.5 * gap;  // below t
+    large.push_back(worst);
     pv::LogBarrier kept_mu(0.8, mu);
     kept_mu.update(large, serial);
     BOOST_TEST(worst - kept_mu.t() > 2.0 * gap);  // the root at the old mu

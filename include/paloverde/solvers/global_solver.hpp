@@ -45,9 +45,9 @@ struct GlobalSolverOptions {
     // barrier's subproblem nearly solved), after at least steps_per_mu steps at one mu; also
     // when one mu held through three progress windows while the worst quality stood still (as
     // long as the last such shrink paid), and after a progress window of steps in which the worst
-    // element held under 1% of the barrier's weight (not on the phase's first mu). Untangling, and
-    // the shape phase with gain_tolerance 0:
-    // after steps_per_mu steps.
+    // element held under 1% of the barrier's weight (on the phase's first mu only while the worst
+    // also stood farther above t than where the phase began). Untangling, and the shape phase with
+    // gain_tolerance 0: after steps_per_mu steps.
     // Newton has its own rule (newton_tolerance).
     double gain_tolerance = 0.1;
     int steps_per_mu = 5;
