@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <string_view>
@@ -74,38 +75,54 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
     const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
     std::vector<std::uint8_t> boundary(n, 0);
     const auto size = static_cast<std::size_t>(k - 1);
-    std::vector<std::uint64_t> faces;  // at this vertex: the others of each face, packed increasing
+    constexpr VertexId kNone = std::numeric_limits<VertexId>::max();
+    auto key = [](VertexId a, VertexId b) {  // a face's others, packed increasing (a triangle's edge: b = 0)
+        return static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32 | static_cast<std::uint32_t>(b);
+    };
+    std::int64_t most_around = 0;
+    for (std::size_t v = 0; v < n; ++v) most_around = std::max(most_around, first_around[v + 1] - first_around[v]);
+    // At this vertex: the others of each face, packed increasing (at most three per element).
+    std::vector<std::uint64_t> faces(3 * static_cast<std::size_t>(most_around));
     for (std::size_t v = 0; v < n; ++v) {
         const auto vertex = static_cast<VertexId>(v);
-        faces.clear();
-        const auto end = static_cast<std::size_t>(first_around[v + 1]);
-        for (auto i = static_cast<std::size_t>(first_around[v]); i < end; ++i) {
+        const auto begin = static_cast<std::size_t>(first_around[v]), end = static_cast<std::size_t>(first_around[v + 1]);
+        std::size_t listed = 0;
+        for (std::size_t i = begin; i < end; ++i) {
             if (i + ahead < around.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(around[i + ahead]));
             const VertexId* c = corners + k * static_cast<std::size_t>(around[i]);
-            // The faces without one of the other corners hold v; v is their smallest vertex when
-            // every other corner but the one left out is larger.
-            for (int skip = 0; skip < k; ++skip) {
-                if (c[skip] == vertex) continue;
-                VertexId others[2] = {0, 0};
-                int count = 0;
-                bool smallest = true;
-                for (int j = 0; j < k; ++j)
-                    if (j != skip && c[j] != vertex) {
-                        smallest = smallest && c[j] > vertex;
-                        others[count++] = c[j];
-                    }
-                if (!smallest) continue;
-                if (count == 2 && others[0] > others[1]) std::swap(others[0], others[1]);
-                // (a triangle's edge has one other, in the high half)
-                faces.push_back(count == 2 ? static_cast<std::uint64_t>(static_cast<std::uint32_t>(others[0])) << 32 |
-                                                 static_cast<std::uint32_t>(others[1])
-                                           : static_cast<std::uint64_t>(static_cast<std::uint32_t>(others[0])) << 32);
+            // v is the smallest vertex of the faces through it whose other corners are all larger:
+            // with L corners above v, a tetrahedron has C(L, 2) such faces, a triangle L edges. The
+            // larger corners are gathered and sorted without branching on their values (which
+            // would mispredict at nearly every corner); unused slots hold kNone.
+            VertexId larger[4] = {kNone, kNone, kNone, kNone};
+            int count = 0;
+            for (int j = 0; j < k; ++j) {
+                larger[count] = c[j];
+                count += c[j] > vertex;
+            }
+            larger[count] = kNone;
+            auto order = [&](int a, int b) {
+                const VertexId low = std::min(larger[a], larger[b]), high = std::max(larger[a], larger[b]);
+                larger[a] = low, larger[b] = high;
+            };
+            std::uint64_t* out = faces.data() + listed;
+            if (k == 4) {
+                order(0, 1), order(1, 2), order(0, 1);
+                out[0] = key(larger[0], larger[1]);
+                out[1] = key(larger[0], larger[2]);
+                out[2] = key(larger[1], larger[2]);
+                listed += static_cast<std::size_t>(count * (count - 1) / 2);
+            } else {
+                out[0] = key(larger[0], 0);
+                out[1] = key(larger[1], 0);
+                listed += static_cast<std::size_t>(count);
             }
         }
-        std::sort(faces.begin(), faces.end());
-        for (auto i = faces.begin(); i != faces.end();) {
+        const auto last = faces.begin() + static_cast<std::ptrdiff_t>(listed);
+        std::sort(faces.begin(), last);
+        for (auto i = faces.begin(); i != last;) {
             auto j = i + 1;
-            while (j != faces.end() && *j == *i) ++j;
+            while (j != last && *j == *i) ++j;
             const std::array<VertexId, 3> face{vertex, static_cast<VertexId>(*i >> 32), static_cast<VertexId>(*i & 0xFFFFFFFFu)};
             if (j - i == 1)
                 for (std::size_t c = 0; c < size; ++c) boundary[static_cast<std::size_t>(face[c])] = 1;

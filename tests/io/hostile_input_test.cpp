@@ -397,12 +397,42 @@ BOOST_AUTO_TEST_CASE(non_manifold_and_duplicate_elements) {
     for (const fs::path& path : write_everywhere(dir, "twice", kFivePoints, twice))
         check_read_error(path, path.filename().string(), {"elements 0 and 2 have the same vertices (duplicate element)"});
 
+    // Triangles too; of three copies, the first two are named.
+    const std::vector<Element> triangles_twice = {{0, 1, 2}, {1, 3, 2}, {2, 0, 1}};
+    for (const fs::path& path : write_everywhere(dir, "triangles_twice", kFivePoints, triangles_twice))
+        check_read_error(path, path.filename().string(), {"elements 0 and 2 have the same vertices (duplicate element)"});
+    const std::vector<Element> thrice = {{1, 2, 3, 4}, {0, 1, 2, 3}, {3, 2, 1, 0}, {0, 3, 1, 2}};
+    for (const fs::path& path : write_everywhere(dir, "thrice", kFivePoints, thrice))
+        check_read_error(path, path.filename().string(), {"elements 1 and 2 have the same vertices (duplicate element)"});
+
     // Two tetrahedra meeting at vertex 3 only: read as they are; every vertex is on the boundary.
     const std::vector<Point> bow_tie = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 2}, {0, 1, 2}, {0, 0, 3}};
     for (const fs::path& path : write_everywhere(dir, "bow_tie", bow_tie, {{0, 1, 2, 3}, {3, 4, 5, 6}})) {
         const MeshFile file = read_mesh(path);
         BOOST_TEST(file.mesh.num_elements() == 2, path.filename());
         BOOST_TEST(file.mesh.num_free_vertices() == 0, path.filename());
+    }
+}
+
+// The boundary a read fixes is the plain definition's (a face, or a triangle's edge, in one
+// element only) on real meshes of both kinds, whose vertices around a face come in every order.
+// (Written without their `fixed` field, which the shared meshes carry.)
+BOOST_AUTO_TEST_CASE(the_boundary_read_is_the_faces_in_one_element) {
+    const ScratchDir dir("hostile_boundary");
+    WriteOptions plain;
+    plain.write_fixed = false;
+    for (const char* name : {"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "tetwild/octopus-vol.mesh",
+                             "stellar/house2.ele", "mesquite/tris/tri_20258.vtk", "mesquite/tris/shashkov.vtk"}) {
+        write_mesh(dir / "plain.vtu", read_mesh(shared_data(name)).mesh, plain);
+        const MeshFile file = read_mesh(dir / "plain.vtu");
+        const Mesh& mesh = file.mesh;
+        const auto boundary = boundary_vertices(mesh.kind(), mesh.connectivity(), mesh.num_vertices());
+        BOOST_TEST_CONTEXT(name) {
+            BOOST_TEST(!file.fixed_from_file);
+            BOOST_TEST(std::ranges::equal(boundary, mesh.fixed()));
+            BOOST_TEST(std::ranges::count(boundary, 1) > 0);
+            BOOST_TEST(std::ranges::count(boundary, 0) > 0);
+        }
     }
 }
 
