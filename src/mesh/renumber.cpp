@@ -78,29 +78,36 @@ VertexGraph vertex_graph(const Mesh& mesh, bool cell_edges) {
     graph.offsets.assign(n + 1, 0);
     graph.neighbours.reserve(around.size());
     std::vector<VertexId> last_row(n, -1);  // the row that last took each vertex
+    std::int64_t most_around = 0;
+    for (std::size_t v = 0; v < n; ++v) most_around = std::max(most_around, first_around[v + 1] - first_around[v]);
+    // One row's neighbours, gathered without branching on the ids (whether a corner is new to
+    // the row mispredicts often): each is written at the row's end, which moves on only for a new
+    // one.
+    std::vector<VertexId> row(k * static_cast<std::size_t>(most_around) + 1);
     const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
     for (std::size_t v = 0; v < n; ++v) {
         const auto vertex = static_cast<VertexId>(v);
-        const std::size_t row = graph.neighbours.size();
+        last_row[v] = vertex;  // never its own neighbour
+        std::size_t length = 0;
         auto take = [&](VertexId w) {
-            if (last_row[static_cast<std::size_t>(w)] == vertex) return;
+            row[length] = w;
+            length += last_row[static_cast<std::size_t>(w)] != vertex;
             last_row[static_cast<std::size_t>(w)] = vertex;
-            graph.neighbours.push_back(w);
         };
         const auto end = static_cast<std::size_t>(first_around[v + 1]);
         for (auto i = static_cast<std::size_t>(first_around[v]); i < end; ++i) {
             if (i + ahead < around.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(around[i + ahead]));
             const VertexId* c = corners + k * static_cast<std::size_t>(around[i]);
             if (!cell_edges) {
-                for (std::size_t j = 0; j < k; ++j)
-                    if (c[j] != vertex) take(c[j]);
+                for (std::size_t j = 0; j < k; ++j) take(c[j]);
             } else if (c[0] == vertex) {
                 for (std::size_t j = 1; j < k; ++j) take(c[j]);
             } else {
                 take(c[0]);  // v is one of the frame's other corners
             }
         }
-        sort_distinct_short(graph.neighbours.data() + row, graph.neighbours.data() + graph.neighbours.size());
+        sort_distinct_short(row.data(), row.data() + length);
+        graph.neighbours.insert(graph.neighbours.end(), row.data(), row.data() + length);
         graph.offsets[v + 1] = static_cast<std::int64_t>(graph.neighbours.size());
     }
     return graph;
@@ -238,10 +245,17 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
         freedom[i] = static_cast<std::uint8_t>(mesh.degrees_of_freedom(old));
         global[i] = mesh.global_ids()[old];
     }
-    std::vector<VertexId> connectivity;
-    connectivity.reserve(mesh.connectivity().size());
-    for (ElementId old : order.old_element)
-        for (VertexId v : mesh.element(old)) connectivity.push_back(new_id[v]);
+    // The elements in their new order lie scattered in the old: each is asked for a few ahead.
+    const auto k = static_cast<std::size_t>(mesh.corners());
+    const std::size_t m = order.old_element.size();
+    const VertexId* corners = mesh.connectivity().data();
+    const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
+    std::vector<VertexId> connectivity(k * m);
+    for (std::size_t i = 0; i < m; ++i) {
+        if (i + ahead < m) __builtin_prefetch(corners + k * static_cast<std::size_t>(order.old_element[i + ahead]));
+        const VertexId* old = corners + k * static_cast<std::size_t>(order.old_element[i]);
+        for (std::size_t c = 0; c < k; ++c) connectivity[k * i + c] = new_id[static_cast<std::size_t>(old[c])];
+    }
     Mesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
     out.set_degrees_of_freedom(std::move(freedom));
     out.set_global_ids(std::move(global));
@@ -298,17 +312,39 @@ std::vector<GlobalId> canonical_element_positions(const Mesh& mesh, std::span<co
             return high != o.high ? high < o.high : low != o.low ? low < o.low : map < o.map;
         }
     };
-    std::vector<Packed> sorted(static_cast<std::size_t>(m));
-    for (ElementId e = 0; e < m; ++e) {
+    auto packed = [&](ElementId e) {
         // The keys of the corners of an element a few ahead: scattered in a mesh in file order.
         if (e + detail::kPrefetchAhead < m)
             for (VertexId v : mesh.element(e + static_cast<ElementId>(detail::kPrefetchAhead)))
                 __builtin_prefetch(&vertex_key[v]);
         const Keyed entry = keyed(e);
         auto word = [&](int i) { return static_cast<std::uint64_t>(static_cast<std::uint32_t>(entry.key[i])); };
-        sorted[e] = {word(0) << 32 | word(1), word(2) << 32 | word(3), e, entry.map};
+        return Packed{word(0) << 32 | word(1), word(2) << 32 | word(3), e, entry.map};
+    };
+    std::vector<Packed> sorted(static_cast<std::size_t>(m));
+    const GlobalId largest = vertex_key.empty() ? 0 : *std::max_element(vertex_key.begin(), vertex_key.end());
+    if (largest > 2 * static_cast<GlobalId>(vertex_key.size())) {
+        for (ElementId e = 0; e < m; ++e) sorted[e] = packed(e);
+        std::sort(sorted.begin(), sorted.end());
+    } else {
+        // Dense keys (vertex positions: the serial set-up's): the records go straight into
+        // buckets by their smallest key (a counting sort), and each bucket, about six records, is
+        // sorted alone. The order of one sort of all of them, without its twenty passes over memory.
+        std::vector<ElementId> next(static_cast<std::size_t>(largest) + 2, 0);
+        for (ElementId e = 0; e < m; ++e) {
+            GlobalId smallest = vertex_key[mesh.element(e)[0]];
+            for (int i = 1; i < k; ++i) smallest = std::min(smallest, vertex_key[mesh.element(e)[i]]);
+            ++next[static_cast<std::size_t>(smallest) + 1];
+        }
+        std::partial_sum(next.begin(), next.end(), next.begin());
+        const std::vector<ElementId> bucket_start = next;
+        for (ElementId e = 0; e < m; ++e) {
+            const Packed record = packed(e);
+            sorted[static_cast<std::size_t>(next[record.high >> 32]++)] = record;
+        }
+        for (std::size_t b = 0; b + 1 < bucket_start.size(); ++b)
+            std::sort(sorted.begin() + bucket_start[b], sorted.begin() + bucket_start[b + 1]);
     }
-    std::sort(sorted.begin(), sorted.end());
     for (ElementId i = 0; i < m; ++i) position[sorted[i].element] = i;
     return position;
 }
