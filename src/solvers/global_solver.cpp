@@ -892,7 +892,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     band_ = stage_.finish ? options_.finish_band * options_.focus_band : options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();
     shrunk_at_ = std::numeric_limits<double>::lowest();
-    size_element_arrays();
+    // Focused, the element arrays take the focus's size at the first refocus; until then only q_
+    // rates the whole mesh (sizing them all for it zeroed 90 MB on fandisk-2M, then unused).
+    if (focusing_) q_.resize(static_cast<std::size_t>(work_.movable_elements()));
+    else size_element_arrays();
 
     // The objective and its weights at the current iterate, for the history and the next step.
     double objective = 0.0;
