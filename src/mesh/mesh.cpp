@@ -160,8 +160,10 @@ void Mesh::build_adjacency() {
     std::partial_sum(vertex_element_offsets_.begin(), vertex_element_offsets_.end(), vertex_element_offsets_.begin());
     vertex_elements_.resize(connectivity_.size());
     std::vector<std::int64_t> next(vertex_element_offsets_.begin(), vertex_element_offsets_.end() - 1);
-    for (std::size_t i = 0; i < connectivity_.size(); ++i)
-        vertex_elements_[next[connectivity_[i]]++] = static_cast<ElementId>(i / k);
+    const ElementId m = num_elements();
+    const VertexId* corner = connectivity_.data();
+    for (ElementId e = 0; e < m; ++e)
+        for (int c = 0; c < k; ++c) vertex_elements_[static_cast<std::size_t>(next[*corner++]++)] = e;
 }
 
 void Mesh::find_plane() {
