@@ -361,8 +361,9 @@ void check_no_duplicate_simplices(const Mesh& mesh) {
         if (row[v + 1] - row[v] < 2) continue;
         keys.clear();
         for (std::int64_t i = row[v]; i < row[v + 1]; ++i) {
-            if (static_cast<std::size_t>(i) + ahead < m) __builtin_prefetch(corners + k * static_cast<std::size_t>(listed[static_cast<std::size_t>(i) + ahead]));
-            const ElementId e = listed[static_cast<std::size_t>(i)];
+            const auto at = static_cast<std::size_t>(i);
+            if (at + ahead < m) __builtin_prefetch(corners + k * static_cast<std::size_t>(listed[at + ahead]));
+            const ElementId e = listed[at];
             const auto c = sorted(static_cast<std::size_t>(e));  // c[0] is v
             keys.emplace_back(word(c[1], c[2]), word(k == 4 ? c[3] : 0, e));
         }
