@@ -88,6 +88,7 @@ Mesh with_angle_terms(const Mesh& mesh) {
     out.set_degrees_of_freedom(std::move(freedom));
     out.set_global_ids(std::vector<GlobalId>(mesh.global_ids().begin(), mesh.global_ids().end()));
     out.set_elements_flipped(mesh.elements_flipped());
+    out.set_locality_ordered(mesh.locality_ordered());  // each element's copies side by side
     return out;
 }
 
@@ -150,6 +151,7 @@ Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
     auto [element_order, movable] = movable_first(mesh, positions);
     order.old_element = std::move(element_order);
     own_ = renumbered(mesh, order);
+    own_.set_locality_ordered(renumber);
     positions = permuted(positions, order.old_element);
     if (angle_terms_) {
         own_ = with_angle_terms(own_);
@@ -297,6 +299,7 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
     f.mesh = Mesh(mesh_.kind(), std::vector<double>(mesh_.coordinates().begin(), mesh_.coordinates().end()),
                   std::move(connectivity));
     f.mesh.set_degrees_of_freedom(std::move(freedom));
+    f.mesh.set_locality_ordered(mesh_.locality_ordered());  // the whole's elements, in their order
     if (mesh_.has_cells()) {  // the corners keep their maps
         std::vector<VertexId> same(static_cast<std::size_t>(n));
         std::iota(same.begin(), same.end(), VertexId{0});

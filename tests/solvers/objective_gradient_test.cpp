@@ -127,6 +127,42 @@ BOOST_AUTO_TEST_CASE(focused_gradient_is_the_whole_meshs_at_the_moving_vertices)
     work.unfocus();
 }
 
+// A renumbered workspace mesh (and each focus made from it) is marked as in locality order, where
+// the passes stop asking for corners ahead; asking or not, they give the same bits.
+BOOST_AUTO_TEST_CASE(passes_over_a_locality_ordered_mesh_give_the_same_bits) {
+    auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
+    BOOST_TEST(!mesh.locality_ordered());
+    BOOST_TEST(!pv::detail::Workspace(mesh, false).mesh().locality_ordered());
+    pv::detail::Workspace work(mesh, true);
+    const pv::Mesh& ordered = work.mesh();
+    BOOST_TEST_REQUIRE(ordered.locality_ordered());
+    pv::Mesh unmarked = ordered;
+    BOOST_TEST(unmarked.locality_ordered());  // copies keep the mark
+    unmarked.set_locality_ordered(false);
+    auto metric = pv::make_metric("aspect_ratio");
+    metric->set_scale(work.scale());
+    const std::vector<double> x(ordered.coordinates().begin(), ordered.coordinates().end());
+    const pv::ElementId m = work.movable_elements();
+    std::vector<double> q(static_cast<std::size_t>(m)), q_unmarked(q.size());
+    metric->evaluate(ordered, x, 0, m, q.data());
+    metric->evaluate(unmarked, x, 0, m, q_unmarked.data());
+    BOOST_TEST(std::equal(q.begin(), q.end(), q_unmarked.begin()));
+    std::vector<double> w(q.size()), g(x.size(), 0.0), g_unmarked(x.size(), 0.0);
+    for (std::size_t e = 0; e < w.size(); ++e) w[e] = 1.0 / (q[e] + 0.01);
+    pv::QualityMetric::GradientTarget target;
+    target.weight = w.data();
+    target.gradient = g.data();
+    metric->accumulate_gradient(ordered, x, 0, m, target);
+    target.gradient = g_unmarked.data();
+    metric->accumulate_gradient(unmarked, x, 0, m, target);
+    BOOST_TEST(std::equal(g.begin(), g.end(), g_unmarked.begin()));
+    std::vector<std::uint8_t> moving(static_cast<std::size_t>(ordered.num_vertices()), 0);
+    for (pv::VertexId v : ordered.element(0)) moving[v] = 1;
+    work.focus(moving);
+    BOOST_TEST(work.mesh().locality_ordered());
+    work.unfocus();
+}
+
 // The Newton direction's Hessian product (a difference of the gradient pass at fixed t, plus
 // t's move) against a central difference of the barrier's gradient with t solved afresh at each
 // point: -A v = (G(x + e v) - G(x - e v)) / 2e, G = sum mu/(q_i - t(x)) grad q_i.

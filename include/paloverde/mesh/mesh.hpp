@@ -136,6 +136,12 @@ public:
     // output keeps the convention of its input. Copies keep the mark.
     bool elements_flipped() const noexcept { return elements_flipped_; }
     void set_elements_flipped(bool flipped) noexcept { elements_flipped_ = flipped; }
+    // Whether the numbering keeps neighbours near each other (a solver's renumbered copy, set by
+    // whoever renumbered it): a pass over the elements then reads their corners almost in order,
+    // and the processor's own prefetching does better than asking for each corner ahead. Copies
+    // keep the mark.
+    bool locality_ordered() const noexcept { return locality_ordered_; }
+    void set_locality_ordered(bool ordered) noexcept { locality_ordered_ = ordered; }
 
     // MeshInterface.
     ElementKind element_kind() const override { return kind_; }
@@ -161,6 +167,7 @@ private:
     bool planar_ = false;
     Vec3 plane_normal_{0.0, 0.0, 1.0};
     bool elements_flipped_ = false;
+    bool locality_ordered_ = false;
     std::vector<CellType> cell_types_;
     std::vector<std::int64_t> cell_offsets_;
     std::vector<VertexId> cell_connectivity_;
