@@ -312,6 +312,7 @@ private:
     // The trial's damped vertices are damped again while their own elements' barrier terms are
     // lower than at the iterate. False when that makes an element block (the trial fails).
     bool damp_where_barrier_falls(std::vector<VertexId>& once_damped, double s, double t);
+    void note_barrier_changes(std::span<const ElementId> elements, double t);
     void apply_preconditioner();
     bool untangled() const { return detail::untangled(work_, x_); }
     void record(const Stats& s, double objective, double step, double gain);
@@ -367,6 +368,9 @@ private:
     std::vector<double> barrier_change_;
     std::vector<std::uint32_t> change_stamp_;
     std::uint32_t change_round_ = 0;
+    std::vector<ElementId> around_;               // damp_where_barrier_falls: the elements of its vertices
+    std::vector<ElementId> changing_, new_gaps_;  // note_barrier_changes: scratch
+    std::vector<double> logs_;
     // Per element: log(q - t) at the iterate, valid where gap_stamp_ holds gap_round_ (one line
     // search: the iterate, t and the focus stand still while its trials come and go).
     std::vector<double> log_gap_;
@@ -665,19 +669,12 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
     const ElementId movable = work_.movable_elements();
     const auto owned = work_.owned();
     ++change_round_;  // the changes of the last call are stale: another trial, maybe another t
+    // Reads the changes noted (note_barrier_changes) for all the elements of the vertices it tests.
     auto barrier_falls = [&](VertexId v) {
         double sum = 0.0, magnitude = 0.0;
         int terms = 0;
         for (ElementId e : mesh.elements_of(v))
             if (e < movable) {
-                if (change_stamp_[e] != change_round_) {
-                    change_stamp_[e] = change_round_;
-                    if (gap_stamp_[e] != gap_round_) {
-                        gap_stamp_[e] = gap_round_;
-                        log_gap_[e] = detail::log_one(q_[e] - t);
-                    }
-                    barrier_change_[e] = detail::log_one(trial_q_[e] - t) - log_gap_[e];
-                }
                 sum += barrier_change_[e];
                 magnitude += std::abs(barrier_change_[e]);
                 ++terms;
@@ -694,6 +691,11 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
     };
     std::erase_if(once_damped, [&](VertexId v) { return !owned[v]; });
     for (VertexId v : once_damped) once_damped_mark_[v] = 1;
+    around_.clear();
+    for (VertexId v : once_damped)
+        for (ElementId e : mesh.elements_of(v))
+            if (e < movable) around_.push_back(e);
+    note_barrier_changes(around_, t);
     std::vector<VertexId>& falling = falling_;  // a member: no allocation per trial
     bool blocked = false;
     for (int round = 0; round < 8 && !blocked; ++round) {
@@ -718,10 +720,36 @@ bool Phase::damp_where_barrier_falls(std::vector<VertexId>& once_damped, double 
             change_stamp_[e] = 0;
             blocked = blocked || blocks(e, t);
         }
+        note_barrier_changes(reevaluated_, t);
         blocked = reducer_.max(blocked ? 1.0 : 0.0) > 0.0;
     }
     for (VertexId v : once_damped) once_damped_mark_[v] = 0;
     return !blocked;
+}
+
+// barrier_change_ (and log_gap_, once per line search) for those of `elements` not noted since
+// the trial last moved them, their logarithms taken together: vectorized, with the same bits as
+// one at a time (fast_log.hpp).
+void Phase::note_barrier_changes(std::span<const ElementId> elements, double t) {
+    changing_.clear();
+    new_gaps_.clear();
+    for (ElementId e : elements) {
+        if (change_stamp_[e] == change_round_) continue;
+        change_stamp_[e] = change_round_;
+        changing_.push_back(e);
+        if (gap_stamp_[e] != gap_round_) {
+            gap_stamp_[e] = gap_round_;
+            new_gaps_.push_back(e);
+        }
+    }
+    logs_.resize(std::max(changing_.size(), new_gaps_.size()));
+    for (std::size_t i = 0; i < new_gaps_.size(); ++i) logs_[i] = q_[new_gaps_[i]] - t;
+    detail::log_all(logs_.data(), logs_.data(), new_gaps_.size());
+    for (std::size_t i = 0; i < new_gaps_.size(); ++i) log_gap_[new_gaps_[i]] = logs_[i];
+    for (std::size_t i = 0; i < changing_.size(); ++i) logs_[i] = trial_q_[changing_[i]] - t;
+    detail::log_all(logs_.data(), logs_.data(), changing_.size());
+    for (std::size_t i = 0; i < changing_.size(); ++i)
+        barrier_change_[changing_[i]] = logs_[i] - log_gap_[changing_[i]];
 }
 
 // preconditioned = M^-1 gradient, M per vertex the 3x3 Gauss-Newton block of the objective
