@@ -15,10 +15,11 @@ struct TetBlock {
     alignas(64) double at[12][kTetBlock];
 };
 
-// The baseline build is SSE2 (2 doubles per instruction); CPUs with AVX2 run a copy of the
-// loops compiled for it (4 doubles). Both give the same bits.
-enum class BlockPath { baseline, avx2 };
-BlockPath best_block_path();
+// The baseline build is SSE2 (2 doubles per instruction); CPUs with AVX2 or AVX-512 run a copy
+// of the loops compiled for it (4 or 8 doubles). All give the same bits.
+enum class BlockPath { baseline, avx2, avx512 };
+bool block_path_supported(BlockPath path);
+BlockPath best_block_path();  // the widest supported
 
 // Copies the corners of `count` (at most kTetBlock) tetrahedra, given by their 4 vertex ids each
 // in `connectivity`, from `coordinates` (3 per vertex) into x; pads the rest of the block with a

@@ -1,4 +1,4 @@
-// The block kernels (vectorized, baseline and AVX2) against the scalar kernels, bit for bit, on
+// The block kernels (vectorized, baseline, AVX2 and AVX-512) against the scalar kernels, bit for bit, on
 // real meshes and on degenerate elements: the batch passes the solvers use must give exactly
 // what the one-element calls give, on every CPU.
 #include <boost/test/unit_test.hpp>
@@ -27,9 +27,11 @@ bool same(double a, double b) {
     return std::memcmp(&a, &b, sizeof a) == 0;
 }
 
+// Every path this CPU runs.
 std::vector<pm::BlockPath> paths() {
-    std::vector<pm::BlockPath> out{pm::BlockPath::baseline};
-    if (pm::best_block_path() == pm::BlockPath::avx2) out.push_back(pm::BlockPath::avx2);
+    std::vector<pm::BlockPath> out;
+    for (pm::BlockPath path : {pm::BlockPath::baseline, pm::BlockPath::avx2, pm::BlockPath::avx512})
+        if (pm::block_path_supported(path)) out.push_back(path);
     return out;
 }
 

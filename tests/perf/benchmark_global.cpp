@@ -39,6 +39,15 @@ double best_of(int repeats, F f) {
     }
     return best;
 }
+
+const char* block_path_name(pv::metrics::BlockPath path) {
+    switch (path) {
+        case pv::metrics::BlockPath::avx512: return "AVX-512";
+        case pv::metrics::BlockPath::avx2: return "AVX2";
+        case pv::metrics::BlockPath::baseline: break;
+    }
+    return "baseline (SSE2)";
+}
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -75,7 +84,7 @@ int main(int argc, char** argv) {
                   << "read " << read << " s, renumber + setup " << setup << " s (vertex graph " << graph
                   << " s, locality order " << locality << " s, a mesh copy " << mesh_copy << " s)\n"
                   << "tetrahedron block kernels: "
-                  << (pv::metrics::best_block_path() == pv::metrics::BlockPath::avx2 ? "AVX2" : "baseline (SSE2)") << "\n";
+                  << block_path_name(pv::metrics::best_block_path()) << "\n";
         // The quality report a run prints before and after (every metric), best of 3.
         const double report = best_of(3, [&] { pv::QualityAssessor().assess(mesh); });
         std::cout << "quality report (every metric) " << report << " s\n";
