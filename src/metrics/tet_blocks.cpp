@@ -347,6 +347,7 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
                                          double* quality, TetBlock* gradient) {
     hybrid<Sqrt512>(x, reference_volume, alpha, quality, gradient);
 }
+#undef PALOVERDE_AVX512
 #endif
 
 }  // namespace

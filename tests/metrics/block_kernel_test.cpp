@@ -1,6 +1,6 @@
-// The block kernels (vectorized, baseline, AVX2 and AVX-512) against the scalar kernels, bit for bit, on
-// real meshes and on degenerate elements: the batch passes the solvers use must give exactly
-// what the one-element calls give, on every CPU.
+// The block kernels (vectorized: baseline, AVX2 and AVX-512) against the scalar kernels, bit for
+// bit, on real meshes and on degenerate elements: the batch passes the solvers use must give
+// exactly what the one-element calls give, on every CPU.
 #include <boost/test/unit_test.hpp>
 
 #include <cmath>
