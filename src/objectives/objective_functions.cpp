@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/exact_sums.hpp"
+#include "core/extremes.hpp"
 #include "core/fast_log.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/objectives/objective_function.hpp"
@@ -20,11 +21,7 @@ void check_state_size(std::string_view objective, std::span<const double> state,
                     std::to_string(state.size()));
 }
 
-double local_min(std::span<const double> q) {
-    double m = std::numeric_limits<double>::infinity();
-    for (double v : q) m = std::min(m, v);
-    return m;
-}
+double local_min(std::span<const double> q) { return detail::extremes(q).least; }
 }  // namespace
 
 LogBarrier::LogBarrier(double shrink, double initial_mu, double initial_active)
@@ -232,13 +229,8 @@ void MinQuality::restore_state(std::span<const double> state) {
 
 double LogBarrier::value(std::span<const double> q, const Reducer& reducer) const {
     // log(q - t) is monotone in q: the extreme qualities bound its terms.
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    for (double v : q) {
-        low = std::min(low, v);
-        high = std::max(high, v);
-    }
-    low = reducer.min(low);
-    high = reducer.max(high);
+    const detail::Extremes extremes = detail::extremes(q);
+    const double low = reducer.min(extremes.least), high = reducer.max(extremes.greatest);
     const double bound = std::max(std::abs(std::log(low - t_)), std::abs(std::log(high - t_)));
     const double sum = reducer.total(
         detail::bounded_block_sums<1>(q.size(), {bound}, [&](std::size_t first, std::size_t count, const auto& terms) {

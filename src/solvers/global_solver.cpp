@@ -8,6 +8,7 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "core/extremes.hpp"
 #include "core/fast_log.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/solvers/vertex_coloring.hpp"
@@ -174,14 +175,11 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
     const Reducer& reducer = work.reducer();
     const auto q = work.counted(all, buffer);
     Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
-    double largest = 0.0;
+    const detail::Extremes range = detail::extremes(q);  // NaN passed over
+    s.worst = range.least;
+    double largest = range.least <= range.greatest ? std::max(std::abs(range.least), std::abs(range.greatest)) : 0.0;
     for (double v : q) {
-        if (std::isnan(v)) {
-            ++s.nan;
-            continue;
-        }
-        s.worst = std::min(s.worst, v);
-        largest = std::max(largest, std::abs(v));
+        s.nan += std::isnan(v);
         s.bad += v <= 0.0;
     }
     largest = reducer.max(largest);
@@ -204,10 +202,7 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
 // The worst of the qualities `all` that this process counts (NaN skipped), over all processes:
 // quality_stats' worst alone.
 double worst_counted(const detail::Workspace& work, std::span<const double> all, std::vector<double>& buffer) {
-    double worst = std::numeric_limits<double>::infinity();
-    for (double v : work.counted(all, buffer))
-        if (v < worst) worst = v;
-    return work.reducer().min(worst);
+    return work.reducer().min(detail::extremes(work.counted(all, buffer)).least);
 }
 
 // Everything that changes the result, for the checkpoint's fingerprint.
