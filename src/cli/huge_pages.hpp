@@ -1,0 +1,10 @@
+#pragma once
+// The program's operator new (huge_pages.cpp): arrays of 2 MiB and more are mappings of their own.
+
+namespace paloverde::cli {
+
+// Whether those mappings are advised onto transparent huge pages: not where the host takes freed
+// memory back (huge_pages.cpp says why). Decided once per process.
+bool large_arrays_advised_huge() noexcept;
+
+}  // namespace paloverde::cli
