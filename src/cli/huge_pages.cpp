@@ -19,9 +19,9 @@
 // Not advised where the kernel reports free memory to a hypervisor (a virtio balloon with free
 // page reporting, as in Firecracker): it reports free blocks of 2 MiB, exactly a huge page's, and
 // the host takes them back, so every huge page is memory the host must fault in afresh. On such a
-// machine a huge page cost 2.8 ms a megabyte to fault against 0.4 for small pages, and fandisk-2M's
-// 40 iterations took 2.6 s with the advice and 2.2 s without (docs/benchmarks.md, "Huge pages
-// where the host takes freed memory back"). The arrays are still mappings of their own.
+// machine a huge page cost 2.8 ms a megabyte to fault against 0.4 for small pages, and the solver
+// took 2.6 s for fandisk-2M's 40 iterations with the advice, 2.2 s without (docs/benchmarks.md,
+// "Tenth round"). The arrays are still mappings of their own.
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/mman.h>

@@ -4,8 +4,9 @@
 // the barrier asks for the extremes of its terms several times an iteration.
 //
 // The same numbers as std::min and std::max folded in order: a NaN is passed over (both keep the
-// running value when a comparison is false), and only which of two equal zeros comes back may
-// differ, which no difference or logarithm of it can tell.
+// running value when a comparison is false). Only which of two equal zeros comes back, -0 or +0,
+// may differ; the barrier adds the least to a positive gap or takes its distance to t, where the
+// two agree.
 #include <cstddef>
 #include <limits>
 #include <span>
