@@ -229,8 +229,8 @@ void MinQuality::restore_state(std::span<const double> state) {
 
 double LogBarrier::value(std::span<const double> q, const Reducer& reducer) const {
     // log(q - t) is monotone in q: the extreme qualities bound its terms.
-    const detail::Extremes extremes = detail::extremes(q);
-    const double low = reducer.min(extremes.least), high = reducer.max(extremes.greatest);
+    const detail::Extremes range = detail::extremes(q);
+    const double low = reducer.min(range.least), high = reducer.max(range.greatest);
     const double bound = std::max(std::abs(std::log(low - t_)), std::abs(std::log(high - t_)));
     const double sum = reducer.total(
         detail::bounded_block_sums<1>(q.size(), {bound}, [&](std::size_t first, std::size_t count, const auto& terms) {

@@ -174,9 +174,8 @@ Stats quality_stats(const detail::Workspace& work, std::span<const double> all, 
                     const Frozen& frozen = {}) {
     const Reducer& reducer = work.reducer();
     const auto q = work.counted(all, buffer);
-    Stats s{std::numeric_limits<double>::infinity(), 0.0, 0, 0};
     const detail::Extremes range = detail::extremes(q);  // NaN passed over
-    s.worst = range.least;
+    Stats s{range.least, 0.0, 0, 0};
     double largest = range.least <= range.greatest ? std::max(std::abs(range.least), std::abs(range.greatest)) : 0.0;
     for (double v : q) {
         s.nan += std::isnan(v);
