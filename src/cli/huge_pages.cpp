@@ -16,12 +16,15 @@
 // looks in for pointers aligned like them (malloc's pointers hardly ever are). When the table is
 // full, allocations go to malloc as before. libstdc++'s other forms (arrays, nothrow) forward here.
 //
-// Not advised where the kernel reports free memory to a hypervisor (a virtio balloon with free
-// page reporting, as in Firecracker): it reports free blocks of 2 MiB, exactly a huge page's, and
-// the host takes them back, so every huge page is memory the host must fault in afresh. On such a
-// machine a huge page cost 2.8 ms a megabyte to fault against 0.4 for small pages, and the solver
-// took 2.6 s for fandisk-2M's 40 iterations with the advice, 2.2 s without (docs/benchmarks.md,
-// "Tenth round"). The arrays are still mappings of their own.
+// Where the kernel reports free memory to a hypervisor (a virtio balloon with free page
+// reporting, as in Firecracker) large arrays come from malloc instead. The balloon reports free
+// blocks of 2 MiB, exactly a huge page's, and the host takes them back, so every huge page is
+// memory the host must fault in afresh: 2.8 ms a megabyte against 0.4 for small pages
+// (docs/benchmarks.md, "Tenth round"). And a mapping of its own, unmapped when freed, is faulted
+// in again page by page at the next phase's arrays; the program's heap keeps what is freed
+// (keep_freed_memory), so the next arrays reuse it without a fault. On such a machine fandisk-2M
+// with --iterations 0 took 186 thousand faults and 4.5 s as mappings, 24 thousand and 2.8 s from
+// the heap, peak memory about the same ("Eleventh round").
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -90,7 +93,7 @@ void* map_large(std::size_t size) noexcept {
     const std::uintptr_t end = address + length + kHugePage;
     if (end > aligned + length) ::munmap(reinterpret_cast<void*>(aligned + length), end - (aligned + length));
     void* p = reinterpret_cast<void*>(aligned);
-    if (paloverde::cli::large_arrays_advised_huge()) ::madvise(p, length, MADV_HUGEPAGE);  // refused: ordinary pages
+    ::madvise(p, length, MADV_HUGEPAGE);  // refused: ordinary pages
     {
         const std::lock_guard lock(mappings_mutex);
         for (Mapping& m : mappings)
@@ -118,7 +121,8 @@ bool unmap_large(void* p) noexcept {
 
 void* allocate(std::size_t size) {
     for (;;) {
-        if (void* p = size >= kLarge ? map_large(size) : std::malloc(size == 0 ? 1 : size)) return p;
+        const bool large = size >= kLarge && paloverde::cli::large_arrays_advised_huge();
+        if (void* p = large ? map_large(size) : std::malloc(size == 0 ? 1 : size)) return p;
         const std::new_handler handler = std::get_new_handler();
         if (!handler) throw std::bad_alloc();
         handler();

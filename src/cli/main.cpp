@@ -34,7 +34,7 @@ private:
 
 int main(int argc, char** argv) {
     using namespace paloverde::cli;
-    paloverde::keep_freed_memory();  // arrays below 2 MiB; larger ones are on huge pages (huge_pages.cpp)
+    paloverde::keep_freed_memory();  // arrays below 2 MiB, and larger ones where not on huge pages (huge_pages.cpp)
     const MpiSession mpi;
     const bool root = MpiSession::rank() == 0;
     // Every rank runs the command, and its errors are thrown on every rank: rank 0 tells.

@@ -1,5 +1,6 @@
 #include "paloverde/core/memory.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <cstdlib>  // defines __GLIBC__ under glibc
 
@@ -22,6 +23,8 @@ constexpr std::size_t kHugePage = std::size_t{2} << 20;
 }  // namespace
 
 void keep_freed_memory() noexcept {
+    static std::atomic<bool> kept{false};
+    if (kept.exchange(true)) return;  // the heap is grown and advised once
 #if defined(__GLIBC__)
     mallopt(M_MMAP_MAX, 0);        // large blocks from the heap, not a mapping of their own each
     mallopt(M_TRIM_THRESHOLD, -1);  // and the heap's free top is not given back

@@ -18,10 +18,11 @@ namespace paloverde {
 // fandisk-100k, about 700 times with the advice (docs/benchmarks.md, "Eighth round"). Only touched
 // pages are ever backed.
 //
-// Call it first thing in main(); a no-op where the C library is not glibc (and the heap's advice
-// only on Linux, not under a sanitizer's allocator). The command line also replaces operator new
-// for arrays of 2 MiB and more, mapping them on huge pages of their own (src/cli/huge_pages.cpp);
-// those go back to the kernel when freed.
+// Call it first thing in main(); later calls do nothing. A no-op where the C library is not glibc
+// (and the heap's advice only on Linux, not under a sanitizer's allocator). The command line also
+// replaces operator new for arrays of 2 MiB and more, mapping them on huge pages of their own
+// (src/cli/huge_pages.cpp), which go back to the kernel when freed; where the host takes freed
+// memory back they come from this heap instead.
 void keep_freed_memory() noexcept;
 
 }  // namespace paloverde
