@@ -18,11 +18,11 @@
 //
 // Where the kernel reports free memory to a hypervisor (a virtio balloon with free page
 // reporting, as in Firecracker) large arrays come from malloc instead. The balloon reports free
-// blocks of 2 MiB, exactly a huge page's, and the host takes them back, so every huge page is
-// memory the host must fault in afresh: 2.8 ms a megabyte against 0.4 for small pages
-// (docs/benchmarks.md, "Tenth round"). And a mapping of its own, unmapped when freed, is faulted
-// in again page by page at the next phase's arrays; the program's heap keeps what is freed
-// (keep_freed_memory), so the next arrays reuse it without a fault. On such a machine fandisk-2M
+// blocks of a huge page or more (2 MiB on one such guest, 8 MiB on another) and the host takes
+// them back, so a mapping unmapped when freed is memory the host must back afresh at the next
+// phase's arrays; on the Firecracker guest of docs/benchmarks.md "Tenth round" that cost 2.8 ms a
+// megabyte as huge pages, 0.4 as small pages. The program's heap keeps what is freed
+// (keep_freed_memory), so the next arrays reuse it without a fault: on a PVM guest fandisk-2M
 // with --iterations 0 took 186 thousand faults and 4.5 s as mappings, 24 thousand and 2.8 s from
 // the heap, peak memory about the same ("Eleventh round").
 #include <dirent.h>
