@@ -282,6 +282,15 @@ Tables::Tables() {
                 "(and again from the best iterate where the worst quality rose far above a barrier's t), until they "
                 "stall too (judged per gradient pass; mu shrinks faster while Newton solves each subproblem in one "
                 "step); none: stop there.")
+        .choice("polish", &GlobalSolverOptions::polish,
+                {{"off", GlobalSolverOptions::Polish::Off},
+                 {"auto", GlobalSolverOptions::Polish::Auto},
+                 {"always", GlobalSolverOptions::Polish::Always}},
+                "After the shape phases (within what is left of the budget): the vertices of the elements in the lowest "
+                "3% of worst..ideal quality stand still and the others raise the sum of their qualities, each kept "
+                "above that line; the worst element keeps its quality bit for bit. auto: where the shape phases left "
+                "the mean quality below the input's, until it is above it again; always: until the mean stops rising; "
+                "off.")
         .flag("damped_vertex_ascent", &GlobalSolverOptions::damped_vertex_ascent,
               "Shape phase (log_barrier, not the newton finish): a vertex the line search damped so that no element "
               "blocks is damped further while its own elements' barrier terms are lower than at the iterate.")

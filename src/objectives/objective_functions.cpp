@@ -285,6 +285,49 @@ void MinQuality::weights(std::span<const double> q, std::span<double> weight) co
     for (std::size_t i = 0; i < q.size(); ++i) weight[i] = q[i] == worst_ ? 1.0 : 0.0;
 }
 
+void MeanAboveFloor::set_floor(double floor, double mu) {
+    if (!std::isfinite(floor)) throw OptionError("the mean_above_floor objective's floor must be a finite number");
+    if (!(mu > 0.0) || !std::isfinite(mu)) throw OptionError("the mean_above_floor objective's mu must be > 0");
+    floor_ = floor;
+    mu_ = mu;
+}
+
+void MeanAboveFloor::restore_state(std::span<const double> state) {
+    check_state_size(name(), state, 2);
+    set_floor(state[0], state[1]);
+}
+
+double MeanAboveFloor::value(std::span<const double> q, const Reducer& reducer) const {
+    // Both kinds of terms are monotone in q: the extreme qualities bound them.
+    const detail::Extremes range = detail::extremes(q);
+    const double low = reducer.min(range.least), high = reducer.max(range.greatest);
+    if (!(low > floor_)) return -std::numeric_limits<double>::infinity();  // (also: no quality anywhere)
+    const double log_bound = std::max(std::abs(std::log(low - floor_)), std::abs(std::log(high - floor_)));
+    const double q_bound = std::max(std::abs(low), std::abs(high));
+    auto sums = detail::bounded_block_sums<2>(q.size(), {q_bound, log_bound},
+                                              [&](std::size_t first, std::size_t count, const auto& terms) {
+                                                  for (std::size_t i = 0; i < count; ++i) {
+                                                      terms[0][i] = q[first + i];
+                                                      terms[1][i] = q[first + i] - floor_;
+                                                  }
+                                                  detail::log_all(terms[1], terms[1], count);
+                                              });
+    reducer.sum(sums);
+    const double sum = sums[0].value() + mu_ * sums[1].value();
+    return std::isnan(sum) ? -std::numeric_limits<double>::infinity() : sum;
+}
+
+void MeanAboveFloor::weights(std::span<const double> q, std::span<double> weight) const {
+    for (std::size_t i = 0; i < q.size(); ++i) weight[i] = 1.0 + mu_ / (q[i] - floor_);
+}
+
+void MeanAboveFloor::curvature_weights(std::span<const double> q, std::span<double> curvature) const {
+    for (std::size_t i = 0; i < q.size(); ++i) {
+        const double r = 1.0 / (q[i] - floor_);
+        curvature[i] = mu_ * r * r;
+    }
+}
+
 void ObjectiveOptions::validate() const {
     if (!(barrier_shrink > 0.0 && barrier_shrink <= 1.0))
         throw OptionError("barrier_shrink must lie in (0, 1] (got " + std::to_string(barrier_shrink) + ")");

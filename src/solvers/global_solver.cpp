@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <iomanip>
 #include <limits>
 #include <optional>
+#include <sstream>
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
@@ -113,7 +115,9 @@ struct PhaseResult {
 // Where solve() stands, for checkpoints: the phase and, while untangling, the round; `finish`:
 // the Newton finish of the shape phase, which goes on counting from the `iterations_before` of the
 // phase before it; `fresh`: the finish's second part, on a fresh barrier; `newton_follows`: a
-// shape phase the finish will follow.
+// shape phase the finish will follow; `polish`: the mean's polish after them all, which ends once
+// the mean quality exceeds `mean_goal` (polish auto: the input's), and `shape_reason` why the
+// shape phases before it stopped (GlobalSolverOptions::polish).
 struct Stage {
     bool untangling = false;
     int round = 0;
@@ -121,7 +125,18 @@ struct Stage {
     bool newton_follows = false;
     int iterations_before = 0;
     bool fresh = false;
+    bool polish = false;
+    double mean_goal = std::numeric_limits<double>::infinity();
+    TerminationReason shape_reason = TerminationReason::Converged;
 };
+
+// The mean's polish holds still the vertices of the elements in this lowest fraction of
+// worst..ideal quality; the others stay above its top (GlobalSolverOptions::polish).
+constexpr double kPolishBand = 0.03;
+// Its barrier's mu, as a fraction of the gap between the mean quality and that top: an element
+// weighs twice once it comes within mu of the top, so the elements the sum would push down stop
+// well before they crowd there.
+constexpr double kPolishMu = 0.01;
 
 // Whole-mesh figures of the movable elements' qualities, the same on every process.
 struct Stats {
@@ -221,6 +236,8 @@ std::string options_text(const GlobalSolverOptions& o) {
         ("gain_tolerance", o.gain_tolerance)("damped_vertex_ascent", o.damped_vertex_ascent)
         ("max_failed_searches", o.max_failed_searches)("renumber", o.renumber);
     if (o.focus_band < 1.0) t("focus_band", o.focus_band);
+    if (o.polish != GlobalSolverOptions::Polish::Auto)
+        t("polish", o.polish == GlobalSolverOptions::Polish::Off ? "off" : "always");
     const bool finish = o.finish == GlobalSolverOptions::Finish::Newton;
     if (finish) t("finish", "newton")("finish_band", o.finish_band);
     if (o.direction == GlobalSolverOptions::Direction::Newton || finish)
@@ -324,6 +341,14 @@ private:
     // the worst, where the steps crept (docs/global_solver.md, "The fresh barrier weighs its focus
     // alone").
     bool focus_alone() const { return focusing_ && stage_.fresh; }
+    // The mean's polish: holds still the vertices of the elements below kPolishBand and sets
+    // the objective's floor at its top (q_ rates the whole mesh at x_).
+    void hold_near_worst();
+    // A distributed run: ghosts take their owners' flags in moving_ (each owner holds every
+    // element of its vertices, so its decision is complete).
+    void moving_like_owners();
+    // The progress the stall windows watch: the barrier's t, or in the polish the mean quality.
+    double measure(const Stats& s) const { return stage_.polish ? s.mean : objective_.progress_measure(); }
     // Focus on the elements around the vertices flagged in moving_ (frozen_: the others).
     // whole_rated: whole_q_ holds the whole mesh's qualities at x_ already (refocus).
     void focus_on_moving(bool whole_rated = false);
@@ -372,6 +397,7 @@ private:
     std::uint32_t gap_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
+    double best_mean_ = -std::numeric_limits<double>::infinity();  // the polish's best iterate
     std::optional<std::uint64_t> best_focus_;  // the focus generation best_x_ was last kept in
     double step_ = 0.05;  // largest vertex displacement of the next trial step, in reference lengths
     double gain_ = 0.0;   // objective increase of the last accepted step (at its mu and t)
@@ -458,20 +484,12 @@ void Phase::refocus() {
     const Mesh& mesh = work_.mesh();
     focus_base_ = worst_counted(work_, whole_q_, counted_);
     focus_top_ = focus_base_ + band_ * (metric_.ideal_value() - focus_base_);
-    // A vertex moves when one of its elements lies in the band. The owner holds every element of
-    // its vertices, so its decision is complete; ghosts take it from the halo.
-    auto from_owners = [&] {
-        if (!work_.distributed()) return;
-        for (std::size_t v = 0; v < moving_.size(); ++v) mark_[v] = moving_[v];
-        work_.halo().update(mark_, 1);
-        for (std::size_t v = 0; v < moving_.size(); ++v) moving_[v] = mark_[v] != 0.0;
-        std::fill(mark_.begin(), mark_.end(), 0.0);
-    };
+    // A vertex moves when one of its elements lies in the band.
     moving_.assign(static_cast<std::size_t>(mesh.num_vertices()), 0);
     for (ElementId e = 0; e < work_.movable_elements(); ++e)
         if (whole_q_[e] < focus_top_)
             for (VertexId v : mesh.element(e)) moving_[v] = 1;
-    from_owners();
+    moving_like_owners();
     // And their neighbours: a band vertex hemmed in by elements whose other corners stand still
     // stalls the focus (fandisk-100k: 0.2146 against 0.2248 for the whole mesh).
     // (Through the band vertices' own elements: a focus is a small part of a large mesh.)
@@ -482,7 +500,32 @@ void Phase::refocus() {
         for (ElementId e : mesh.elements_of(v))
             if (e < work_.movable_elements())
                 for (VertexId w : mesh.element(e)) moving_[w] = 1;
-    from_owners();
+    moving_like_owners();
+    focus_on_moving(true);
+}
+
+void Phase::moving_like_owners() {
+    if (!work_.distributed()) return;
+    for (std::size_t v = 0; v < moving_.size(); ++v) mark_[v] = moving_[v];
+    work_.halo().update(mark_, 1);
+    for (std::size_t v = 0; v < moving_.size(); ++v) moving_[v] = mark_[v] != 0.0;
+    std::fill(mark_.begin(), mark_.end(), 0.0);
+}
+
+void Phase::hold_near_worst() {
+    const Stats s = stats(q_);
+    focus_base_ = s.worst;
+    focus_top_ = s.worst + kPolishBand * (metric_.ideal_value() - s.worst);
+    auto& objective = dynamic_cast<MeanAboveFloor&>(objective_);
+    objective.set_floor(focus_top_, kPolishMu * std::max(s.mean - focus_top_, 1e-3 * std::abs(focus_top_) + 1e-12));
+    // An element at the top itself is held too: the line search keeps the moving ones above it.
+    const Mesh& mesh = work_.mesh();
+    moving_.assign(static_cast<std::size_t>(mesh.num_vertices()), 1);
+    for (ElementId e = 0; e < work_.movable_elements(); ++e)
+        if (!(q_[e] > focus_top_))
+            for (VertexId v : mesh.element(e)) moving_[v] = 0;
+    moving_like_owners();
+    whole_q_ = q_;
     focus_on_moving(true);
 }
 
@@ -541,7 +584,11 @@ void Phase::damp_like_owners(std::vector<VertexId>& damped) {
 void Phase::record(const Stats& s, double objective, double step, double gain) {
     IterationRecord r;
     r.iteration = summary_.iterations;
-    r.phase = untangling_ ? "untangle" : stage_.fresh ? "finish_fresh" : stage_.finish ? "finish" : "shape";
+    r.phase = untangling_     ? "untangle"
+              : stage_.polish ? "polish"
+              : stage_.fresh  ? "finish_fresh"
+              : stage_.finish ? "finish"
+                              : "shape";
     r.worst_quality = s.worst;
     r.best_worst_quality = best_worst_;
     r.mean_quality = s.mean;
@@ -796,6 +843,10 @@ void Phase::save_checkpoint(int iteration) {
     state.numbers = {{"untangling", untangling_ ? 1.0 : 0.0},
                      {"finish", stage_.finish ? 1.0 : 0.0},
                      {"fresh", stage_.fresh ? 1.0 : 0.0},
+                     {"polish", stage_.polish ? 1.0 : 0.0},
+                     {"shape_reason", static_cast<double>(stage_.shape_reason)},
+                     {"mean_goal", stage_.mean_goal},
+                     {"best_mean", best_mean_},
                      {"round", stage_.round},
                      {"budget", stop_.max_iterations},
                      {"iteration", iteration},
@@ -849,6 +900,7 @@ int Phase::restore(const detail::SolverState& state, double& objective) {
     previous_preconditioned_ = state.vertex_field("previous_preconditioned", n);
     best_worst_ = state.number("best_worst");
     best_bad_ = static_cast<long>(state.number("best_bad"));
+    if (state.numbers.contains("best_mean")) best_mean_ = state.number("best_mean");
     step_ = state.number("step");
     first_gradient_norm_ = state.number("first_gradient_norm");
     restart_ = state.number("restart") != 0.0;
@@ -898,8 +950,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     best_x_ = x_;
     damping_.assign(n3 / 3, 1.0);
     // Only the preconditioner and Newton need the curvature (8 bytes per element, 48 per vertex).
-    const bool newton = !untangling_ && (options_.direction == GlobalSolverOptions::Direction::Newton || stage_.finish);
-    const bool precondition = (untangling_ && options_.precondition_untangling) || newton;
+    const bool newton =
+        !untangling_ && !stage_.polish && (options_.direction == GlobalSolverOptions::Direction::Newton || stage_.finish);
+    // The polish's sum has no curvature of its own: its barrier's gives the elements' scale.
+    const bool precondition = (untangling_ && options_.precondition_untangling) || newton || stage_.polish;
     curvature_weight_.clear();
     curvature_.assign(precondition ? 2 * n3 : 0, 0.0);
     preconditioned_.assign(n3, 0.0);
@@ -910,8 +964,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
     // Newton's directions from the start come out worse on a focus (fandisk-100k: 0.0895 against
     // 0.2302 on the whole mesh after 500 iterations): they keep the whole mesh. The finish, from
     // where conjugate gradients stalled, focuses like them (on finish_band of their band).
-    focusing_ = !untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0;
-    band_ = stage_.finish ? options_.finish_band * options_.focus_band : options_.focus_band;
+    focusing_ = stage_.polish || (!untangling_ && (!newton || stage_.finish) && options_.focus_band < 1.0);
+    band_ = stage_.polish ? 1.0 : stage_.finish ? options_.finish_band * options_.focus_band : options_.focus_band;
     widened_at_ = std::numeric_limits<double>::lowest();
     shrunk_at_ = std::numeric_limits<double>::lowest();
     // Focused, the element arrays take the focus's size at the first refocus; until then only q_
@@ -935,18 +989,20 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             barrier->limit_first_gap(band_, metric_.ideal_value());
         if (!focus_alone()) objective_.update(work_.counted(q_, counted_), reducer_);
         if (focusing_) {
-            refocus();
+            if (stage_.polish) hold_near_worst();
+            else refocus();
             objective_.update(work_.counted(q_, counted_), reducer_);
         }
         const Stats s = stats(q_);
         best_worst_ = s.worst;
         best_bad_ = s.bad;
+        best_mean_ = s.mean;
         if (barrier_mu() > 0.0) {
             first_t_ = barrier_t();
             first_gap_ = best_worst_ - first_t_;
         }
         best_history_ = {best_worst_};
-        measure_history_ = {objective_.progress_measure()};
+        measure_history_ = {measure(s)};
         bad_history_ = {static_cast<double>(s.bad)};
         stage_history_ = {0.0};
         gain_history_ = {0.0};
@@ -1103,7 +1159,9 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                 weight < kLeastWorstWeight && (!first_mu || (first_gap_ > 0.0 && barrier_mu() > weight * first_gap_));
             let_go_steps_ = let_go_now ? let_go_steps_ + 1 : 0;
             const bool let_go = let_go_steps_ >= stop_.progress_window;
-            solved = adaptive ? steps_at_mu_ >= options_.steps_per_mu && accepted &&
+            // (The polish's objective has no mu: its conjugate directions restart on failures only.)
+            solved = stage_.polish ? false
+                     : adaptive    ? steps_at_mu_ >= options_.steps_per_mu && accepted &&
                                     (gain_ < options_.gain_tolerance * barrier_mu() || let_go)
                               : steps_at_mu_ >= options_.steps_per_mu;
         }
@@ -1125,16 +1183,20 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                        "the qualities, the objective or the barrier's t are not finite numbers (iteration " +
                            std::to_string(summary_.iterations) + "); the best iterate is handed back");
         }
-        // Better: fewer non-positive elements, then a higher worst quality.
-        if (detail::better_iterate(s.bad, s.worst, best_bad_, best_worst_)) {
+        // Better: fewer non-positive elements, then a higher worst quality; in the polish (which
+        // holds the worst element) no lower worst quality and a higher mean.
+        const bool better = stage_.polish ? s.bad <= best_bad_ && s.worst >= best_worst_ && s.mean > best_mean_
+                                          : detail::better_iterate(s.bad, s.worst, best_bad_, best_worst_);
+        if (better) {
             best_bad_ = s.bad;
             best_worst_ = s.worst;
+            best_mean_ = s.mean;
             keep_best();
         }
         objective_.weights(q_, weight_);
         record(s, objective, step, accepted ? gain_ : 0.0);
         best_history_.push_back(best_worst_);
-        measure_history_.push_back(objective_.progress_measure());
+        measure_history_.push_back(measure(s));
         bad_history_.push_back(static_cast<double>(s.bad));
         stage_history_.push_back(stage_history_.back() + ((!accepted || solved) ? 1.0 : 0.0));
         gain_history_.push_back(gain_history_.back() + (accepted && barrier_mu() > 0.0 ? gain_ / barrier_mu() : 0.0));
@@ -1144,8 +1206,10 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             best_x_ = x_;
             return end(TerminationReason::TargetReached, "untangled");
         }
-        if (!untangling_ && detail::target_reached(stop_, best_worst_))
+        if (!untangling_ && !stage_.polish && detail::target_reached(stop_, best_worst_))
             return end(TerminationReason::TargetReached, "the worst quality reached the target");
+        if (stage_.polish && best_mean_ > stage_.mean_goal)
+            return end(TerminationReason::Converged, "above the input's mean");
         if (out_of_reach) {
             PhaseResult result = end(TerminationReason::Converged, "the barrier's subproblem is out of Newton's reach");
             result.recenter = true;
@@ -1183,7 +1247,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
             return w.rose_too_little(best_history_) && w.rose_too_little(measure_history_) && w.did_not_fall(bad_history_);
         };
         const bool stalled = failures_ >= options_.max_failed_searches ||
-                             (standing(progress) && (progress.rose(stage_history_) || long_stall));
+                             (standing(progress) && (stage_.polish || progress.rose(stage_history_) || long_stall));
         // A focus that stalls may be held by the elements just outside it: a wider one, as long
         // as the last widening paid (each costs a stall window on more elements).
         // Not before the Newton finish, which starts on a fresh focus, nor in it: there the wider
@@ -1215,7 +1279,8 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         } else if (failures_ >= options_.max_failed_searches) {
             return end(TerminationReason::NoImprovingStep, "no step along the search direction raises the objective");
         } else if (stalled) {
-            return end(TerminationReason::Converged, "the worst quality stopped improving");
+            return end(TerminationReason::Converged,
+                       stage_.polish ? "the mean quality stopped rising" : "the worst quality stopped improving");
         }
         // Over three windows, as the worst quality rises in steps (a window without a rise is
         // common long before conjugate gradients stop paying: fandisk-100k); only while the
@@ -1261,7 +1326,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
                                std::to_string(progress.window()) + ")");
         }
         // Half way up the band, the elements above it start to matter: a new focus.
-        if (focusing_ && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {
+        if (focusing_ && !stage_.polish && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {
             refocus();
             // A barrier over its focus alone keeps its t, and the weight on the worst, as its focus changes.
             if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focus_alone())
@@ -1431,14 +1496,21 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         const bool resume_finish = resume && resume->numbers.contains("finish") && resume->number("finish") != 0.0;
         // (Checkpoints from before the finish had two parts have no "fresh": theirs was fresh.)
         const bool resume_fresh = resume_finish && (!resume->numbers.contains("fresh") || resume->number("fresh") != 0.0);
-        if (!resume_finish)
+        // A run resumed from a checkpoint of the mean's polish goes straight back to it.
+        const bool resume_polish = resume && resume->numbers.contains("polish") && resume->number("polish") != 0.0;
+        if (resume_polish)
+            result = {static_cast<TerminationReason>(resume->number("shape_reason")),
+                      "the shape phases stopped (" + std::string(to_string(static_cast<TerminationReason>(
+                                                         resume->number("shape_reason")))) +
+                          ") before the checkpoint"};
+        if (!resume_finish && !resume_polish)
             result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{.newton_follows = finish},
                            summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
                          .run(resume ? &*resume : nullptr);
         const bool stalled = result.reason == TerminationReason::Converged || result.reason == TerminationReason::NoImprovingStep;
         auto shape_iterations = [&] { return summary.iterations - summary.untangle_iterations; };
         const int left = options.termination.max_iterations - shape_iterations();
-        const bool finishing = !resume_finish && finish && stalled && left > 0;
+        const bool finishing = !resume_finish && !resume_polish && finish && stalled && left > 0;
         // First with the shape phase's own barrier (its mu): where the conjugate gradients stalled
         // near a max-min point, Newton steps converge from there (fandisk-9M). That part may take
         // its 50 steps before it hands over, so it goes first only where the budget leaves the fresh
@@ -1466,6 +1538,52 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
                            start, checkpointer)
                          .run(resuming ? &*resume : nullptr);
             fresh_next = result.recenter;
+        }
+        // The mean's polish, from the best iterate of them all, within what is left of the budget.
+        auto mean_at = [&](std::span<const double> coordinates) {
+            std::vector<double> q(static_cast<std::size_t>(work.movable_elements())), buffer;
+            work.evaluate(*metric, coordinates, q);
+            ++summary.quality_passes;
+            return quality_stats(work, q, buffer).mean;
+        };
+        const bool budget_left = result.reason != TerminationReason::IterationLimit &&
+                                 result.reason != TerminationReason::TimeLimit &&
+                                 shape_iterations() < options.termination.max_iterations;
+        const bool sound_end =
+            result.reason != TerminationReason::Interrupted && result.reason != TerminationReason::NumericalFailure;
+        std::optional<double> mean_before;
+        double mean_goal = std::numeric_limits<double>::infinity();  // always: until the mean stops rising
+        if (resume_polish) {
+            mean_goal = resume->number("mean_goal");
+        } else if (options.polish != GlobalSolverOptions::Polish::Off && budget_left && sound_end) {
+            mean_before = mean_at(xyz);
+            if (options.polish == GlobalSolverOptions::Polish::Auto) {
+                mean_goal = mean_at(work.mesh().coordinates());
+                if (!(*mean_before < mean_goal)) mean_before.reset();  // the mean did not fall
+            }
+        }
+        if (resume_polish || mean_before) {
+            MeanAboveFloor polish;
+            const PhaseResult polished =
+                Phase(work, xyz, *metric, polish, options.termination, options,
+                      Stage{.iterations_before = shape_iterations(),
+                            .polish = true,
+                            .mean_goal = mean_goal,
+                            .shape_reason = result.reason},
+                      summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
+                    .run(resume_polish ? &*resume : nullptr);
+            if (polished.reason == TerminationReason::Interrupted || polished.reason == TerminationReason::NumericalFailure) {
+                result = polished;
+            } else {
+                const double mean_after = mean_at(xyz);
+                std::ostringstream then;
+                then << std::setprecision(7) << "; then, with the elements near the worst held still, the mean quality ";
+                if (!mean_before) then << "came to " << mean_after;
+                else if (mean_after > *mean_before) then << "rose from " << *mean_before << " to " << mean_after;
+                else then << "stayed at " << *mean_before;
+                then << " (" << polished.message << ")";
+                result.message += then.str();
+            }
         }
     } else if (resume) {
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");

@@ -219,6 +219,20 @@ BOOST_AUTO_TEST_CASE(a_fresh_barrier_after_the_worst_rose_far_above_t_gives_the_
     BOOST_TEST(distributed.history.size() == h.size());
 }
 
+// The mean's polish (here always, after the finish): which vertices stand still is decided by
+// their owners from the whole mesh's qualities, and its steps are the serial ones, bit for bit.
+BOOST_AUTO_TEST_CASE(the_means_polish_gives_the_serial_answer) {
+    pv::GlobalSolverOptions options;
+    options.polish = pv::GlobalSolverOptions::Polish::Always;
+    const auto [serial, distributed] = serial_and_distributed(pv::test::shared_mesh("mesquite/tets/tire.vtk"), options);
+    const auto& h = serial.history;
+    const auto polish = std::count_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "polish"; });
+    BOOST_TEST(polish > 20);
+    BOOST_TEST_REQUIRE(distributed.history.size() == h.size());
+    for (std::size_t i = 0; i < h.size(); ++i)
+        BOOST_TEST((distributed.history[i].moved == h[i].moved && distributed.history[i].mean_quality == h[i].mean_quality));
+}
+
 // Newton directions (each a truncated CG solve over Hessian products through the halo) take the
 // same steps on any number of ranks as serially, on a mesh that is untangled first.
 BOOST_AUTO_TEST_CASE(newton_directions_give_the_serial_answer) {

@@ -145,6 +145,20 @@ BOOST_AUTO_TEST_CASE(global_run_resumed_around_a_restarted_barrier_ends_as_the_u
     BOOST_TEST(phase.at(32) == "finish_fresh");
 }
 
+// The mean's polish (always; on tire with a budget of 260 from iteration 182, after the finish):
+// resumed from a checkpoint of the finish before it and from two taken in it, with its floor and
+// mu (the objective's state), the vertices it holds still, its best mean and why the shape
+// phases before it stopped.
+BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_polish_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.polish = pv::GlobalSolverOptions::Polish::Always;
+    options.termination.max_iterations = 260;
+    const auto phase = check_global_shape_run_resumes(options, "checkpoint_global_polish", {150, 195, 241});
+    BOOST_TEST(phase.at(150) == "finish");
+    BOOST_TEST(phase.at(195) == "polish");
+    BOOST_TEST(phase.at(241) == "polish");
+}
+
 // A focused run saves which vertices its focus moves: resumed, it goes on with the same focus.
 BOOST_AUTO_TEST_CASE(global_focused_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
     pv::GlobalSolverOptions options;

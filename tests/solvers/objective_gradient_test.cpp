@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -22,22 +24,29 @@ BOOST_AUTO_TEST_SUITE(objective_gradient)
 
 BOOST_AUTO_TEST_CASE(whole_mesh_gradient_matches_finite_differences) {
     for (const char* metric_name : {"aspect_ratio", "mean_ratio", "inverse_condition", "untangle_hybrid"}) {
-        for (const char* objective_name : {"log_barrier", "p_mean"}) {
+        for (const std::string objective_name : {"log_barrier", "p_mean", "mean_above_floor"}) {
             auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk")).mesh;
-            if (std::string(objective_name) == "p_mean") {
-                // p-mean needs positive qualities: use an untangled mesh.
+            if (objective_name != "log_barrier") {
+                // p-mean needs positive qualities (and the floor lies below them): an untangled mesh.
                 mesh = pv::read_mesh(pv::test::shared_data("stellar/house2.node")).mesh;
             }
             pv::detail::Workspace work(mesh, true);
             auto metric = pv::make_metric(metric_name);
             metric->set_scale(work.scale());
-            auto objective = pv::make_objective(objective_name);
+            std::unique_ptr<pv::ObjectiveFunction> objective;
+            if (objective_name == "mean_above_floor") objective = std::make_unique<pv::MeanAboveFloor>();
+            else objective = pv::make_objective(objective_name);
             const pv::Reducer serial;
             std::vector<double> x(work.mesh().coordinates().begin(), work.mesh().coordinates().end());
             const auto m = static_cast<std::size_t>(work.movable_elements());
             std::vector<double> q(m), w(m), g(x.size());
             work.evaluate(*metric, x, q);
             objective->update(q, serial);  // fixes t and mu for the comparison
+            if (auto* mean = dynamic_cast<pv::MeanAboveFloor*>(objective.get())) {
+                // A floor close under the worst element: its barrier term bends sharply.
+                const double worst = *std::min_element(q.begin(), q.end());
+                mean->set_floor(worst - 0.02, 0.01);
+            }
             auto F = [&](const std::vector<double>& at) {
                 std::vector<double> qq(m);
                 work.evaluate(*metric, at, qq);
@@ -67,6 +76,41 @@ BOOST_AUTO_TEST_CASE(whole_mesh_gradient_matches_finite_differences) {
             BOOST_TEST(checked > 10);
         }
     }
+}
+
+// The mean above a floor: its weights are its value's derivatives, its curvature weights their
+// negated derivatives; below the floor it has no value; its state carries floor and mu.
+BOOST_AUTO_TEST_CASE(mean_above_floor_weights_and_curvature_match_finite_differences) {
+    const pv::Reducer serial;
+    pv::MeanAboveFloor objective;
+    objective.set_floor(0.2, 0.03);
+    const std::vector<double> q{0.21, 0.25, 0.4, 0.9, 0.2003};
+    std::vector<double> w(q.size()), c(q.size());
+    objective.weights(q, w);
+    objective.curvature_weights(q, c);
+    for (std::size_t i = 0; i < q.size(); ++i) {
+        const double h = 1e-7 * (q[i] - 0.2);
+        auto plus = q, minus = q;
+        plus[i] += h;
+        minus[i] -= h;
+        const double dvalue = (objective.value(plus, serial) - objective.value(minus, serial)) / (2 * h);
+        BOOST_TEST(dvalue == w[i], boost::test_tools::tolerance(1e-6));
+        std::vector<double> wp(q.size()), wm(q.size());
+        objective.weights(plus, wp);
+        objective.weights(minus, wm);
+        BOOST_TEST(-(wp[i] - wm[i]) / (2 * h) == c[i], boost::test_tools::tolerance(1e-6));
+        BOOST_TEST(w[i] > 1.0);  // the barrier pushes every element up
+    }
+    BOOST_TEST(objective.domain_floor() == 0.2);
+    auto at_floor = q;
+    at_floor[1] = 0.2;
+    BOOST_TEST(objective.value(at_floor, serial) == -std::numeric_limits<double>::infinity());
+    pv::MeanAboveFloor restored;
+    restored.restore_state(objective.state());
+    BOOST_TEST(restored.value(q, serial) == objective.value(q, serial));
+    BOOST_CHECK_THROW(restored.set_floor(std::numeric_limits<double>::quiet_NaN(), 0.1), pv::OptionError);
+    BOOST_CHECK_THROW(restored.set_floor(0.1, 0.0), pv::OptionError);
+    BOOST_CHECK_THROW(restored.restore_state(std::vector<double>{0.1}), pv::Error);
 }
 
 // A focus's gradient pass keeps only the vertices its elements touch (compact lanes): each moving

@@ -151,6 +151,30 @@ private:
     double worst_ = 0.0;  // at the last update()
 };
 
+// The qualities' sum with a barrier at a floor: F = sum_i q_i + mu * sum_i log(q_i - floor). Raises
+// the mean quality while every element stays above the floor; the barrier keeps them off it
+// smoothly (an element within mu of the floor weighs twice), and its curvature gives a solver's
+// preconditioner the elements' scale (the sum alone has none). Both are set by the solver
+// (set_floor) and kept in its state. Not among make_objective's names: without a floor it is
+// not defined.
+class MeanAboveFloor final : public ObjectiveFunction {
+public:
+    std::string_view name() const override { return "mean_above_floor"; }
+    // floor: finite; mu > 0. Throws OptionError otherwise.
+    void set_floor(double floor, double mu);
+    double floor() const { return floor_; }
+    double domain_floor() const override { return floor_; }
+    void update(std::span<const double>, const Reducer&) override {}
+    double value(std::span<const double> counted, const Reducer& reducer) const override;
+    void weights(std::span<const double> quality, std::span<double> weight) const override;
+    void curvature_weights(std::span<const double> quality, std::span<double> curvature) const override;
+    std::vector<double> state() const override { return {floor_, mu_}; }
+    void restore_state(std::span<const double> state) override;
+
+private:
+    double floor_ = 0.0, mu_ = 0.0;
+};
+
 struct ObjectiveOptions {
     double barrier_shrink = 0.8;  // mu <- shrink * mu after steps_per_mu steps, in (0, 1]
     double initial_mu = 0.0;      // 0: chosen from the qualities

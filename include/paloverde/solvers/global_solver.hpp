@@ -79,6 +79,16 @@ struct GlobalSolverOptions {
     // in its Hessian).
     enum class Finish { None, Newton };
     Finish finish = Finish::Newton;
+    // The mean's polish, after the shape phases (and the finish): the barrier raises the worst
+    // element partly at the expense of the rest, and may leave the mean quality below the
+    // input's. The polish holds still every vertex of an element within 3% of worst..ideal of
+    // the worst quality and raises the sum of the other elements' qualities, each kept above
+    // that line (MeanAboveFloor): the worst element and every element near it keep their
+    // qualities bit for bit. auto: where the mean fell below the input's, until it is above it
+    // again (the first step or two: the polish costs little); always: until the mean stops
+    // rising; off. It counts against the same budget.
+    enum class Polish { Off, Auto, Always };
+    Polish polish = Polish::Auto;
     // Shape phase (log_barrier, not the finish): a vertex the line search damped so that no element
     // blocks is damped further while its own elements' barrier terms are lower at the trial than
     // at the iterate. The bulk keeps its long steps; the vertices by the worst elements stop
