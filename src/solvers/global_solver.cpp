@@ -110,6 +110,8 @@ struct PhaseResult {
     std::string message;
     // The Newton finish found its barrier's subproblem out of reach: a fresh barrier should follow.
     bool recenter = false;
+    // The mean quality of the iterate handed back (the polish, which keeps the best mean).
+    double mean = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Where solve() stands, for checkpoints: the phase and, while untangling, the round; `finish`:
@@ -828,7 +830,7 @@ void Phase::keep_best() {
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
     work_.unfocus();
     x_.swap(best_x_);  // the best iterate, which may be the current one
-    return {reason, std::move(message)};
+    return {reason, std::move(message), false, best_mean_};
 }
 
 bool Phase::sound(const Stats& s, double objective) const {
@@ -1498,11 +1500,10 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         const bool resume_fresh = resume_finish && (!resume->numbers.contains("fresh") || resume->number("fresh") != 0.0);
         // A run resumed from a checkpoint of the mean's polish goes straight back to it.
         const bool resume_polish = resume && resume->numbers.contains("polish") && resume->number("polish") != 0.0;
-        if (resume_polish)
-            result = {static_cast<TerminationReason>(resume->number("shape_reason")),
-                      "the shape phases stopped (" + std::string(to_string(static_cast<TerminationReason>(
-                                                         resume->number("shape_reason")))) +
-                          ") before the checkpoint"};
+        if (resume_polish) {
+            const auto shape_reason = static_cast<TerminationReason>(resume->number("shape_reason"));
+            result = {shape_reason, "the shape phases stopped (" + std::string(to_string(shape_reason)) + ") before the checkpoint"};
+        }
         if (!resume_finish && !resume_polish)
             result = Phase(work, xyz, *metric, *objective, options.termination, options, Stage{.newton_follows = finish},
                            summary, observer, start, checkpointer, sliding_vertices ? &*sliding_vertices : nullptr)
@@ -1575,7 +1576,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
             if (polished.reason == TerminationReason::Interrupted || polished.reason == TerminationReason::NumericalFailure) {
                 result = polished;
             } else {
-                const double mean_after = mean_at(xyz);
+                const double mean_after = polished.mean;
                 std::ostringstream then;
                 then << std::setprecision(7) << "; then, with the elements near the worst held still, the mean quality ";
                 if (!mean_before) then << "came to " << mean_after;

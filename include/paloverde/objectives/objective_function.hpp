@@ -162,7 +162,6 @@ public:
     std::string_view name() const override { return "mean_above_floor"; }
     // floor: finite; mu > 0. Throws OptionError otherwise.
     void set_floor(double floor, double mu);
-    double floor() const { return floor_; }
     double domain_floor() const override { return floor_; }
     void update(std::span<const double>, const Reducer&) override {}
     double value(std::span<const double> counted, const Reducer& reducer) const override;
