@@ -8,8 +8,8 @@ input's) included in the time. With --old, the global solver as it was
 before issue 16's focus, adaptive mu, finish and damped-vertex ascent (--set gain_tolerance=0,
 focus_band=1, finish=none, damped_vertex_ascent=false) runs too; with --previous, as it was before
 the Newton finish, the narrower focus and the damped-vertex ascent (finish=none, focus_band=0.05,
-damped_vertex_ascent=false). Prints a markdown table (docs/global_solver.md, "Global against
-local") and, with matplotlib (Debian: python3-matplotlib), writes one plot per mesh of the best
+damped_vertex_ascent=false). Prints a markdown table (docs/global_solver.md, "Against
+the local smoother"; its figures are kept in docs/data/race.csv) and, with matplotlib (Debian: python3-matplotlib), writes one plot per mesh of the best
 worst quality against seconds.
 
     python3 examples/solver_race.py MESH [MESH ...] [--old] [--previous] [--plot PREFIX] [--set KEY=VALUE ...]
