@@ -26,6 +26,23 @@ inline void store(double* g, int corner, P v) {
     g[3 * corner + 2] = v.z;
 }
 
+// An orthonormal basis (a, b) of the plane of unit normal n, with a x b = n: a is the coordinate
+// axis e_k least aligned with n (the smallest |n_k|, the first on ties) projected into the plane,
+// so that it is never short (|e_k - n_k n|^2 = 1 - n_k^2 >= 2/3). For n = (0, 0, 1) it is the
+// x and y axes, so a planar mesh in the xy plane keeps its own coordinates.
+inline int plane_basis_axis(const P& n) {
+    const double ax = std::abs(n.x), ay = std::abs(n.y), az = std::abs(n.z);
+    return ax <= ay && ax <= az ? 0 : (ay <= az ? 1 : 2);
+}
+inline void plane_basis(const P& n, P& a, P& b) {
+    const int k = plane_basis_axis(n);
+    const double nk = k == 0 ? n.x : (k == 1 ? n.y : n.z);
+    const P axis{k == 0 ? 1.0 : 0.0, k == 1 ? 1.0 : 0.0, k == 2 ? 1.0 : 0.0};
+    const P w = axis - nk * n;
+    a = (1.0 / norm(w)) * w;
+    b = cross(n, a);
+}
+
 // Corner pairs of the edges.
 inline constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 inline constexpr int kTriEdges[3][2] = {{0, 1}, {0, 2}, {1, 2}};

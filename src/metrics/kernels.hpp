@@ -77,8 +77,8 @@ struct MeanRatio {
     static double rated(double volume, double edge_sum, double root) {
         return sign_of(volume) * 12.0 * root * root / edge_sum;
     }
-    double tet(const double* x, double* g, const MetricScale&) const {
-        const TetGeometry t(x);
+    // From a tet's geometry, for the metrics that rate its shape by the mean ratio (ShapeSize).
+    static double of(const TetGeometry& t, double* g) {
         if (!(t.edge_sum > 0.0)) {
             if (g) std::fill(g, g + 12, 0.0);
             return 0.0;
@@ -91,6 +91,7 @@ struct MeanRatio {
         }
         return q;
     }
+    double tet(const double* x, double* g, const MetricScale&) const { return of(TetGeometry(x), g); }
     void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
         metrics::tet_values_block(path, TetValueMetric::mean_ratio, x, nullptr, q);
     }
@@ -106,10 +107,14 @@ struct InverseCondition {
     struct Frame {
         P s1, s2, s3, c23, c31, c12;
         explicit Frame(const P* corner) {
+            columns(corner, s1, s2, s3);
+            c23 = cross(s2, s3), c31 = cross(s3, s1), c12 = cross(s1, s2);
+        }
+        // S's columns alone (ShapeSizeOrient needs no adjugate).
+        static void columns(const P* corner, P& s1, P& s2, P& s3) {
             const P a = corner[0];
             const P e1 = corner[1] - a, e2 = corner[2] - a, e3 = corner[3] - a;
             s1 = e1, s2 = (1.0 / r3) * (2.0 * e2 - e1), s3 = (1.0 / r6) * (3.0 * e3 - e1 - e2);
-            c23 = cross(s2, s3), c31 = cross(s3, s1), c12 = cross(s1, s2);
         }
         double det() const { return dot(s1, c23); }
         double norm_squared() const { return dot(s1, s1) + dot(s2, s2) + dot(s3, s3); }
@@ -139,16 +144,20 @@ struct InverseCondition {
             const P g1 = k * c23 - kn * s1 - kc * dc1;
             const P g2 = k * c31 - kn * s2 - kc * dc2;
             const P g3 = k * c12 - kn * s3 - kc * dc3;
-            // Back from S to E (dS = dE W^-1), then from edges to corners.
-            const P ge1 = g1 - (1.0 / r3) * g2 - (1.0 / r6) * g3;
-            const P ge2 = (2.0 / r3) * g2 - (1.0 / r6) * g3;
-            const P ge3 = (3.0 / r6) * g3;
-            store(g, 1, ge1);
-            store(g, 2, ge2);
-            store(g, 3, ge3);
-            store(g, 0, -(ge1 + ge2 + ge3));
+            store_corner_gradient(g1, g2, g3, g);
         }
         return q;
+    }
+    // The corner gradient from g_j = d/d s_j (S's columns): back from S to E (dS = dE W^-1, so
+    // d/dE = d/dS W^-T), then from the edges to the corners.
+    static void store_corner_gradient(const P& g1, const P& g2, const P& g3, double* g) {
+        const P ge1 = g1 - (1.0 / r3) * g2 - (1.0 / r6) * g3;
+        const P ge2 = (2.0 / r3) * g2 - (1.0 / r6) * g3;
+        const P ge3 = (3.0 / r6) * g3;
+        store(g, 1, ge1);
+        store(g, 2, ge2);
+        store(g, 3, ge3);
+        store(g, 0, -(ge1 + ge2 + ge3));
     }
     void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
         metrics::tet_values_block(path, TetValueMetric::inverse_condition, x, nullptr, q);
@@ -252,6 +261,158 @@ struct UntangleHybrid {
         double qgrad[9];
         const double q = triangle_shape(t, g ? qgrad : nullptr);
         return blend(t.area, q, t.darea, qgrad, 3, g, s);
+    }
+};
+
+// The target-matrix metrics of Knupp (Mesquite's TShapeSize and TShapeSizeOrient) as qualities
+// in [-1, 1] that a log-barrier can raise. A cell corner or an element with a target comes here
+// mapped (cell_types.hpp), so "the regular simplex" is its target's shape, and the reference
+// volume its target's volume: tau = V / V_ref is 1 at the target's size.
+//
+// The size term s(tau) = 2|tau| / (1 + tau^2): 1 at tau = 1 only, the same for tau and 1/tau (an
+// element twice too large rates as one twice too small), 0 at tau = 0. Past |tau| = 1 it is
+// written in r = 1/|tau|, so that neither it nor its derivative overflows for huge elements.
+struct SizeTerm {
+    double value, derivative;  // s and ds/dtau
+    explicit SizeTerm(double tau) {
+        const double t = std::abs(tau), r = t > 1.0 ? 1.0 / t : t, d = 1.0 + r * r;
+        value = 2.0 * r / d;
+        const double ds_dr = 2.0 * (1.0 - r * r) / (d * d);
+        derivative = sign_of(tau) * (t > 1.0 ? -ds_dr * r * r : ds_dr);  // dr/dt = -r^2 past 1
+    }
+};
+
+// q = m h s(tau) and its gradient g = h s dm + m s dh + m h s'(tau) dV / V_ref, from the shape m,
+// the orientation factor h (1 and dh = null for ShapeSize) and the volume; K corners.
+template <int K>
+double shape_orientation_size(double m, const double* dm, double h, const double* dh, double volume,
+                              const P* dvolume, double* g, double reference_volume) {
+    const SizeTerm size(volume / reference_volume);
+    const double q = m * h * size.value;
+    if (g) {
+        const double by_volume = m * h * size.derivative / reference_volume;
+        for (int i = 0; i < K; ++i) {
+            P gi = (h * size.value) * load(dm, i) + by_volume * dvolume[i];
+            if (dh) gi = gi + (m * size.value) * load(dh, i);
+            store(g, i, gi);
+        }
+    }
+    return q;
+}
+
+// Shape and size: the mean ratio times s(tau). 1 exactly for the regular simplex of the
+// reference volume; <= 0 exactly when inverted (the mean ratio carries the sign).
+struct ShapeSize {
+    static constexpr std::string_view name = "shape_size";
+    static constexpr bool rates_size = true;
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        const TetGeometry t(x);
+        double dm[12];
+        const double m = MeanRatio::of(t, g ? dm : nullptr);
+        return shape_orientation_size<4>(m, dm, 1.0, nullptr, t.volume, t.dvolume, g, s.reference_volume);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        double dm[9];
+        const double m = triangle_shape(t, g ? dm : nullptr);
+        return shape_orientation_size<3>(m, dm, 1.0, nullptr, t.area, t.darea, g, s.reference_volume);
+    }
+};
+
+// Shape, size and orientation: the mean ratio times h = (1 + o) / 2 times s(tau), where
+// o = tr S / (sqrt(d) |S|_F) is the cosine between S = Y W^-1 (the map from the regular simplex
+// to this one) and the identity: 1 exactly when S is a positive multiple of a rotation-free
+// identity, i.e. the element has its target's orientation. In 3D o = -1 needs S = -c I, which is
+// inverted, so a valid tet rates > 0. A triangle's S is the 2 x 2 map in the plane's basis
+// (plane_basis): P^T Y W2^-1 with P = [a b]; there S = -c I is a valid triangle turned half a
+// turn, which rates 0. Triangles of a surface (non-oriented) mesh use their own normal's basis,
+// which follows no target: orientation there means little, and the basis jumps where the
+// normal's two smallest coordinates tie.
+struct ShapeSizeOrient {
+    static constexpr std::string_view name = "shape_size_orient";
+    static constexpr bool rates_size = true;
+    static constexpr bool rotation_invariant = false;
+    static constexpr double r2 = std::numbers::sqrt2, r3 = std::numbers::sqrt3;
+
+    // h = (1 + o) / 2 and dh / d corner; false (h undefined) when S vanishes.
+    static bool tet_orientation(const P* corner, double& h, double* dh) {
+        P s1, s2, s3;
+        InverseCondition::Frame::columns(corner, s1, s2, s3);
+        const double n2 = dot(s1, s1) + dot(s2, s2) + dot(s3, s3), n = std::sqrt(n2);
+        if (!(n > 0.0)) return false;
+        const double o = (s1.x + s2.y + s3.z) / (r3 * n);
+        h = 0.5 * (1.0 + o);
+        if (dh) {
+            // do/ds_j = e_j / (sqrt3 |S|) - o s_j / |S|^2: d tr S / d s_j is the j-th axis.
+            const double k = 0.5 / (r3 * n), ko = 0.5 * o / n2;
+            InverseCondition::store_corner_gradient(P{k, 0.0, 0.0} - ko * s1, P{0.0, k, 0.0} - ko * s2,
+                                                    P{0.0, 0.0, k} - ko * s3, dh);
+        }
+        return true;
+    }
+
+    // The same for a triangle, S = P^T Y W2^-1 with the columns s1 = e1, s2 = (2 e2 - e1) / sqrt3
+    // of Y W2^-1 seen in the plane's basis: u_j = (a.s_j, b.s_j), o = (u1_a + u2_b) / (sqrt2 |u|).
+    static bool tri_orientation(const TriGeometry& t, const MetricScale& s, double& h, double* dh) {
+        const P e1 = t.corner[1] - t.corner[0], e2 = t.corner[2] - t.corner[0];
+        const P c = cross(e1, e2);
+        const double c_length = norm(c);
+        P n{s.plane_normal[0], s.plane_normal[1], s.plane_normal[2]};
+        if (!s.oriented_triangles) {
+            if (!(c_length > 0.0)) return false;
+            n = (1.0 / c_length) * c;
+        }
+        P a, b;
+        plane_basis(n, a, b);
+        const P s1 = e1, s2 = (1.0 / r3) * (2.0 * e2 - e1);
+        const double u1a = dot(a, s1), u1b = dot(b, s1), u2a = dot(a, s2), u2b = dot(b, s2);
+        const double n2 = u1a * u1a + u1b * u1b + u2a * u2a + u2b * u2b, un = std::sqrt(n2);
+        if (!(un > 0.0)) return false;
+        const double o = (u1a + u2b) / (r2 * un);
+        h = 0.5 * (1.0 + o);
+        if (dh) {
+            // With the basis held: do/ds_j = (a or b) / (sqrt2 |u|) - o P u_j / |u|^2.
+            const double k = 0.5 / (r2 * un), ko = 0.5 * o / n2;
+            const P g1 = k * a - ko * (u1a * a + u1b * b), g2 = k * b - ko * (u2a * a + u2b * b);
+            P ge1 = g1 - (1.0 / r3) * g2, ge2 = (2.0 / r3) * g2;
+            if (!s.oriented_triangles) {
+                // The basis turns with the triangle's normal. Only its twist about n (the rate
+                // w = da.b) moves o: a tilt moves the in-plane s_j out of the plane only to second
+                // order, and |u| is the same in any basis of the plane. d(tr) = w (b.s1 - a.s2), and
+                // with a = (e_k - n_k n) / |e_k - n_k n|: w = -n_k b.dn / |e_k - n_k n|, where
+                // b.dn = b.dc / |c| = de1.(e2 x b) + de2.(b x e1), over |c|.
+                const int axis = plane_basis_axis(n);
+                const double nk = axis == 0 ? n.x : (axis == 1 ? n.y : n.z);
+                const double kappa = -k * nk * (u1b - u2a) / (std::sqrt(1.0 - nk * nk) * c_length);
+                ge1 = ge1 + kappa * cross(e2, b);
+                ge2 = ge2 + kappa * cross(b, e1);
+            }
+            store(dh, 1, ge1);
+            store(dh, 2, ge2);
+            store(dh, 0, -(ge1 + ge2));
+        }
+        return true;
+    }
+
+    double tet(const double* x, double* g, const MetricScale& s) const {
+        const TetGeometry t(x);
+        double dm[12], dh[12], h = 0.0;
+        if (!tet_orientation(t.corner, h, g ? dh : nullptr)) {
+            if (g) std::fill(g, g + 12, 0.0);
+            return 0.0;
+        }
+        const double m = MeanRatio::of(t, g ? dm : nullptr);
+        return shape_orientation_size<4>(m, dm, h, dh, t.volume, t.dvolume, g, s.reference_volume);
+    }
+    double tri(const double* x, double* g, const MetricScale& s) const {
+        const TriGeometry t(x, s);
+        double dm[9], dh[9], h = 0.0;
+        if (!tri_orientation(t, s, h, g ? dh : nullptr)) {
+            if (g) std::fill(g, g + 9, 0.0);
+            return 0.0;
+        }
+        const double m = triangle_shape(t, g ? dm : nullptr);
+        return shape_orientation_size<3>(m, dm, h, dh, t.area, t.darea, g, s.reference_volume);
     }
 };
 

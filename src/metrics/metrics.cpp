@@ -232,6 +232,14 @@ public:
         if constexpr (requires { Kernel::ideal; }) return Kernel::ideal;
         return 1.0;
     }
+    bool rates_size() const override {
+        if constexpr (requires { Kernel::rates_size; }) return Kernel::rates_size;
+        return false;
+    }
+    bool rotation_invariant() const override {
+        if constexpr (requires { Kernel::rotation_invariant; }) return Kernel::rotation_invariant;
+        return true;
+    }
 
     double value(ElementKind kind, const double* corners) const override {
         return kind == ElementKind::Tetrahedron ? kernel_.tet(corners, nullptr, scale_)
@@ -501,6 +509,13 @@ Catalogue& catalogue() {
             built_in<DihedralSine>("smallest sine of the dihedral angles (tetrahedra; corner angles for triangles) over the "
                                    "regular element's; an inverted element rates minus its largest sine; range [-1.06, 1], ideal "
                                    "1; small for angles near 0 and near 180 degrees alike. Its gradient is the smallest angle's."),
+            built_in<ShapeSize>("m s(tau), m the mean ratio, tau = V / V_ref, s(tau) = 2|tau| / (1 + tau^2); range [-1, 1], "
+                                "ideal 1 (the regular simplex of volume V_ref), <= 0 when inverted. Relative to the "
+                                "element's target: docs/metrics.md."),
+            built_in<ShapeSizeOrient>(
+                "m (1 + o) / 2 s(tau), as shape_size with o = tr S / (sqrt(d) |S|_F), S the map from the regular "
+                "element; range [-1, 1], ideal 1 (the regular simplex of volume V_ref in its target's orientation), <= 0 "
+                "when inverted. Relative to the element's target: docs/metrics.md."),
             built_in<MinDihedralAngle>("smallest dihedral angle in degrees, negative if inverted; tetrahedra; range "
                                        "[-70.53, 70.53], ideal 70.53. No gradient: for assessments and smart Laplace."),
             built_in<MinCornerAngle>("smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal "

@@ -4,6 +4,7 @@
 #include <boost/test/data/test_case.hpp>
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -155,8 +156,10 @@ BOOST_DATA_TEST_CASE(blocks_and_single_corners_rate_cells_alike, bdata::make(met
     BOOST_TEST(batch == single);
 }
 
+// A metric that rates orientation (shape_size_orient) is moved and scaled but not turned.
 BOOST_DATA_TEST_CASE(cells_rate_the_same_after_motion_and_scaling, bdata::make(metrics_for_cells()), name) {
-    const double c = std::cos(0.7), s = std::sin(0.7);
+    const double turn = pv::make_metric(name)->rotation_invariant() ? 0.7 : 0.0;
+    const double c = std::cos(turn), s = std::sin(turn);
     for (pv::CellType type : kCells) {
         std::vector<double> xyz = ideal_coordinates(type);
         xyz[3] += 0.2, xyz[4] -= 0.1;  // a distorted cell
@@ -200,6 +203,36 @@ BOOST_AUTO_TEST_CASE(a_mirrored_cell_is_inverted_at_every_corner) {
             flipped.flip_elements();  // an involution
             BOOST_TEST((std::vector<pv::VertexId>(flipped.connectivity().begin(), flipped.connectivity().end()) ==
                         std::vector<pv::VertexId>(mesh.connectivity().begin(), mesh.connectivity().end())));
+        }
+    }
+}
+
+// The target metrics on a unit cube: every corner maps to the unit regular tetrahedron (volume
+// sqrt(2) / 12) in the regular tetrahedron's own orientation, so with that reference volume they
+// rate 1; the cube grown by 10% or turned by 10 degrees rates less.
+BOOST_AUTO_TEST_CASE(target_metrics_rate_the_unit_cube_one_at_every_corner) {
+    const std::vector<double> cube = ideal_coordinates(pv::CellType::Hexahedron);
+    const double c = std::cos(std::numbers::pi / 18), s = std::sin(std::numbers::pi / 18);
+    std::vector<double> grown = cube, turned = cube;
+    for (std::size_t i = 0; i < cube.size(); i += 3) {
+        for (int d = 0; d < 3; ++d) grown[i + d] = 1.1 * cube[i + d];
+        turned[i] = c * cube[i] - s * cube[i + 1];
+        turned[i + 1] = s * cube[i] + c * cube[i + 1];
+    }
+    for (const char* name : {"shape_size", "shape_size_orient"}) {
+        BOOST_TEST_CONTEXT(name) {
+            auto metric = pv::make_metric(name);
+            pv::MetricScale scale;
+            scale.reference_volume = std::sqrt(2.0) / 12.0;
+            metric->set_scale(scale);
+            const auto mesh = one_cell(pv::CellType::Hexahedron, cube);
+            BOOST_TEST(mesh.num_elements() == 8);
+            for (double q : rate(*metric, mesh, cube)) BOOST_TEST(q == 1.0, boost::test_tools::tolerance(1e-12));
+            for (double q : rate(*metric, mesh, grown)) BOOST_TEST(q < 0.999);
+            for (double q : rate(*metric, mesh, turned)) {
+                if (metric->rotation_invariant()) BOOST_TEST(q == 1.0, boost::test_tools::tolerance(1e-12));
+                else BOOST_TEST(q < 0.999);
+            }
         }
     }
 }

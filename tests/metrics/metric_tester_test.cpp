@@ -1,11 +1,14 @@
 // The generic metric tester: every metric in the catalogue passes the same checks on both
 // element kinds — ideal value, gradient against finite differences, invariance under
 // translation, rotation, uniform scaling and even corner permutations, and sensible values on
-// inverted and degenerate elements.
+// inverted and degenerate elements. A metric that says it rates size (rates_size()) or
+// orientation (rotation_invariant() false) is checked for falling below the ideal when scaled or
+// turned instead of for invariance under turns.
 #include <boost/test/data/test_case.hpp>
 #include <boost/test/unit_test.hpp>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <vector>
 
@@ -89,6 +92,10 @@ BOOST_DATA_TEST_CASE(gradient_matches_finite_differences, bdata::make(names()), 
             Corners x = distorted(kind, rng, 0.25);
             if (trial >= 20)
                 for (std::size_t i = 0; i < x.size(); i += 3) x[i] = -x[i];
+            // A metric that rates size also meets elements far from the reference volume (tau
+            // from about 0.1 to 8), where its size term bends the other way.
+            if (m->rates_size() && trial % 4 == 3)
+                for (double& c : x) c *= trial % 8 == 3 ? 2.0 : 0.5;
             if (std::abs(signed_measure(kind, x)) < 0.05) continue;  // mean ratio's kink and edge-ratio ties
             std::vector<double> g(x.size());
             const double v = m->value_and_gradient(kind, x.data(), g.data());
@@ -110,17 +117,22 @@ BOOST_DATA_TEST_CASE(gradient_matches_finite_differences, bdata::make(names()), 
     }
 }
 
+// Scaled by the same factor as the reference volume (scale-free volumes are invariant). A metric
+// that rates orientation (rotation_invariant() false) is only translated and scaled, not turned
+// nor permuted: the next test checks that turning it costs.
 BOOST_DATA_TEST_CASE(invariant_under_translation_rotation_scaling_and_even_permutation, bdata::make(names()), name) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> angle(0.0, 6.283185307179586);
     for (auto kind : kKinds) {
         if (!metric_for(name, kind)->supports(kind)) continue;
+        const bool turns = metric_for(name, kind)->rotation_invariant();
         const int corners = pv::corner_count(kind);
         for (int trial = 0; trial < 20; ++trial) {
             const Corners x = distorted(kind, rng, 0.2);
             const double reference = metric_for(name, kind)->value(kind, x.data());
             // Rotation about z keeps triangles in the oriented plane; tets also get a tilt.
-            const double a = angle(rng), b = kind == pv::ElementKind::Tetrahedron ? angle(rng) : 0.0;
+            double a = angle(rng), b = kind == pv::ElementKind::Tetrahedron ? angle(rng) : 0.0;
+            if (!turns) a = b = 0.0;
             const double scale = std::pow(10.0, trial % 9 - 4);  // 1e-4 .. 1e4
             Corners y = x;
             for (int c = 0; c < corners; ++c) {
@@ -134,6 +146,7 @@ BOOST_DATA_TEST_CASE(invariant_under_translation_rotation_scaling_and_even_permu
             auto scaled = metric_for(name, kind, scale);
             BOOST_TEST_CONTEXT(name << " on a " << pv::to_string(kind) << ", trial " << trial << ", scale " << scale) {
                 BOOST_TEST(scaled->value(kind, y.data()) == reference, boost::test_tools::tolerance(1e-8));
+                if (!turns) continue;
                 // Even permutation of the corners: (0 1 2) -> (1 2 0).
                 Corners p = x;
                 for (int d = 0; d < 3; ++d) {
@@ -142,6 +155,44 @@ BOOST_DATA_TEST_CASE(invariant_under_translation_rotation_scaling_and_even_permu
                     p[6 + d] = x[d];
                 }
                 BOOST_TEST(metric_for(name, kind)->value(kind, p.data()) == reference, boost::test_tools::tolerance(1e-12));
+            }
+        }
+    }
+}
+
+// What the invariances above leave out: a metric that rates size is ideal only at the reference
+// volume, and one that rates orientation only in the regular simplex's own orientation (but
+// anywhere it is moved to).
+BOOST_DATA_TEST_CASE(size_and_orientation_cost_where_a_metric_rates_them, bdata::make(names()), name) {
+    for (auto kind : kKinds) {
+        auto m = metric_for(name, kind);
+        if (!m->supports(kind) || (!m->rates_size() && m->rotation_invariant())) continue;
+        const int corners = pv::corner_count(kind);
+        const Corners x = ideal(kind);
+        BOOST_TEST_CONTEXT(name << " on a " << pv::to_string(kind)) {
+            if (m->rates_size())
+                for (double factor : {1.1, 1.0 / 1.1, 3.0}) {
+                    Corners y = x;
+                    for (double& c : y) c *= factor;
+                    BOOST_TEST(m->value(kind, y.data()) < m->ideal_value(), "scaled by " << factor);
+                }
+            Corners moved = x;
+            for (int c = 0; c < corners; ++c) moved[3 * c] += 7.0, moved[3 * c + 1] -= 3.0;
+            BOOST_TEST(m->value(kind, moved.data()) == m->ideal_value(), boost::test_tools::tolerance(1e-12));
+            if (m->rotation_invariant()) continue;
+            // 10 degrees about z (in the plane of a triangle), and for a tet also about x.
+            const double c10 = std::cos(std::numbers::pi / 18), s10 = std::sin(std::numbers::pi / 18);
+            for (int axis : {2, 0}) {
+                if (axis == 0 && kind == pv::ElementKind::Triangle) continue;
+                const int i = axis == 2 ? 0 : 1, j = axis == 2 ? 1 : 2;  // the plane turned
+                Corners y = x;
+                for (int c = 0; c < corners; ++c) {
+                    y[3 * c + i] = c10 * x[3 * c + i] - s10 * x[3 * c + j];
+                    y[3 * c + j] = s10 * x[3 * c + i] + c10 * x[3 * c + j];
+                }
+                const double turned = m->value(kind, y.data());
+                BOOST_TEST(turned < m->ideal_value(), "turned about axis " << axis);
+                BOOST_TEST(turned > 0.9, "turned about axis " << axis);  // a little turn costs a little
             }
         }
     }

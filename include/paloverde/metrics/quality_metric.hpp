@@ -47,6 +47,14 @@ public:
     virtual bool supports_cells() const { return true; }
     virtual bool has_gradient() const { return true; }
     virtual double ideal_value() const { return 1.0; }
+    // Whether the ideal value also needs the element's size: true for the metrics that rate an
+    // element against its reference volume (shape_size, shape_size_orient), which fall below the
+    // ideal when the regular simplex is scaled away from that volume.
+    virtual bool rates_size() const { return false; }
+    // False for the metrics that rate an element's orientation against its target
+    // (shape_size_orient): a rotated element rates differently, and so does one whose corners are
+    // permuted (which turns the regular simplex).
+    virtual bool rotation_invariant() const { return true; }
 
     void set_scale(const MetricScale& scale) { scale_ = scale; }
     const MetricScale& scale() const { return scale_; }
@@ -114,8 +122,9 @@ struct MetricOptions {
 
 // The metric catalogue: every metric a name can choose, in configs, on the command line, in
 // assessments and in make_metric(). The built-in ones come first (aspect_ratio, mean_ratio,
-// inverse_condition, edge_ratio, scaled_volume, untangle_hybrid, min_dihedral_deg for
-// tetrahedra, min_angle_deg for triangles), then those a program registered.
+// inverse_condition, edge_ratio, scaled_volume, untangle_hybrid, dihedral_sine, shape_size,
+// shape_size_orient, min_dihedral_deg for tetrahedra, min_angle_deg for triangles), then those a
+// program registered.
 struct MetricInfo {
     std::string name;
     std::string help;  // formula, range, ideal value: shown by `paloverde run --describe`
