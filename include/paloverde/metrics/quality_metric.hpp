@@ -28,8 +28,10 @@ struct MetricScale {
     // element volume of the mesh.
     double reference_volume = 1.0;
     // Optional: a reference volume per element (indexed like the mesh's elements), for meshes
-    // whose element sizes vary widely; used by scaled_volume and untangle_hybrid instead of
-    // reference_volume. Not owned: the array must outlive the metric's use of it.
+    // whose element sizes vary widely; used by scaled_volume, untangle_hybrid, shape_size and
+    // shape_size_orient instead of reference_volume in the batch passes (evaluate,
+    // evaluate_listed, accumulate_gradient; value() and element_value() take reference_volume).
+    // Not owned: the array must outlive the metric's use of it.
     std::span<const double> element_reference_volume;
 
     static MetricScale of(const Mesh& mesh);
