@@ -136,8 +136,9 @@ void for_each_chunk(ElementId elements, RateChunk rate_chunk) {
 }  // namespace
 
 const std::vector<std::string>& QualityAssessor::default_metrics() {
-    static const std::vector<std::string> names{"aspect_ratio",  "mean_ratio",       "inverse_condition", "edge_ratio",
-                                                "scaled_volume", "min_dihedral_deg", "min_angle_deg"};
+    static const std::vector<std::string> names{"aspect_ratio",     "mean_ratio",    "inverse_condition",
+                                                "edge_ratio",       "scaled_volume", "scaled_jacobian",
+                                                "min_dihedral_deg", "min_angle_deg"};
     return names;
 }
 
@@ -172,6 +173,12 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     for (double c : xyz) largest = std::max(largest, std::abs(c));
     largest = reducer.max(largest);
     if (const int exponent = unit_scale_exponent(std::span<const double>(&largest, 1)); std::abs(exponent) > 64) {
+        if (mesh.has_targets()) {  // their volumes scale with the coordinates
+            Mesh scaled = mesh;
+            std::copy(xyz.begin(), xyz.end(), scaled.coordinates().begin());
+            scaled.scale(exponent);
+            return assess(scaled, scaled.coordinates(), counted, owned, reducer, plane_normal);
+        }
         std::vector<double> scaled(xyz.begin(), xyz.end());
         scale_coordinates(scaled, exponent);
         return assess(mesh, scaled, counted, owned, reducer, plane_normal);

@@ -23,7 +23,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
         std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle;
-        std::string checkpoint, checkpoint_every, resume;
+        std::string checkpoint, checkpoint_every, resume, keep, reference;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
     };
@@ -73,6 +73,16 @@ void add_improve_command(CLI::App& app, int& exit_code) {
                     "surface.feature_angle (global, local, with --boundary slide): boundary faces meeting at more than this "
                     "angle (degrees; default 40) make a feature curve that stays")
         ->type_name("DEG");
+    cmd->add_option("--keep", o->keep,
+                    "targets.keep: what each element keeps of the input, any of size, orientation, aspect, skew (comma "
+                    "separated) or all; the rest is made ideal. none: every element is pulled toward the regular "
+                    "element; auto (the default): a mesh with cells keeps its aspect, one of tetrahedra or triangles "
+                    "nothing (docs/targets.md)")
+        ->type_name("FACTORS");
+    cmd->add_option("--reference", o->reference,
+                    "targets.reference: a mesh with the input's connectivity whose elements are the targets (every "
+                    "factor --keep does not keep)")
+        ->type_name("REF");
     cmd->add_option("--fixed", o->fixed, "input.fixed: auto, boundary, file or none (which vertices stay put)")
         ->type_name("MODE");
     add_orientation_option(*cmd, o->orientation, "input.orientation: ");
@@ -145,6 +155,8 @@ void add_improve_command(CLI::App& app, int& exit_code) {
                                   "global or local); the " + method + " method keeps the boundary fixed");
             }
         }
+        if (!o->keep.empty()) flag("targets.keep", "[" + o->keep + "]", "--keep");
+        if (!o->reference.empty()) flag("targets.reference", o->reference, "--reference", true);
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
         if (!o->orientation.empty()) flag("input.orientation", o->orientation, "--orientation");
         if (!o->threads.empty()) flag("threads", o->threads, "--threads");

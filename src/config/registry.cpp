@@ -411,6 +411,24 @@ Tables::Tables() {
                         [] { return SolverOptions(LaplaceSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::laplace(options_as<LaplaceSolverOptions>(o, "laplace")); },
                         [](const SolverOptions& o) { return Targets{o.get<LaplaceSolverOptions>().termination.target_worst_quality}; }});
+    const auto global_target = [](const SolverOptions& o) {
+        return Targets{o.get<GlobalSolverOptions>().termination.target_worst_quality};
+    };
+    wrappers.push_back({"size_adapt_shape",
+                        "Every element keeps its size (its target's size is the input's), its shape is made ideal: "
+                        "assess, untangle if needed and improve with the global solver rating shape_size, assess",
+                        "global", &global_kind, {{"metric"}, "size_adapt_shape rates with shape_size"},
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::size_adapt_shape(options_as<GlobalSolverOptions>(o, "size_adapt_shape")); },
+                        global_target});
+    wrappers.push_back({"boundary_layer_shape",
+                        "Every element keeps its size, aspect and orientation, its angles are made ideal (layers keep "
+                        "their heights): assess, untangle if needed and improve with the global solver rating "
+                        "shape_size_orient, assess",
+                        "global", &global_kind, {{"metric"}, "boundary_layer_shape rates with shape_size_orient"},
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::boundary_layer_shape(options_as<GlobalSolverOptions>(o, "boundary_layer_shape")); },
+                        global_target});
     wrappers.push_back({"untangle_then_improve",
                         "Assess, untangle, then improve the shape, each with the global solver, assess: the default job.",
                         "global", &global_kind,

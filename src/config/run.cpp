@@ -4,6 +4,7 @@
 #include <chrono>
 #include <iomanip>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "config/partitioned_run.hpp"
@@ -98,6 +99,21 @@ MeshFile read_input(const RunSpec& spec) {
     }
     // The flags written with the output are the ones used, not the file's.
     std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
+    if (const TargetOptions targets = spec.targets.options(mesh.has_cells()); targets.any()) {
+        const std::string& path = spec.targets.reference;
+        std::optional<MeshFile> reference;
+        if (!path.empty()) {
+            // Held the way the input is, so that its corners are the input's.
+            ReadOptions as_input = read;
+            as_input.orientation = file.orientation.flipped ? OrientationMode::Flipped : OrientationMode::AsIs;
+            reference = read_mesh(path, as_input);
+        }
+        try {
+            set_targets(mesh, targets, reference ? &reference->mesh : nullptr);
+        } catch (const MeshError& e) {
+            throw MeshError("'" + (path.empty() ? in.mesh : path) + "': " + e.what());
+        }
+    }
     return file;
 }
 

@@ -6,6 +6,8 @@
 
 #include "config/registry_internal.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
 
 namespace paloverde::config {
 
@@ -17,6 +19,46 @@ ConfigError::ConfigError(std::string where, std::string key, const std::string& 
 void InputSpec::validate() const {
     for (long long v : fixed_vertices)
         if (v < 0) throw OptionError("fixed_vertices must be vertex ids >= 0 (got " + std::to_string(v) + ")");
+}
+
+TargetOptions TargetsSpec::options(bool cells) const {
+    auto joined = [](const std::vector<std::string>& words) {
+        std::string out;
+        for (const auto& w : words) {
+            if (w == "none" || w == "auto") continue;
+            out += (out.empty() ? "" : ",") + w;
+        }
+        return out;
+    };
+    const bool automatic = std::find(keep.begin(), keep.end(), "auto") != keep.end();
+    TargetOptions o = TargetOptions::from(joined(keep), TargetSource::Input);
+    if (automatic && cells) o.aspect = TargetSource::Input;
+    if (reference.empty()) return o;
+    if (from_reference.empty()) {  // every factor not kept
+        for (TargetSource* f : {&o.size, &o.orientation, &o.aspect, &o.skew})
+            if (*f == TargetSource::Ideal) *f = TargetSource::Reference;
+        return o;
+    }
+    const TargetOptions r = TargetOptions::from(joined(from_reference), TargetSource::Reference);
+    const TargetSource* from[] = {&r.size, &r.orientation, &r.aspect, &r.skew};
+    TargetSource* to[] = {&o.size, &o.orientation, &o.aspect, &o.skew};
+    for (int i = 0; i < 4; ++i) {
+        if (*from[i] != TargetSource::Reference) continue;
+        if (*to[i] == TargetSource::Input)
+            throw OptionError("a factor cannot be both kept and taken from the reference (keep: " + joined(keep) +
+                              "; from_reference: " + joined(from_reference) + ")");
+        *to[i] = TargetSource::Reference;
+    }
+    return o;
+}
+
+void TargetsSpec::validate() const {
+    if (!from_reference.empty() && reference.empty())
+        throw OptionError("from_reference needs a reference mesh (reference: FILE)");
+    const bool alone = std::none_of(keep.begin(), keep.end(), [](const std::string& w) { return w == "none" || w == "auto"; });
+    if (!alone && keep.size() > 1)
+        throw OptionError("keep: auto and none stand alone (got " + std::to_string(keep.size()) + " words)");
+    options(true);
 }
 
 void PartitionSpec::validate() const {
@@ -90,6 +132,9 @@ void RunSpec::check_runnable() const {
     if (study.size() > 1 && !output.mesh.empty() && output.mesh.find("{method}") == std::string::npos)
         throw ConfigError(origin_of(*this, "output.mesh"), "output.mesh",
                           "a study writes one mesh per method: put {method} in the name (e.g. out_{method}.vtu)");
+    if (partitioned() && !targets.reference.empty())
+        throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
+                          "a reference mesh is not carried to the ranks' parts yet: run this mesh serially (partition.parts: 1)");
 }
 
 namespace detail {
@@ -118,6 +163,30 @@ const Table<InputSpec>& input_table() {
                     "The file's element orientation convention. auto: flip every element (two corners swapped) "
                     "when the elements' total signed volume is negative (the mirror convention); as_is: the file's "
                     "order; flipped: flip every element. Outputs keep the file's order. Pieces decide together.");
+        return t;
+    }();
+    return t;
+}
+
+const Table<TargetsSpec>& targets_table() {
+    static const Table<TargetsSpec> t = [] {
+        const auto factors = [] { return std::vector<std::string>{"size", "orientation", "aspect", "skew", "all"}; };
+        const auto kept = [] {
+            return std::vector<std::string>{"size", "orientation", "aspect", "skew", "all", "auto", "none"};
+        };
+        Table<TargetsSpec> t("targets", [](const TargetsSpec& s) { s.validate(); });
+        t.names("keep", &TargetsSpec::keep, kept, "factor",
+                "Factors of each element's target kept from the input: size, orientation, aspect (the edges' "
+                "relative lengths), skew (the angles), all; the rest are ideal (or from the reference). auto: aspect "
+                "for a mesh with cells (hexahedra, wedges, pyramids, quadrilaterals), nothing for tetrahedra and "
+                "triangles; none: nothing, every element is pulled toward the ideal element. With size or "
+                "orientation kept, solver steps whose metric is not set rate with shape_size or "
+                "shape_size_orient (docs/targets.md).")
+            .path("reference", &TargetsSpec::reference,
+                  "A mesh with the input's connectivity (any format) whose elements give the factors of "
+                  "from_reference; empty: none.")
+            .names("from_reference", &TargetsSpec::from_reference, factors, "factor",
+                   "Factors taken from the reference mesh; empty: every factor not kept.");
         return t;
     }();
     return t;
@@ -389,6 +458,9 @@ const Table<RunSpec>& run_table() {
             if (s.threads < 0) throw OptionError("threads must be >= 0 (0: OpenMP's default; got " + std::to_string(s.threads) + ")");
         });
         t.object("input", &RunSpec::input, input_table(), "The mesh, which of its vertices stay put, and its orientation convention.")
+            .object("targets", &RunSpec::targets, targets_table(),
+                    "What each element should look like: its size, orientation, aspect and skew kept from the input, "
+                    "taken from a reference mesh, or ideal (docs/targets.md).")
             .integer("threads", &RunSpec::threads, "Threads of every solver; 0: OpenMP's default. Results do not depend on it.")
             .object("partition", &RunSpec::partition, partition_table(), "Splitting the mesh across MPI ranks.")
             .object("parallel", &RunSpec::parallel, parallel_table(), "How the ranks of a partitioned run talk.")
@@ -464,6 +536,30 @@ std::vector<ObjectInfo> section_infos() {
 
 }  // namespace detail
 
+namespace {
+// With size or orientation kept, a solver step whose metric was not set rates with the metric
+// that measures them (TargetOptions::metric): a shape metric alone would let them drift.
+void choose_target_metrics(RunSpec& spec) {
+    const TargetOptions targets = spec.targets.options(false);  // auto keeps no size
+    if (!targets.any()) return;
+    auto choose = [&](std::vector<StepSpec>& queue, const std::string& path) {
+        for (std::size_t i = 0; i < queue.size(); ++i) {
+            const std::string prefix = path + "[" + std::to_string(i) + "].";
+            const bool set = std::any_of(spec.origins.begin(), spec.origins.end(), [&](const auto& origin) {
+                return origin.first.starts_with(prefix) && origin.first.find(".metric", prefix.size() - 1) != std::string::npos;
+            });
+            if (set) continue;
+            if (auto* global = queue[i].options.get_if<GlobalSolverOptions>())
+                global->shape_metric = targets.metric(global->shape_metric);
+            else if (auto* local = queue[i].options.get_if<LocalSolverOptions>())
+                local->metric = targets.metric(local->metric);
+        }
+    };
+    choose(spec.queue, "queue");
+    for (std::size_t m = 0; m < spec.study.size(); ++m) choose(spec.study[m].queue, "study[" + std::to_string(m) + "].queue");
+}
+}  // namespace
+
 RunSpec parse_config(std::string_view yaml, const std::string& source, std::span<const Override> overrides) {
     using namespace detail;
     Node root = parse_yaml(yaml, source);
@@ -482,6 +578,7 @@ RunSpec parse_config(std::string_view yaml, const std::string& source, std::span
     RunSpec spec;
     spec.queue = RunSpec::default_queue();
     run_table().read(spec, root, "", Reader{&spec.origins});
+    choose_target_metrics(spec);
     return spec;
 }
 

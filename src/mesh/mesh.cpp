@@ -116,8 +116,8 @@ std::vector<double> Mesh::cell_minimum(std::span<const double> per_element) cons
     return out;
 }
 
-void Mesh::carry_cells_from(const Mesh& source, std::span<const VertexId> new_id,
-                            std::span<const ElementId> old_element) {
+void Mesh::carry_element_data_from(const Mesh& source, std::span<const VertexId> new_id,
+                                   std::span<const ElementId> old_element) {
     cell_types_ = source.cell_types_;
     cell_offsets_ = source.cell_offsets_;
     cell_connectivity_.resize(source.cell_connectivity_.size());
@@ -125,13 +125,60 @@ void Mesh::carry_cells_from(const Mesh& source, std::span<const VertexId> new_id
         cell_connectivity_[i] = new_id[static_cast<std::size_t>(source.cell_connectivity_[i])];
     element_cell_.clear();
     corner_map_.clear();
-    if (!source.has_cells()) return;
-    element_cell_.resize(old_element.size());
-    corner_map_.resize(old_element.size());
-    for (std::size_t i = 0; i < old_element.size(); ++i) {
-        element_cell_[i] = source.element_cell_[static_cast<std::size_t>(old_element[i])];
-        corner_map_[i] = source.corner_map_[static_cast<std::size_t>(old_element[i])];
+    clear_targets();
+    if (source.has_cells()) {
+        element_cell_.resize(old_element.size());
+        corner_map_.resize(old_element.size());
+        for (std::size_t i = 0; i < old_element.size(); ++i) {
+            element_cell_[i] = source.element_cell_[static_cast<std::size_t>(old_element[i])];
+            corner_map_[i] = source.corner_map_[static_cast<std::size_t>(old_element[i])];
+        }
     }
+    if (source.has_targets()) {
+        target_maps_.resize(old_element.size());
+        target_volumes_.resize(old_element.size());
+        for (std::size_t i = 0; i < old_element.size(); ++i) {
+            target_maps_[i] = source.target_maps_[static_cast<std::size_t>(old_element[i])];
+            target_volumes_[i] = source.target_volumes_[static_cast<std::size_t>(old_element[i])];
+        }
+    }
+}
+
+void Mesh::set_targets(std::vector<CornerMap> maps, std::vector<double> volumes) {
+    const auto m = static_cast<std::size_t>(num_elements());
+    if (maps.size() != m || volumes.size() != m)
+        throw MeshError("targets: " + std::to_string(maps.size()) + " maps and " + std::to_string(volumes.size()) +
+                        " volumes given for " + std::to_string(m) + " elements");
+    const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
+    for (std::size_t e = 0; e < m; ++e) {
+        const CornerMap& a = maps[e];
+        bool finite = true;
+        for (const auto& row : a)
+            for (double x : row) finite = finite && std::isfinite(x);
+        const double det = d == 2 ? a[0][0] * a[1][1] - a[0][1] * a[1][0]
+                                  : a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
+                                        a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+                                        a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+        if (!finite || !(det > 0.0))
+            throw MeshError("target of element " + std::to_string(e) + ": its map is " +
+                            (finite ? "not orientation-preserving" : "not finite"));
+        if (!(volumes[e] > 0.0) || !std::isfinite(volumes[e]))
+            throw MeshError("target of element " + std::to_string(e) + ": its volume " + std::to_string(volumes[e]) +
+                            " is not a finite positive number");
+    }
+    target_maps_ = std::move(maps);
+    target_volumes_ = std::move(volumes);
+}
+
+void Mesh::clear_targets() noexcept {
+    target_maps_.clear();
+    target_volumes_.clear();
+}
+
+void Mesh::scale(int exponent) {
+    scale_coordinates(coordinates_, exponent);
+    const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
+    for (double& v : target_volumes_) v = std::ldexp(v, d * exponent);
 }
 
 Mesh Mesh::copy_of(const MeshInterface& source) {
@@ -224,6 +271,8 @@ void Mesh::find_plane() {
 }
 
 void Mesh::flip_elements() {
+    // A target is a map of the corners in their order: flipped corners would need other maps.
+    if (has_targets()) throw MeshError("the elements of a mesh with targets cannot be flipped: orient it first");
     const auto k = static_cast<std::size_t>(corners());
     if (has_cells()) {
         for (std::size_t c = 0; c < cell_types_.size(); ++c) {

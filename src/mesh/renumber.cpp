@@ -260,7 +260,7 @@ Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
     out.set_degrees_of_freedom(std::move(freedom));
     out.set_global_ids(std::move(global));
     out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
-    out.carry_cells_from(mesh, new_id, order.old_element);
+    out.carry_element_data_from(mesh, new_id, order.old_element);
     return out;
 }
 

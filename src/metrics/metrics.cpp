@@ -6,6 +6,7 @@
 #include "core/prefetch.hpp"
 #include "evaluate_together.hpp"
 #include "kernels.hpp"
+#include "scaled_jacobian.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/mesh.hpp"
@@ -74,12 +75,30 @@ void unmap_gradient(const CornerMap& m, double* g) {
     for (int d = 0; d < 3; ++d) g[d] = total[d];
 }
 
-// Gathers element e's K corners into x, mapped when the mesh's cells give it a map.
+// Where an element's corners are carried from before a kernel rates them: its target's map where
+// the mesh has targets, else its cell's corner map; none for the elements of a simplex mesh.
+class ElementMaps {
+public:
+    explicit ElementMaps(const Mesh& mesh)
+        : ids_(mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data()),
+          targets_(mesh.has_targets() ? mesh.target_maps().data() : nullptr) {}
+    explicit operator bool() const { return ids_ || targets_; }
+    const CornerMap* of(ElementId e) const {
+        if (targets_) return targets_ + e;
+        return ids_ && ids_[e] ? &corner_map(ids_[e]) : nullptr;
+    }
+
+private:
+    const std::uint8_t* ids_;
+    const CornerMap* targets_;
+};
+
+// Gathers element e's K corners into x, mapped when the element has a map.
 template <int K>
-void gather(const VertexId* c, const double* coords, const std::uint8_t* maps, ElementId e, double* x) {
+void gather(const VertexId* c, const double* coords, const ElementMaps& maps, ElementId e, double* x) {
     for (int i = 0; i < K; ++i)
         for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-    if (maps && maps[e]) map_corner<K>(corner_map(maps[e]), x);
+    if (const CornerMap* m = maps.of(e)) map_corner<K>(*m, x);
 }
 
 // The element-by-element passes, for kernels and for a program's own metrics alike: each
@@ -90,7 +109,7 @@ void rate_each(const Mesh& mesh, std::span<const double> xyz, ElementId first, E
                Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
-    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const ElementMaps maps(mesh);
     double x[3 * K];
     const bool ask_ahead = !mesh.locality_ordered();
     for (ElementId e = first; e < last; ++e) {
@@ -106,7 +125,7 @@ void accumulate_each(const Mesh& mesh, std::span<const double> xyz, ElementId fi
                      const QualityMetric::GradientTarget& target, Rate& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
-    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const ElementMaps maps(mesh);
     double x[3 * K], g[3 * K];
     for (ElementId e = first; e < last; ++e) {
         const double w = target.weight[e - first];
@@ -115,7 +134,7 @@ void accumulate_each(const Mesh& mesh, std::span<const double> xyz, ElementId fi
         const VertexId* c = conn + static_cast<std::size_t>(e) * K;
         gather<K>(c, coords, maps, e, x);
         rate(std::integral_constant<int, K>{}, e, x, g);
-        if (maps && maps[e]) unmap_gradient<K>(corner_map(maps[e]), g);
+        if (const CornerMap* m = maps.of(e)) unmap_gradient<K>(*m, g);
         for (int i = 0; i < K; ++i) add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, g + 3 * i);
     }
 }
@@ -141,13 +160,13 @@ void accumulate_gradient_each(const Mesh& mesh, std::span<const double> xyz, Ele
     }
 }
 
-// Maps the corners of lane j of a gathered block when its cell gives it a map (m != 0), as
-// gather<4>() maps them: the same bits.
-inline void map_lane(std::uint8_t m, int j, TetBlock& x) {
+// Maps the corners of lane j of a gathered block when its element has a map, as gather<4>() maps
+// them: the same bits.
+inline void map_lane(const CornerMap* m, int j, TetBlock& x) {
     if (!m) return;
     double corner[12];
     for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
-    map_corner<4>(corner_map(m), corner);
+    map_corner<4>(*m, corner);
     for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
 }
 
@@ -163,7 +182,7 @@ template <class Rate>
 void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, Rate&& rate) {
     const VertexId* conn = mesh.connectivity().data();
     const double* coords = xyz.data();
-    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const ElementMaps maps(mesh);
     const bool ask_ahead = !mesh.locality_ordered();
     TetBlock x;
     for (ElementId b = first; b < last; b += kTetBlock) {
@@ -173,7 +192,7 @@ void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId fir
                                      4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
         gather_tets(conn + 4 * static_cast<std::size_t>(b), coords, count, x);
         if (maps)
-            for (int j = 0; j < count; ++j) map_lane(maps[b + j], j, x);
+            for (int j = 0; j < count; ++j) map_lane(maps.of(b + j), j, x);
         rate(std::as_const(x), b, count);
     }
 }
@@ -184,7 +203,7 @@ template <class Rate>
 void for_each_listed_block(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
                            Rate&& rate) {
     const VertexId* conn = mesh.connectivity().data();
-    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const ElementMaps maps(mesh);
     TetBlock x;
     VertexId corners[4 * kTetBlock];
     for (std::size_t b = 0; b < elements.size(); b += kTetBlock) {
@@ -194,7 +213,7 @@ void for_each_listed_block(const Mesh& mesh, std::span<const double> xyz, std::s
             std::copy_n(conn + 4 * static_cast<std::size_t>(ids[j]), 4, corners + 4 * j);
         gather_tets(corners, xyz.data(), count, x);
         if (maps)
-            for (int j = 0; j < count; ++j) map_lane(maps[ids[j]], j, x);
+            for (int j = 0; j < count; ++j) map_lane(maps.of(ids[j]), j, x);
         rate(std::as_const(x), ids, count);
     }
 }
@@ -251,6 +270,27 @@ public:
                                                 : kernel_.tri(corners, gradient, scale_);
     }
 
+    // A size metric rates an element of a mesh with targets against its target's volume, which
+    // the one-element calls value() and value_and_gradient() cannot see.
+    double element_value(const Mesh& mesh, std::span<const double> xyz, ElementId e,
+                         double* gradient = nullptr) const override {
+        if (!(kTargetSize && mesh.has_targets())) return QualityMetric::element_value(mesh, xyz, e, gradient);
+        if (gradient) require_gradient();
+        MetricScale local = scale_;
+        const ElementMaps maps(mesh);
+        const VertexId* c = mesh.connectivity().data() + static_cast<std::size_t>(e) * mesh.corners();
+        double x[12];
+        const auto rate = [&]<int K>(std::integral_constant<int, K>) {
+            gather<K>(c, xyz.data(), maps, e, x);
+            const double q = kernel<K>(x, gradient, scale_of(mesh, e, local));
+            if (gradient)
+                if (const CornerMap* m = maps.of(e)) unmap_gradient<K>(*m, gradient);
+            return q;
+        };
+        return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
+                                                       : rate(std::integral_constant<int, 3>{});
+    }
+
     void evaluate(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                   double* quality) const override {
         if constexpr (kHasBlocks || kHasValueBlocks) {
@@ -258,7 +298,7 @@ public:
         }
         MetricScale local = scale_;
         evaluate_each(mesh, xyz, first, last, quality, [&](auto k, ElementId e, const double* x, double* g) {
-            return kernel<decltype(k)::value>(x, g, scale_of(e, local));
+            return kernel<decltype(k)::value>(x, g, scale_of(mesh, e, local));
         });
     }
 
@@ -268,7 +308,7 @@ public:
             if (mesh.kind() == ElementKind::Tetrahedron && elements.size() >= static_cast<std::size_t>(kTetBlock)) {
                 alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
                 for_each_listed_block(mesh, xyz, elements, [&](const TetBlock& x, const ElementId* ids, int count) {
-                    for (int j = 0; j < kTetBlock; ++j) reference_volume[j] = j < count ? reference_volume_of(ids[j]) : 1.0;
+                    for (int j = 0; j < kTetBlock; ++j) reference_volume[j] = j < count ? reference_volume_of(mesh, ids[j]) : 1.0;
                     rate_block_at(x, reference_volume, q);
                     for (int j = 0; j < count; ++j) quality[ids[j]] = q[j];
                 });
@@ -291,7 +331,7 @@ public:
         }
         MetricScale local = scale_;
         accumulate_gradient_each(mesh, xyz, first, last, target, [&](auto k, ElementId e, const double* x, double* g) {
-            return kernel<decltype(k)::value>(x, g, scale_of(e, local));
+            return kernel<decltype(k)::value>(x, g, scale_of(mesh, e, local));
         });
     }
 
@@ -320,22 +360,35 @@ private:
         if constexpr (K == 4) return kernel_.tet(x, g, scale);
         else return kernel_.tri(x, g, scale);
     }
-    // Element e's reference volume: its own when there are some, else the mesh's.
-    double reference_volume_of(ElementId e) const {
+    // Size metrics measure an element of a mesh with targets against its target's volume.
+    static constexpr bool kTargetSize = [] {
+        if constexpr (requires { Kernel::rates_size; }) return Kernel::rates_size;
+        return false;
+    }();
+    // Element e's reference volume: its target's (size metrics), else its own when there are
+    // some, else the mesh's.
+    double reference_volume_of(const Mesh& mesh, ElementId e) const {
+        if (kTargetSize && mesh.has_targets()) return mesh.target_volumes()[static_cast<std::size_t>(e)];
         return scale_.element_reference_volume.empty() ? scale_.reference_volume
                                                        : scale_.element_reference_volume[static_cast<std::size_t>(e)];
     }
     // The scale of element e: the mesh's, with e's own reference volume.
-    const MetricScale& scale_of(ElementId e, MetricScale& local) const {
-        if (scale_.element_reference_volume.empty()) return scale_;
-        local.reference_volume = reference_volume_of(e);
+    const MetricScale& scale_of(const Mesh& mesh, ElementId e, MetricScale& local) const {
+        if (scale_.element_reference_volume.empty() && !(kTargetSize && mesh.has_targets())) return scale_;
+        local.reference_volume = reference_volume_of(mesh, e);
         return local;
     }
 
     // Block passes over tetrahedra: the corners of kTetBlock elements (for_each_block) and their
     // reference volumes rated in one vectorized call, and the gradients scattered.
+    // (Blocks are for the metrics that do not rate size against targets: evaluate_together()
+    // hands them no mesh.)
+    static_assert(!(kTargetSize && (kHasBlocks || kHasValueBlocks)), "a target size metric rates element by element");
     void reference_volumes(ElementId first, int count, double* reference_volume) const {
-        for (int j = 0; j < count; ++j) reference_volume[j] = reference_volume_of(first + j);
+        for (int j = 0; j < count; ++j)
+            reference_volume[j] = scale_.element_reference_volume.empty()
+                                      ? scale_.reference_volume
+                                      : scale_.element_reference_volume[static_cast<std::size_t>(first + j)];
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
 
@@ -365,7 +418,7 @@ private:
     void accumulate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                            const GradientTarget& target) const {
         const VertexId* conn = mesh.connectivity().data();
-        const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+        const ElementMaps maps(mesh);
         TetBlock g;
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
@@ -379,7 +432,7 @@ private:
                 const VertexId* c = conn + 4 * static_cast<std::size_t>(e);
                 double gradient[12];
                 for (int i = 0; i < 12; ++i) gradient[i] = g.at[i][j];
-                if (maps && maps[e]) unmap_gradient<4>(corner_map(maps[e]), gradient);
+                if (const CornerMap* m = maps.of(e)) unmap_gradient<4>(*m, gradient);
                 for (int i = 0; i < 4; ++i)
                     add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, gradient + 3 * i);
             }
@@ -436,14 +489,14 @@ void MetricOptions::validate() const {
 
 double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xyz, ElementId e,
                                    double* gradient) const {
-    const std::uint8_t* maps = mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data();
+    const metrics::ElementMaps maps(mesh);
     const VertexId* c = mesh.connectivity().data() + static_cast<std::size_t>(e) * mesh.corners();
     double x[12];
     const auto rate = [&]<int K>(std::integral_constant<int, K>) {
         metrics::gather<K>(c, xyz.data(), maps, e, x);
         if (!gradient) return value(mesh.kind(), x);
         const double q = value_and_gradient(mesh.kind(), x, gradient);
-        if (maps && maps[e]) metrics::unmap_gradient<K>(corner_map(maps[e]), gradient);
+        if (const CornerMap* m = maps.of(e)) metrics::unmap_gradient<K>(*m, gradient);
         return q;
     };
     return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
@@ -520,6 +573,12 @@ Catalogue& catalogue() {
                                        "[-70.53, 70.53], ideal 70.53. No gradient: for assessments and smart Laplace."),
             built_in<MinCornerAngle>("smallest angle in degrees, negative if inverted; triangles; range [-60, 60], ideal "
                                      "60. No gradient: for assessments and smart Laplace."),
+            MetricInfo{"scaled_jacobian",
+                       "smallest corner scaled Jacobian det(e1, e2, e3) / (|e1| |e2| |e3|) (in 2D the sine of the corner "
+                       "angle) over the ideal element's, taken on the element's own corners whatever its target; "
+                       "range [-1, 1], ideal 1 (any box, any rectangle); negative if inverted. No gradient: for "
+                       "assessments and the guard that keeps a mesh of cells from losing it (docs/targets.md).",
+                       [](const MetricOptions&) { return make_scaled_jacobian(); }},
         };
         for (const auto& m : out.metrics) out.names.push_back(m.name);
         return out;

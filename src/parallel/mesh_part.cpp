@@ -1,5 +1,8 @@
 #include "paloverde/parallel/mesh_part.hpp"
 
+#include <algorithm>
+
+#include "paloverde/core/error.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
@@ -22,6 +25,21 @@ bool MeshPart::owns(VertexId v) const {
 
 bool MeshPart::counts(ElementId e) const {
     return !distributed_ || distributed_->counted[static_cast<std::size_t>(e)] != 0;
+}
+
+void set_targets(MeshPart part, const TargetOptions& options, const Mesh* reference) {
+    if (!options.any()) {
+        part.mesh().clear_targets();
+        return;
+    }
+    if (reference && part.distributed())
+        throw OptionError("targets from a reference mesh are not carried to the ranks' parts yet: run serially");
+    const Mesh& mesh = part.mesh();
+    std::vector<std::uint8_t> counted(static_cast<std::size_t>(mesh.num_elements()));
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) counted[static_cast<std::size_t>(e)] = part.counts(e);
+    const double sum = part.reducer().total(ideal_size_sum(mesh, counted));
+    const double elements = part.reducer().total(static_cast<double>(std::count(counted.begin(), counted.end(), 1)));
+    set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0);
 }
 
 }  // namespace paloverde

@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 
 namespace paloverde {
 
@@ -43,9 +44,41 @@ void InstructionQueue::attach(const Instruction& step) const {
     step.solver->set_observer([observer = observer_, label = step.label](const IterationRecord& r) { observer(label, r); });
 }
 
+namespace {
+// Puts the mesh's targets back as they were when it was made.
+class KeptTargets {
+public:
+    explicit KeptTargets(Mesh& mesh)
+        : mesh_(mesh), maps_(mesh.target_maps().begin(), mesh.target_maps().end()),
+          volumes_(mesh.target_volumes().begin(), mesh.target_volumes().end()) {}
+    ~KeptTargets() {
+        if (maps_.empty()) mesh_.clear_targets();
+        else mesh_.set_targets(std::move(maps_), std::move(volumes_));
+    }
+    KeptTargets(const KeptTargets&) = delete;
+    KeptTargets& operator=(const KeptTargets&) = delete;
+
+private:
+    Mesh& mesh_;
+    std::vector<CornerMap> maps_;
+    std::vector<double> volumes_;
+};
+}  // namespace
+
+InstructionQueue& InstructionQueue::targets(TargetOptions options) {
+    steps_.push_back({"targets", nullptr, nullptr, options});
+    return *this;
+}
+
 QueueResult InstructionQueue::run(MeshPart part) const {
     QueueResult result;
+    std::optional<KeptTargets> kept;
     for (const Instruction& step : steps_) {
+        if (step.targets) {
+            if (!kept) kept.emplace(part.mesh());
+            set_targets(part, *step.targets);
+            continue;
+        }
         if (step.assessor) {
             result.steps.push_back({step.label, step.assessor->assess(part)});
             continue;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <span>
 #include <string>
 #include <vector>
@@ -59,7 +60,9 @@ public:
         begin(std::move(solver), std::move(metric));
     }
     ~SolverRun() {
-        if (!finished_) std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
+        if (finished_) return;
+        mesh_.scale(-exponent_);  // the target volumes
+        std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
     }
     SolverRun(const SolverRun&) = delete;
     SolverRun& operator=(const SolverRun&) = delete;
@@ -102,13 +105,14 @@ public:
         summary.worst_after = worst_movable(summary.after);
         const bool worse = summary.after.inverted > summary.before.inverted ||
                            (summary.after.inverted == summary.before.inverted && summary.worst_after < summary.worst_before);
+        const double jacobian_before = worst_scaled_jacobian(summary.before), jacobian_after = worst_scaled_jacobian(summary.after);
+        mesh_.scale(-exponent_);
         if (safety_net && worse) {
-            std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
-            summary.after = summary.before;
-            summary.worst_after = summary.worst_before;
-            summary.message += " (the result was worse than the input, which is handed back unchanged)";
-        } else {
-            scale_coordinates(mesh_.coordinates(), -exponent_);
+            hand_back_input("the result was worse than the input");
+        } else if (safety_net && jacobian_after < jacobian_before) {
+            std::ostringstream why;
+            why << "the result lowered the minimum scaled Jacobian from " << jacobian_before << " to " << jacobian_after;
+            hand_back_input(why.str());
         }
         finished_ = true;
         summary.seconds = seconds_since(start_);
@@ -119,19 +123,35 @@ public:
 
 private:
     void begin(std::string solver, std::string metric) {
-        scale_coordinates(mesh_.coordinates(), exponent_);
+        mesh_.scale(exponent_);
         summary.solver = std::move(solver);
         // The solver's own metric (and the aspect ratio, which rates every element kind): a run's
         // full report is the caller's to make (config::run assesses every metric around the
         // queue), and on a large mesh every metric assessed costs several passes over the elements.
         std::vector<std::string> metrics{metric};
         if (metric != "aspect_ratio") metrics.push_back("aspect_ratio");
+        if (guards_scaled_jacobian()) metrics.push_back("scaled_jacobian");
         assessor_ = QualityAssessor(metrics);
         summary.quality_metric = std::move(metric);
         summary.before = assess();
         summary.worst_before = worst_movable(summary.before);
     }
     QualityReport assess() const { return assessor_.assess(part_); }
+    // A mesh of cells with targets (the command line's default for cells) is judged by its users'
+    // measure too: a valid input's minimum corner scaled Jacobian is never lowered. -inf where it
+    // does not apply (no cells, no targets, an inverted input).
+    bool guards_scaled_jacobian() const { return mesh_.has_cells() && mesh_.has_targets(); }
+    double worst_scaled_jacobian(const QualityReport& report) const {
+        const MetricReport* r = report.metric("scaled_jacobian");
+        if (!r || summary.before.inverted > 0) return -INFINITY;
+        return r->movable.count > 0 ? r->movable.min : r->all.min;
+    }
+    void hand_back_input(const std::string& why) {
+        std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
+        summary.after = summary.before;
+        summary.worst_after = summary.worst_before;
+        summary.message += " (" + why + ", so the input is handed back unchanged)";
+    }
     double worst_movable(const QualityReport& report) const {
         const MetricReport* r = report.metric(summary.quality_metric);
         if (!r) r = &report.metrics.front();

@@ -107,6 +107,9 @@ Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
       angle_terms_(angle_terms) {
     if (angle_terms && (part.mesh().kind() != ElementKind::Tetrahedron || part.mesh().has_cells()))
         throw OptionError("angle terms are for meshes of tetrahedra only");
+    // Each copy permutes its element's corners, which a target's map is written for.
+    if (angle_terms && part.mesh().has_targets())
+        throw OptionError("the dihedral angles are rated against the regular tetrahedron: they take no targets");
     if (part_) {
         reducer_ = &part.reducer();
         halo_ = &part.halo();
@@ -300,10 +303,10 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
                   std::move(connectivity));
     f.mesh.set_degrees_of_freedom(std::move(freedom));
     f.mesh.set_locality_ordered(mesh_.locality_ordered());  // the whole's elements, in their order
-    if (mesh_.has_cells()) {  // the corners keep their maps
+    if (mesh_.has_cells() || mesh_.has_targets()) {  // the corners keep their maps and targets
         std::vector<VertexId> same(static_cast<std::size_t>(n));
         std::iota(same.begin(), same.end(), VertexId{0});
-        f.mesh.carry_cells_from(mesh_, same, f.elements);
+        f.mesh.carry_element_data_from(mesh_, same, f.elements);
     }
     const auto size = static_cast<ElementId>(f.elements.size());
     if (part_)

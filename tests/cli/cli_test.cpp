@@ -123,6 +123,37 @@ BOOST_AUTO_TEST_CASE(a_failed_write_keeps_the_previous_output) {
     BOOST_TEST(!std::filesystem::exists(dir / "no"));
 }
 
+// Targets (docs/targets.md): kept factors, a reference with the input's connectivity, clear errors.
+BOOST_AUTO_TEST_CASE(improve_keeps_what_it_is_told_and_refuses_what_it_does_not_know) {
+    const pv::test::ScratchDir dir("cli_targets");
+    const auto input = pv::test::shared_data("mesquite/hexes/cub_fru.vtk");
+    auto result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "x.vtk") + " --keep size,colour");
+    BOOST_TEST(result.exit_code == 2);
+    BOOST_TEST(has(result.output, "colour"), result.output);
+    BOOST_TEST(has(result.output, "size, orientation, aspect, skew, all"), result.output);
+
+    const auto other = pv::test::shared_data("mesquite/hexes/hexes_4by2by2.vtk");
+    result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "x.vtk") + " --reference " + quoted(other));
+    BOOST_TEST(result.exit_code == 1);
+    BOOST_TEST(has(result.output, "hexes_4by2by2.vtk"), result.output);
+    BOOST_TEST(has(result.output, "connectivity"), result.output);
+    BOOST_TEST(!std::filesystem::exists(dir / "x.vtk"));
+
+    // The default run keeps the cells' aspect: the summary's scaled Jacobian never falls.
+    result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --print-config");
+    BOOST_TEST_REQUIRE(result.exit_code == 0);
+    BOOST_TEST(has(result.output, "keep: [auto]"), result.output);
+    result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "out.vtk") + " --keep size,aspect --print-config");
+    BOOST_TEST(has(result.output, "shape_size"), result.output);
+    // A reference equal to the input, every factor from it: nothing needs to move.
+    result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "same.vtk") + " --reference " + quoted(input) +
+                     " --summary " + quoted(dir / "s.json"));
+    BOOST_TEST_INFO(result.output);
+    BOOST_TEST_REQUIRE(result.exit_code == 0);
+    const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
+    BOOST_TEST(std::abs(summary["worst_before"].get<double>() - 1.0) < 1e-9);
+}
+
 BOOST_AUTO_TEST_CASE(bad_usage_exits_two) {
     BOOST_TEST(run_cli("").exit_code == 2);
     BOOST_TEST(run_cli("frobnicate").exit_code == 2);

@@ -49,4 +49,21 @@ InstructionQueue untangle_then_improve(GlobalSolverOptions options) {
     return queue;
 }
 
+namespace {
+InstructionQueue with_targets(const TargetOptions& targets, GlobalSolverOptions options) {
+    options.shape_metric = targets.metric(options.shape_metric);
+    InstructionQueue queue;
+    queue.targets(targets).assess("before").improve(std::make_unique<GlobalSolver>(options)).assess("after");
+    return queue;
+}
+}  // namespace
+
+InstructionQueue size_adapt_shape(GlobalSolverOptions options) {
+    return with_targets(TargetOptions::from("size"), std::move(options));
+}
+
+InstructionQueue boundary_layer_shape(GlobalSolverOptions options) {
+    return with_targets(TargetOptions::from("size,aspect,orientation"), std::move(options));
+}
+
 }  // namespace paloverde::wrappers

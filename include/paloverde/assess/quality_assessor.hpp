@@ -55,8 +55,9 @@ struct QualityReport {
 
 class QualityAssessor {
 public:
-    // The default set (default_metrics()): the shape metrics, scaled volume, and the minimum
-    // dihedral angle (tetrahedra) or minimum angle (triangles), each where the mesh's kind has it.
+    // The default set (default_metrics()): the shape metrics, scaled volume, the minimum corner
+    // scaled Jacobian, and the minimum dihedral angle (tetrahedra) or minimum angle (triangles),
+    // each where the mesh's kind has it.
     QualityAssessor();
     static const std::vector<std::string>& default_metrics();
     explicit QualityAssessor(const std::vector<std::string>& metric_names, int histogram_bins = 10);

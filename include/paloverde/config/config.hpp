@@ -14,6 +14,7 @@
 #include "paloverde/config/registry.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "paloverde/metrics/targets.hpp"
 
 namespace paloverde::config {
 
@@ -46,6 +47,21 @@ struct InputSpec {
     std::vector<long long> fixed_vertices;  // fixed as well: 0-based vertex ids in file order
     OrientationMode orientation = OrientationMode::Auto;  // the file's convention (orientation.hpp)
     void validate() const;                // throws OptionError naming the field
+};
+
+// What each element should look like (metrics/targets.hpp): the factors of its target kept from
+// the input, those taken from a reference mesh, the rest ideal. `keep: auto` (the default) keeps
+// the aspect of a mesh with cells (hexahedra, wedges, pyramids, quadrilaterals), whose cells are
+// stretched by design and whose users read the scaled Jacobian, which ignores the stretch, and
+// keeps nothing of a mesh of simplices; `none` keeps nothing: every element is pulled toward the
+// ideal element (the regular one).
+struct TargetsSpec {
+    std::vector<std::string> keep{"auto"};    // size, orientation, aspect, skew, all, auto, none
+    std::string reference;                    // a mesh with the input's connectivity
+    std::vector<std::string> from_reference;  // with a reference; empty: every factor not kept
+    // The targets for a mesh with cells (`cells`) or without.
+    TargetOptions options(bool cells) const;
+    void validate() const;
 };
 
 // Partitioned (MPI) runs; see docs/config.md. parts = 1 is a serial run.
@@ -94,6 +110,7 @@ struct OutputSpec {
 
 struct RunSpec {
     InputSpec input;
+    TargetsSpec targets;
     int threads = 0;  // 0: OpenMP's default; results do not depend on it
     PartitionSpec partition;
     ParallelSpec parallel;

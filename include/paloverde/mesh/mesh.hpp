@@ -76,10 +76,27 @@ public:
     // Reduces per-element values to per-cell ones by the minimum (a cell is as good as its worst
     // corner); without cells, a copy.
     std::vector<double> cell_minimum(std::span<const double> per_element) const;
-    // Renumbers or reorders: the cells' vertices by new_id (new_id[old]), the elements' cell and
-    // map by old_element (new element i was old_element[i]). For renumbered().
-    void carry_cells_from(const Mesh& source, std::span<const VertexId> new_id,
-                          std::span<const ElementId> old_element);
+    // Renumbers or reorders: the cells' vertices by new_id (new_id[old]), the elements' cell, map
+    // and target by old_element (new element i was old_element[i]). For renumbered() and for any
+    // mesh made of some of another's elements.
+    void carry_element_data_from(const Mesh& source, std::span<const VertexId> new_id,
+                                 std::span<const ElementId> old_element);
+
+    // Targets (metrics/targets.hpp): per element, the map that carries its corner simplex to the
+    // simplex a metric rates in its place (instead of its cell's corner map), so that an element
+    // equal to its target is rated as the regular simplex; and the signed volume (area, in 2D)
+    // that mapped simplex has at the target's size, which size metrics measure against. Empty
+    // without targets: every element is then rated against the ideal element.
+    bool has_targets() const noexcept { return !target_maps_.empty(); }
+    std::span<const CornerMap> target_maps() const noexcept { return target_maps_; }
+    std::span<const double> target_volumes() const noexcept { return target_volumes_; }
+    // Throws MeshError for a wrong count, or naming the first element whose map is not finite or
+    // reverses orientation, or whose volume is not a finite positive number.
+    void set_targets(std::vector<CornerMap> maps, std::vector<double> volumes);
+    void clear_targets() noexcept;
+    // Multiplies every coordinate by 2^exponent, and the target volumes with them: exact, and
+    // harmless to orientation (unit_scale_exponent).
+    void scale(int exponent);
 
     // Vertex -> incident elements, compressed rows.
     std::span<const ElementId> elements_of(VertexId v) const noexcept {
@@ -173,6 +190,8 @@ private:
     std::vector<VertexId> cell_connectivity_;
     std::vector<ElementId> element_cell_;
     std::vector<std::uint8_t> corner_map_;
+    std::vector<CornerMap> target_maps_;
+    std::vector<double> target_volumes_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

@@ -70,7 +70,7 @@ public:
     // Element e of `mesh` at the vertex positions `coordinates`, rated as the batch calls rate it
     // (a cell's corner through its corner map); with `gradient` (3 doubles per corner, in the
     // element's corner order) its gradient too. For local patches.
-    double element_value(const Mesh& mesh, std::span<const double> coordinates, ElementId e,
+    virtual double element_value(const Mesh& mesh, std::span<const double> coordinates, ElementId e,
                          double* gradient = nullptr) const;
 
     // Qualities of elements [first, last) of `mesh` at the vertex positions `coordinates` (the

@@ -8,6 +8,7 @@
 // A view, cheap to copy: it refers to the mesh (and the DistributedMesh) it was made from, which
 // must outlive it. Made implicitly from either, so `solver.improve(mesh)` reads as it should.
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "paloverde/parallel/halo.hpp"
 #include "paloverde/parallel/reducer.hpp"
 
@@ -37,5 +38,10 @@ private:
     const Halo* halo_;
     DistributedMesh* distributed_ = nullptr;
 };
+
+// Sets the targets of the part's elements (metrics/targets.hpp), the ideal size being the whole
+// mesh's: the same targets, bit for bit, however the mesh is split. Collective. A reference mesh
+// is the whole mesh's reference, for a serial run only (throws OptionError for a part).
+void set_targets(MeshPart part, const TargetOptions& options, const Mesh* reference = nullptr);
 
 }  // namespace paloverde

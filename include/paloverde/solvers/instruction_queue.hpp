@@ -5,12 +5,14 @@
 // the result says which step stopped it and why.
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <variant>
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "paloverde/solvers/solver.hpp"
 
 namespace paloverde {
@@ -36,6 +38,10 @@ public:
     // Labelled with the solver's name, or with `label`.
     InstructionQueue& improve(std::unique_ptr<Solver> solver);
     InstructionQueue& improve(std::string label, std::unique_ptr<Solver> solver);
+    // Sets the mesh's targets (metrics/targets.hpp) from its coordinates at this point of the
+    // queue: the steps after it rate every element against its target. The queue hands the mesh
+    // back with the targets it had before.
+    InstructionQueue& targets(TargetOptions options);
     // The steps of `other`, after these (its solvers are shared, not copied).
     InstructionQueue& append(const InstructionQueue& other);
     // Sets the observer of every improver of the queue, also those added later. Copies of a queue
@@ -49,8 +55,9 @@ public:
 private:
     struct Instruction {
         std::string label;
-        std::shared_ptr<const QualityAssessor> assessor;  // one of the two is set
+        std::shared_ptr<const QualityAssessor> assessor;  // one of the three is set
         std::shared_ptr<Solver> solver;
+        std::optional<TargetOptions> targets;
     };
     void attach(const Instruction& step) const;
 

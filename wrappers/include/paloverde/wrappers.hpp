@@ -21,4 +21,16 @@ InstructionQueue laplace(LaplaceSolverOptions options = {});
 // Untangle, then improve the shape, each with the global solver: the default job.
 InstructionQueue untangle_then_improve(GlobalSolverOptions options = {});
 
+// Jobs with targets (metrics/targets.hpp), set from the mesh as the queue starts; the global solver
+// (untangling first where needed) then rates with the metric the targets ask for (shape_size, or
+// shape_size_orient where orientation is kept: options.shape_metric is replaced by it).
+//
+// Mesquite's size-adapt shape job: every element keeps its size, its shape is made ideal. For a
+// graded mesh whose sizes were designed (refined near a feature, coarse far away).
+InstructionQueue size_adapt_shape(GlobalSolverOptions options = {});
+// An anisotropic (boundary-layer) mesh: every element keeps its size, aspect and orientation, its
+// angles are made ideal (Mesquite's viscous-CFD job for tetrahedra; the same for hexahedra,
+// wedges and quadrilaterals, whose ideal angles are right angles). The layers keep their heights.
+InstructionQueue boundary_layer_shape(GlobalSolverOptions options = {});
+
 }  // namespace paloverde::wrappers

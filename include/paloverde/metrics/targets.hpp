@@ -1,0 +1,63 @@
+#pragma once
+// Targets: what each element of a mesh should look like (Knupp's target-matrix paradigm). At each
+// corner (a tetrahedron or a triangle is its own corner; a cell has one per frame, cell_types.hpp)
+// the target Jacobian W factors as W = lambda V Q D: size lambda (det W = lambda^d), orientation
+// V (a rotation), skew Q (the angles between the corner's edges, det Q = 1) and aspect D (the
+// edges' relative lengths, diagonal, det D = 1). Each factor comes from one source: the ideal
+// element's corner, the input mesh's own corner (kept), or a reference mesh's corner. Quality is
+// then measured on T = A W^-1 (A the corner's edge matrix): an element equal to its target rates
+// 1 in every shape metric, whatever its size or stretch; size metrics (shape_size) compare det T
+// with 1, orientation metrics (shape_size_orient) T with a multiple of the identity.
+//
+// The factors come from a QR factorization of a corner's edge matrix, A = V R (R upper triangular
+// with a positive diagonal): lambda = det(R)^(1/d), D from R's column lengths, Q from R with its
+// columns normalized. An input or reference corner that is inverted gives its size, aspect and
+// skew (those of its mirror image) but not its orientation, which is then ideal; a degenerate
+// one gives nothing (its target is the ideal element at the mesh's mean size).
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "paloverde/core/exact_sum.hpp"
+#include "paloverde/mesh/mesh.hpp"
+
+namespace paloverde {
+
+enum class TargetSource { Ideal, Input, Reference };
+
+struct TargetOptions {
+    TargetSource size = TargetSource::Ideal;
+    TargetSource orientation = TargetSource::Ideal;
+    TargetSource aspect = TargetSource::Ideal;
+    TargetSource skew = TargetSource::Ideal;
+
+    // The factors named in `list` ("size,aspect"; any of size, orientation, aspect, skew, or
+    // "all"; empty: none) from `source`, the rest ideal. Throws OptionError naming a word it does
+    // not know and the known ones.
+    static TargetOptions from(std::string_view list, TargetSource source = TargetSource::Input);
+    // Some factor is not ideal: the mesh needs targets.
+    bool any() const;
+    bool uses(TargetSource source) const;
+    // The factors from `source`, as from() reads them ("size,aspect"; "" for none).
+    std::string list(TargetSource source) const;
+    // The metric that rates what these targets ask for: shape_size_orient where orientation is
+    // not ideal, shape_size where size is not, else `shape_metric`.
+    std::string metric(std::string_view shape_metric) const;
+};
+
+// The ideal size is the ideal element's, scaled so that the elements' mean |det A| / det W_ideal
+// is 1: this sums |det A| / det W_ideal over the elements with counted[e] (all when empty), for
+// a distributed mesh to add over its parts before it divides by the number of elements.
+ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted = {});
+
+// Sets every element's target on `mesh` (Mesh::set_targets) from its coordinates now (Input) and
+// from `reference`'s (Reference): the same element kind, cells and connectivity, vertex for
+// vertex. `ideal_scale` is the mean of ideal_size_sum()'s terms over the whole mesh (the
+// overload without it computes it from `mesh`). With no factor other than ideal it clears the
+// targets. Throws MeshError naming the first difference of a reference that does not match,
+// OptionError when a factor asks for a reference and none is given, and MeshError for a triangle
+// mesh that is not planar.
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale);
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference = nullptr);
+
+}  // namespace paloverde

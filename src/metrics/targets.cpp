@@ -1,0 +1,293 @@
+#include "paloverde/metrics/targets.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <vector>
+
+#include "core/exact_sums.hpp"
+#include "geometry.hpp"
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/cell_types.hpp"
+
+namespace paloverde {
+
+namespace {
+
+using Matrix = CornerMap;  // m[row][column]; the upper-left d x d block is used
+
+constexpr std::array<std::string_view, 4> kFactorNames = {"size", "orientation", "aspect", "skew"};
+
+TargetSource& factor_of(TargetOptions& o, std::size_t i) {
+    TargetSource* factors[] = {&o.size, &o.orientation, &o.aspect, &o.skew};
+    return *factors[i];
+}
+TargetSource factor_of(const TargetOptions& o, std::size_t i) {
+    const TargetSource factors[] = {o.size, o.orientation, o.aspect, o.skew};
+    return factors[i];
+}
+
+Matrix product(const Matrix& a, const Matrix& b, int d) {
+    Matrix out{};
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j)
+            for (int k = 0; k < d; ++k) out[i][j] += a[i][k] * b[k][j];
+    return out;
+}
+
+double determinant(const Matrix& m, int d) {
+    if (d == 2) return m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+}
+
+Matrix inverse(const Matrix& m, int d) {
+    const double det = determinant(m, d);
+    Matrix out{};
+    if (d == 2) {
+        out[0][0] = m[1][1] / det, out[0][1] = -m[0][1] / det;
+        out[1][0] = -m[1][0] / det, out[1][1] = m[0][0] / det;
+        return out;
+    }
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+            out[i][j] = (m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]) / det;
+        }
+    return out;
+}
+
+// A corner's factors W = lambda V Q D (targets.hpp).
+struct Factors {
+    double lambda = 1.0;
+    Matrix v{}, q{}, d{};
+    bool valid = false;     // not degenerate: every factor is usable
+    bool positive = false;  // positively oriented: V is a rotation
+};
+
+// Factors of the d x d matrix x by Gram-Schmidt QR (with one reorthogonalization: thin boundary
+// layer corners would lose their small edge's direction to rounding otherwise).
+Factors factor(const Matrix& x, int d) {
+    Factors f;
+    Matrix r{};
+    std::array<std::array<double, 3>, 3> q{};  // q[j]: column j of V
+    double largest = 0.0;
+    for (int j = 0; j < d; ++j) {
+        std::array<double, 3> u{};
+        for (int i = 0; i < d; ++i) u[i] = x[i][j];
+        for (int pass = 0; pass < 2; ++pass)
+            for (int k = 0; k < j; ++k) {
+                double c = 0.0;
+                for (int i = 0; i < d; ++i) c += q[k][i] * u[i];
+                r[k][j] += c;
+                for (int i = 0; i < d; ++i) u[i] -= c * q[k][i];
+            }
+        double length = 0.0;
+        for (int i = 0; i < d; ++i) length += u[i] * u[i];
+        length = std::sqrt(length);
+        r[j][j] = length;
+        largest = std::max(largest, length);
+        if (length > 0.0)
+            for (int i = 0; i < d; ++i) q[j][i] = u[i] / length;
+    }
+    double smallest = INFINITY;
+    for (int j = 0; j < d; ++j) smallest = std::min(smallest, r[j][j]);
+    f.valid = std::isfinite(largest) && smallest > 1e-10 * largest;
+    if (!f.valid) return f;
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) f.v[i][j] = q[j][i];
+    f.positive = determinant(x, d) > 0.0;
+    const double det_r = determinant(r, d);
+    f.lambda = std::pow(det_r, 1.0 / d);
+    double lengths[3], product_of_lengths = 1.0;
+    for (int j = 0; j < d; ++j) {
+        double sum = 0.0;
+        for (int i = 0; i <= j; ++i) sum += r[i][j] * r[i][j];
+        lengths[j] = std::sqrt(sum);
+        product_of_lengths *= lengths[j];
+    }
+    const double mean_length = std::pow(product_of_lengths, 1.0 / d);
+    const double skew_scale = std::pow(det_r / product_of_lengths, 1.0 / d);  // det of the unit-column R
+    for (int j = 0; j < d; ++j) {
+        f.d[j][j] = lengths[j] / mean_length;
+        for (int i = 0; i <= j; ++i) f.q[i][j] = r[i][j] / lengths[j] / skew_scale;
+    }
+    return f;
+}
+
+// Element e's corner edges at xyz, as the columns of a d x d matrix: in 3D as they are, in 2D in
+// the plane's basis (a, b).
+Matrix edge_matrix(const Mesh& mesh, std::span<const double> xyz, ElementId e, const metrics::P& a,
+                   const metrics::P& b) {
+    const auto corners = mesh.element(e);
+    const metrics::P origin = metrics::load(xyz.data(), corners[0]);
+    Matrix m{};
+    const int d = mesh.corners() - 1;
+    for (int j = 0; j < d; ++j) {
+        const metrics::P edge = metrics::load(xyz.data(), corners[j + 1]) - origin;
+        if (d == 3) {
+            m[0][j] = edge.x, m[1][j] = edge.y, m[2][j] = edge.z;
+        } else {
+            m[0][j] = metrics::dot(edge, a), m[1][j] = metrics::dot(edge, b);
+        }
+    }
+    return m;
+}
+
+// The regular simplex's corner (unit edges) and, for element e, the ideal element's corner, both
+// in the ideal element's coordinates: the cell's corner map M = W^-1 W_regular gives W.
+Matrix regular_frame(int d) {
+    const auto x = ideal_cell(d == 3 ? CellType::Tetrahedron : CellType::Triangle);
+    Matrix w{};
+    for (int j = 0; j < d; ++j)
+        for (int i = 0; i < d; ++i) w[i][j] = x[j + 1][i] - x[0][i];
+    return w;
+}
+Matrix ideal_frame(const Mesh& mesh, ElementId e, const Matrix& regular, int d) {
+    const auto maps = mesh.corner_maps();
+    if (maps.empty() || maps[e] == 0) return regular;
+    return product(regular, inverse(corner_map(maps[e]), d), d);
+}
+
+void check_reference(const Mesh& mesh, const Mesh& reference) {
+    if (reference.kind() != mesh.kind() || reference.num_vertices() != mesh.num_vertices() ||
+        reference.num_cells() != mesh.num_cells() || reference.num_elements() != mesh.num_elements())
+        throw MeshError("the reference mesh has " + std::to_string(reference.num_vertices()) + " vertices and " +
+                        std::to_string(reference.num_cells()) + " elements, the mesh " +
+                        std::to_string(mesh.num_vertices()) + " and " + std::to_string(mesh.num_cells()) +
+                        ": a reference must have the mesh's connectivity");
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+        const auto mine = mesh.cell(c), theirs = reference.cell(c);
+        if (mesh.cell_type(c) != reference.cell_type(c) || !std::equal(mine.begin(), mine.end(), theirs.begin(), theirs.end()))
+            throw MeshError("element " + std::to_string(c) + " of the reference mesh has other vertices than the mesh's: "
+                            "a reference must have the mesh's connectivity");
+    }
+}
+
+}  // namespace
+
+TargetOptions TargetOptions::from(std::string_view list, TargetSource source) {
+    TargetOptions o;
+    std::string known;
+    for (std::string_view name : kFactorNames) known += (known.empty() ? "" : ", ") + std::string(name);
+    while (!list.empty()) {
+        const std::size_t comma = list.find(',');
+        std::string_view word = list.substr(0, comma);
+        list = comma == std::string_view::npos ? std::string_view{} : list.substr(comma + 1);
+        while (!word.empty() && word.front() == ' ') word.remove_prefix(1);
+        while (!word.empty() && word.back() == ' ') word.remove_suffix(1);
+        if (word == "all") {
+            for (std::size_t i = 0; i < kFactorNames.size(); ++i) factor_of(o, i) = source;
+            continue;
+        }
+        const auto* found = std::find(kFactorNames.begin(), kFactorNames.end(), word);
+        if (found == kFactorNames.end())
+            throw OptionError("unknown target factor '" + std::string(word) + "' (known: " + known + ", all)");
+        factor_of(o, static_cast<std::size_t>(found - kFactorNames.begin())) = source;
+    }
+    return o;
+}
+
+bool TargetOptions::any() const { return !uses(TargetSource::Ideal) || uses(TargetSource::Input) || uses(TargetSource::Reference); }
+
+bool TargetOptions::uses(TargetSource source) const {
+    for (std::size_t i = 0; i < kFactorNames.size(); ++i)
+        if (factor_of(*this, i) == source) return true;
+    return false;
+}
+
+std::string TargetOptions::list(TargetSource source) const {
+    std::string out;
+    for (std::size_t i = 0; i < kFactorNames.size(); ++i)
+        if (factor_of(*this, i) == source) out += (out.empty() ? "" : ",") + std::string(kFactorNames[i]);
+    return out;
+}
+
+std::string TargetOptions::metric(std::string_view shape_metric) const {
+    if (orientation != TargetSource::Ideal) return "shape_size_orient";
+    if (size != TargetSource::Ideal) return "shape_size";
+    return std::string(shape_metric);
+}
+
+namespace {
+// The plane's basis (a, b) of a 2D mesh; the coordinate axes x and y for a volume mesh, whose
+// edge matrices use their coordinates as they are.
+void basis_of(const Mesh& mesh, metrics::P& a, metrics::P& b) {
+    a = {1.0, 0.0, 0.0}, b = {0.0, 1.0, 0.0};
+    if (mesh.kind() != ElementKind::Triangle) return;
+    const Vec3& n = mesh.plane_normal();
+    metrics::plane_basis({n[0], n[1], n[2]}, a, b);
+}
+
+// |det A| / det W_ideal of element e: its size against the ideal element's.
+double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const metrics::P& a, const metrics::P& b) {
+    const int d = mesh.corners() - 1;
+    return std::abs(determinant(edge_matrix(mesh, mesh.coordinates(), e, a, b), d)) /
+           determinant(ideal_frame(mesh, e, regular, d), d);
+}
+}  // namespace
+
+ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted) {
+    metrics::P a, b;
+    basis_of(mesh, a, b);
+    const Matrix regular = regular_frame(mesh.corners() - 1);
+    const auto sums = detail::exact_sums<1>(static_cast<std::size_t>(mesh.num_elements()), [&](std::size_t e, auto& acc) {
+        if (counted.empty() || counted[e]) acc[0].add(size_ratio(mesh, static_cast<ElementId>(e), regular, a, b));
+    });
+    return sums[0];
+}
+
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference) {
+    const double elements = static_cast<double>(mesh.num_elements());
+    set_targets(mesh, options, reference, elements > 0 ? ideal_size_sum(mesh).value() / elements : 1.0);
+}
+
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale) {
+    if (!options.any()) {
+        mesh.clear_targets();
+        return;
+    }
+    if (options.uses(TargetSource::Reference) && !reference)
+        throw OptionError("targets from a reference mesh (" + options.list(TargetSource::Reference) +
+                          ") need the reference mesh");
+    if (reference) check_reference(mesh, *reference);
+    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
+        throw MeshError("targets are for volume meshes and planar 2D meshes: the triangles do not lie in one plane");
+    const int d = mesh.corners() - 1;
+    const auto m = static_cast<std::size_t>(mesh.num_elements());
+    metrics::P a, b, ra, rb;
+    basis_of(mesh, a, b);
+    if (reference) basis_of(*reference, ra, rb);
+    const Matrix regular = regular_frame(d);
+    const double regular_volume = determinant(regular, d) / (d == 3 ? 6.0 : 2.0);
+    // Every corner flat: nothing to size by.
+    const double scale = ideal_scale > 0.0 && std::isfinite(ideal_scale) ? ideal_scale : 1.0;
+
+    std::vector<CornerMap> maps(m);
+    std::vector<double> volumes(m);
+    for (std::size_t e = 0; e < m; ++e) {
+        const auto element = static_cast<ElementId>(e);
+        const Matrix ideal = ideal_frame(mesh, element, regular, d);
+        const Factors id = factor(ideal, d);
+        const Factors in = factor(edge_matrix(mesh, mesh.coordinates(), element, a, b), d);
+        const Factors ref = reference ? factor(edge_matrix(*reference, reference->coordinates(), element, ra, rb), d)
+                                      : Factors{};
+        auto pick = [&](TargetSource source) -> const Factors& {
+            const Factors& f = source == TargetSource::Input ? in : source == TargetSource::Reference ? ref : id;
+            return f.valid ? f : id;
+        };
+        const Factors& oriented = pick(options.orientation);
+        const Matrix& v = oriented.positive ? oriented.v : id.v;
+        const Factors& sized = pick(options.size);
+        const double lambda = &sized != &id ? sized.lambda : std::pow(scale * determinant(ideal, d), 1.0 / d);
+        // W / lambda = V Q D, and the map that carries W to lambda times the regular corner.
+        const Matrix shape = product(v, product(pick(options.skew).q, pick(options.aspect).d, d), d);
+        const Matrix map = product(inverse(shape, d), regular, d);
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) maps[e][i][j] = i < d && j < d ? map[i][j] : 0.0;
+        volumes[e] = std::pow(lambda, d) * regular_volume;
+    }
+    mesh.set_targets(std::move(maps), std::move(volumes));
+}
+
+}  // namespace paloverde

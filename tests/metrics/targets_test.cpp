@@ -1,0 +1,235 @@
+// Targets (metrics/targets.hpp): each factor from each source, the metrics rating an element that
+// equals its target 1, the maps' gradients, scaling, and the errors for bad input.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/mesh/cell_types.hpp"
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/metrics/targets.hpp"
+
+namespace pv = paloverde;
+
+namespace {
+
+std::vector<double> rate(const std::string& name, const pv::Mesh& mesh, std::span<const double> xyz) {
+    auto metric = pv::make_metric(name);
+    metric->prepare(mesh);
+    std::vector<double> q(static_cast<std::size_t>(mesh.num_elements()));
+    metric->evaluate(mesh, xyz, 0, mesh.num_elements(), q.data());
+    return q;
+}
+std::vector<double> rate(const std::string& name, const pv::Mesh& mesh) { return rate(name, mesh, mesh.coordinates()); }
+
+void check_all_near(const std::vector<double>& q, double value, double tolerance = 1e-12) {
+    for (std::size_t e = 0; e < q.size(); ++e) BOOST_TEST(std::abs(q[e] - value) <= tolerance, "element " << e << ": " << q[e]);
+}
+
+// The regular tetrahedron of edge `edge`, turned by `angle` about z, as a one-element mesh.
+pv::Mesh regular_tet(double edge = 1.0, double angle = 0.0) {
+    const double c = std::cos(angle), s = std::sin(angle);
+    std::vector<double> xyz;
+    for (const auto& p : pv::ideal_cell(pv::CellType::Tetrahedron)) {
+        xyz.push_back(edge * (c * p[0] - s * p[1]));
+        xyz.push_back(edge * (s * p[0] + c * p[1]));
+        xyz.push_back(edge * p[2]);
+    }
+    return pv::Mesh(pv::ElementKind::Tetrahedron, std::move(xyz), {0, 1, 2, 3});
+}
+
+// A box of a x b x c as one hexahedron.
+pv::Mesh box(double a, double b, double c) {
+    std::vector<double> xyz{0, 0, 0, a, 0, 0, a, b, 0, 0, b, 0, 0, 0, c, a, 0, c, a, b, c, 0, b, c};
+    const pv::CellType types[] = {pv::CellType::Hexahedron};
+    return pv::Mesh::from_cells(std::move(xyz), types, {0, 1, 2, 3, 4, 5, 6, 7});
+}
+
+// A few tetrahedra of random shapes and sizes, positively oriented.
+pv::Mesh random_tets(int count, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<double> xyz;
+    std::vector<pv::VertexId> corners;
+    for (int t = 0; t < count; ++t) {
+        double p[4][3];
+        for (auto& point : p)
+            for (double& x : point) x = u(rng) * (1.0 + t);
+        const double d = (p[1][0] - p[0][0]) * ((p[2][1] - p[0][1]) * (p[3][2] - p[0][2]) - (p[2][2] - p[0][2]) * (p[3][1] - p[0][1])) -
+                         (p[1][1] - p[0][1]) * ((p[2][0] - p[0][0]) * (p[3][2] - p[0][2]) - (p[2][2] - p[0][2]) * (p[3][0] - p[0][0])) +
+                         (p[1][2] - p[0][2]) * ((p[2][0] - p[0][0]) * (p[3][1] - p[0][1]) - (p[2][1] - p[0][1]) * (p[3][0] - p[0][0]));
+        if (d < 0) std::swap(p[2], p[3]);
+        for (const auto& point : p) xyz.insert(xyz.end(), point, point + 3);
+        for (int i = 0; i < 4; ++i) corners.push_back(static_cast<pv::VertexId>(4 * t + i));
+    }
+    return pv::Mesh(pv::ElementKind::Tetrahedron, std::move(xyz), std::move(corners));
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(targets)
+
+BOOST_AUTO_TEST_CASE(an_element_that_keeps_everything_rates_one_in_every_metric) {
+    pv::Mesh tets = random_tets(20, 7);
+    pv::set_targets(tets, pv::TargetOptions::from("all"));
+    for (const char* metric : {"mean_ratio", "aspect_ratio", "inverse_condition", "shape_size", "shape_size_orient"})
+        check_all_near(rate(metric, tets), 1.0, 1e-10);
+
+    pv::Mesh hex = box(3.0, 1.0, 0.01);
+    pv::set_targets(hex, pv::TargetOptions::from("all"));
+    for (const char* metric : {"mean_ratio", "shape_size", "shape_size_orient"}) check_all_near(rate(metric, hex), 1.0, 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(a_stretched_box_keeps_its_aspect_and_its_angles_are_what_is_rated) {
+    pv::Mesh hex = box(10.0, 1.0, 0.1);
+    BOOST_TEST(rate("mean_ratio", hex)[0] < 0.5);  // against the cube
+    pv::set_targets(hex, pv::TargetOptions::from("aspect"));
+    check_all_near(rate("mean_ratio", hex), 1.0, 1e-12);
+    // Sheared, it is no longer its target: the angles count, the stretch does not.
+    std::vector<double> sheared(hex.coordinates().begin(), hex.coordinates().end());
+    for (int v : {4, 5, 6, 7}) sheared[3 * v] += 0.05;
+    for (double q : rate("mean_ratio", hex, sheared)) BOOST_TEST(q < 1.0 - 1e-6);
+}
+
+BOOST_AUTO_TEST_CASE(size_is_kept_only_when_asked) {
+    pv::Mesh small = regular_tet(0.5);
+    pv::set_targets(small, pv::TargetOptions::from("size"));
+    check_all_near(rate("shape_size", small), 1.0);
+    // Twice the edges: eight times the volume, tau = 8, 2 tau / (1 + tau^2) = 16 / 65.
+    std::vector<double> doubled(small.coordinates().begin(), small.coordinates().end());
+    for (double& x : doubled) x *= 2.0;
+    check_all_near(rate("shape_size", small, doubled), 16.0 / 65.0, 1e-12);
+
+    // Ideal size: the mesh's mean, so two regular tets of different sizes both miss it.
+    pv::Mesh two = random_tets(2, 3);
+    pv::set_targets(two, pv::TargetOptions::from("skew,aspect"));
+    const auto q = rate("shape_size", two);
+    BOOST_TEST(q[0] < 1.0);
+    BOOST_TEST(q[1] < 1.0);
+}
+
+BOOST_AUTO_TEST_CASE(orientation_is_rated_only_where_it_is_kept) {
+    pv::Mesh turned = regular_tet(1.0, 0.5);
+    pv::set_targets(turned, pv::TargetOptions::from("size,orientation"));
+    check_all_near(rate("shape_size_orient", turned), 1.0, 1e-12);
+    // Ideal orientation: the regular tet as cell_types holds it; turned by 0.5 rad it is not.
+    pv::set_targets(turned, pv::TargetOptions::from("size"));
+    BOOST_TEST(rate("shape_size_orient", turned)[0] < 0.99);
+    check_all_near(rate("shape_size", turned), 1.0, 1e-12);
+}
+
+BOOST_AUTO_TEST_CASE(a_reference_mesh_gives_the_targets_of_a_moved_mesh) {
+    const pv::Mesh reference = random_tets(10, 11);
+    pv::Mesh moved = reference;
+    std::vector<double> xyz(moved.coordinates().begin(), moved.coordinates().end());
+    for (std::size_t i = 0; i < xyz.size(); ++i) moved.coordinates()[i] += 0.05 * std::sin(static_cast<double>(i));
+    pv::TargetOptions options;
+    options.size = options.orientation = options.aspect = options.skew = pv::TargetSource::Reference;
+    pv::set_targets(moved, options, &reference);
+    // At the reference's positions every element is its target.
+    check_all_near(rate("shape_size_orient", moved, xyz), 1.0, 1e-10);
+    for (double q : rate("shape_size_orient", moved)) BOOST_TEST(q < 1.0);
+
+    // Other connectivity, other counts: refused, naming what differs.
+    const pv::Mesh other = random_tets(9, 11);
+    BOOST_CHECK_EXCEPTION(pv::set_targets(moved, options, &other), pv::MeshError, [](const pv::MeshError& e) {
+        return std::string(e.what()).find("connectivity") != std::string::npos;
+    });
+    std::vector<double> same(reference.coordinates().begin(), reference.coordinates().end());
+    std::vector<pv::VertexId> swapped(reference.connectivity().begin(), reference.connectivity().end());
+    std::swap(swapped[4], swapped[8]);
+    const pv::Mesh rewired(pv::ElementKind::Tetrahedron, same, swapped);
+    BOOST_CHECK_EXCEPTION(pv::set_targets(moved, options, &rewired), pv::MeshError, [](const pv::MeshError& e) {
+        return std::string(e.what()).find("element 1") != std::string::npos;
+    });
+    BOOST_CHECK_THROW(pv::set_targets(moved, options), pv::OptionError);  // no reference given
+}
+
+BOOST_AUTO_TEST_CASE(a_degenerate_or_inverted_input_element_falls_back_to_the_ideal) {
+    // A flat tetrahedron: its corner gives no factor; the ideal element stands in, no NaN.
+    pv::Mesh flat(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}, {0, 1, 2, 3});
+    pv::set_targets(flat, pv::TargetOptions::from("all"));
+    for (const auto& row : flat.target_maps()[0])
+        for (double x : row) BOOST_TEST(std::isfinite(x));
+    // An inverted one keeps its size and shape (its mirror's), not its orientation.
+    pv::Mesh inverted = regular_tet();
+    std::swap(inverted.coordinates()[6], inverted.coordinates()[9]);
+    std::swap(inverted.coordinates()[7], inverted.coordinates()[10]);
+    std::swap(inverted.coordinates()[8], inverted.coordinates()[11]);
+    pv::set_targets(inverted, pv::TargetOptions::from("all"));
+    BOOST_TEST(rate("mean_ratio", inverted)[0] <= 0.0);
+}
+
+BOOST_AUTO_TEST_CASE(triangles_and_quadrilaterals_take_targets_in_their_plane) {
+    // A 4 x 1 rectangle: its corners keep their aspect.
+    std::vector<double> xyz{0, 0, 0, 4, 0, 0, 4, 1, 0, 0, 1, 0};
+    const pv::CellType quad[] = {pv::CellType::Quadrilateral};
+    pv::Mesh rectangle = pv::Mesh::from_cells(xyz, quad, {0, 1, 2, 3});
+    BOOST_TEST(rate("mean_ratio", rectangle)[0] < 0.9);
+    pv::set_targets(rectangle, pv::TargetOptions::from("aspect"));
+    check_all_near(rate("mean_ratio", rectangle), 1.0, 1e-12);
+
+    pv::Mesh triangles(pv::ElementKind::Triangle, {0, 0, 0, 3, 0, 0, 0.5, 0.2, 0, 3, 1, 0}, {0, 1, 2, 1, 3, 2});
+    pv::set_targets(triangles, pv::TargetOptions::from("all"));
+    for (const char* metric : {"mean_ratio", "shape_size", "shape_size_orient"}) check_all_near(rate(metric, triangles), 1.0, 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(gradients_through_targets_match_finite_differences) {
+    pv::Mesh tets = random_tets(6, 5);
+    pv::set_targets(tets, pv::TargetOptions::from("size,aspect"));
+    std::vector<double> xyz(tets.coordinates().begin(), tets.coordinates().end());
+    std::mt19937 rng(2);
+    std::normal_distribution<double> jitter(0.0, 0.1);
+    for (double& x : xyz) x += jitter(rng);
+    for (const char* name : {"shape_size", "mean_ratio", "shape_size_orient"}) {
+        auto metric = pv::make_metric(name);
+        metric->prepare(tets);
+        for (pv::ElementId e = 0; e < tets.num_elements(); ++e) {
+            double g[12];
+            metric->element_value(tets, xyz, e, g);
+            for (int i = 0; i < 4; ++i)
+                for (int d = 0; d < 3; ++d) {
+                    const auto at = 3 * static_cast<std::size_t>(tets.element(e)[i]) + d;
+                    const double h = 1e-6 * (1.0 + e);
+                    std::vector<double> plus = xyz, minus = xyz;
+                    plus[at] += h, minus[at] -= h;
+                    const double fd = (metric->element_value(tets, plus, e) - metric->element_value(tets, minus, e)) / (2 * h);
+                    BOOST_TEST(std::abs(fd - g[3 * i + d]) <= 1e-5 * (1.0 + std::abs(fd)),
+                               name << " element " << e << " corner " << i << ": " << g[3 * i + d] << " vs " << fd);
+                }
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(scaling_the_mesh_scales_its_target_sizes_exactly) {
+    pv::Mesh tets = random_tets(8, 9);
+    pv::set_targets(tets, pv::TargetOptions::from("size"));
+    std::vector<double> xyz(tets.coordinates().begin(), tets.coordinates().end());
+    for (double& x : xyz) x *= 1.1;
+    const auto before = rate("shape_size", tets, xyz);
+    tets.scale(-40);
+    for (double& x : xyz) x = std::ldexp(x, -40);
+    const auto after = rate("shape_size", tets, xyz);
+    for (std::size_t e = 0; e < before.size(); ++e) BOOST_TEST(before[e] == after[e]);
+}
+
+BOOST_AUTO_TEST_CASE(bad_factors_and_bad_targets_are_refused_clearly) {
+    BOOST_CHECK_EXCEPTION(pv::TargetOptions::from("size,colour"), pv::OptionError, [](const pv::OptionError& e) {
+        const std::string what = e.what();
+        return what.find("colour") != std::string::npos && what.find("size, orientation, aspect, skew") != std::string::npos;
+    });
+    pv::Mesh tet = regular_tet();
+    pv::CornerMap mirror{};
+    mirror[0][0] = mirror[1][1] = 1.0, mirror[2][2] = -1.0;
+    BOOST_CHECK_THROW(tet.set_targets({mirror}, {1.0}), pv::MeshError);
+    pv::CornerMap identity{};
+    identity[0][0] = identity[1][1] = identity[2][2] = 1.0;
+    BOOST_CHECK_THROW(tet.set_targets({identity}, {0.0}), pv::MeshError);
+    BOOST_CHECK_THROW(tet.set_targets({identity, identity}, {1.0, 1.0}), pv::MeshError);
+    tet.set_targets({identity}, {1.0});
+    BOOST_CHECK_THROW(tet.flip_elements(), pv::MeshError);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

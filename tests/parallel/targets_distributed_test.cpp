@@ -1,0 +1,77 @@
+// Targets travel with a part (metrics/targets.hpp): computed on each rank's part from its own
+// elements, the ideal size summed over the whole mesh, they are the serial targets bit for bit, and
+// the global solver rating against them ends on the serial mesh. Run by CTest on 1, 2 and 4 ranks.
+#include <mpi.h>
+
+#include <boost/test/data/test_case.hpp>
+#include <boost/test/unit_test.hpp>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "distributed_checks.hpp"
+#include "support/cell_meshes.hpp"
+
+namespace pv = paloverde;
+namespace bdata = boost::unit_test::data;
+using pv::test::Fill;
+using pv::test::rank;
+
+namespace {
+
+struct Case {
+    const char* name;
+    Fill fill;
+    const char* keep;
+};
+const Case kCases[] = {{"hexahedra, aspect kept", Fill::Hexahedra, "aspect"},
+                       {"hexahedra, size and aspect kept", Fill::Hexahedra, "size,aspect"},
+                       {"tetrahedra, size, aspect and orientation kept", Fill::Tetrahedra, "size,aspect,orientation"},
+                       {"wedges, everything but the skew kept", Fill::Wedges, "size,aspect,orientation"}};
+std::ostream& operator<<(std::ostream& out, const Case& c) { return out << c.name; }
+
+// A grid stretched along z (the cells ten times wider than tall) and tangled.
+pv::Mesh stretched(Fill fill) {
+    pv::Mesh mesh = pv::test::cube_grid(5, fill);
+    for (std::size_t v = 2; v < mesh.coordinates().size(); v += 3) mesh.coordinates()[v] *= 0.1;
+    return pv::test::tangled(std::move(mesh), 3);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(targets_distributed)
+
+BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result, bdata::make(kCases), c) {
+    const pv::Mesh input = stretched(c.fill);
+    const pv::TargetOptions targets = pv::TargetOptions::from(c.keep);
+    pv::GlobalSolverOptions options;
+    options.shape_metric = targets.metric("aspect_ratio");
+    options.termination.max_iterations = 15;
+    options.untangle_termination.max_iterations = 150;
+
+    pv::Mesh serial = input;
+    pv::set_targets(serial, targets);
+    auto part = pv::test::scatter(input);
+    pv::set_targets(pv::MeshPart(part), targets);
+    // Rated against their targets, the parts report what the whole mesh does, bit for bit.
+    const pv::QualityAssessor assessor({options.shape_metric});
+    const auto whole_report = assessor.assess(serial), part_report = assessor.assess(pv::MeshPart(part));
+    const auto& a = whole_report.metrics.front().all;
+    const auto& b = part_report.metrics.front().all;
+    BOOST_TEST(a.min == b.min);
+    BOOST_TEST(a.mean == b.mean);
+    BOOST_TEST(a.count == b.count);
+
+    const auto serial_summary = pv::GlobalSolver(options).improve(serial);
+    const auto summary = pv::GlobalSolver(options).improve(part);
+    pv::Mesh gathered = input;
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    BOOST_TEST(summary.iterations == serial_summary.iterations);
+    BOOST_TEST(summary.worst_after == serial_summary.worst_after);
+    BOOST_TEST(summary.after.inverted == serial_summary.after.inverted);
+    if (rank() == 0) BOOST_TEST(pv::test::relative_difference(gathered, serial) == 0.0);
+    pv::test::check_never_worse(summary);
+}
+
+BOOST_AUTO_TEST_SUITE_END()

@@ -1,0 +1,154 @@
+// Solvers with targets (metrics/targets.hpp): a graded boundary layer keeps its layer heights while
+// its angles are fixed; a mesh of cells whose aspect is kept never loses scaled Jacobian; the
+// size-adapt and boundary-layer wrappers run end to end.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/mesh/orientation.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/wrappers.hpp"
+#include "support/solver_checks.hpp"
+
+namespace pv = paloverde;
+
+namespace {
+
+constexpr int kColumns = 4, kLayers = 8;
+
+// Heights of the layers of a block graded from the wall z = 0 (first 2e-3, growth 1.5).
+std::vector<double> layer_tops() {
+    std::vector<double> z{0.0};
+    for (int k = 0; k < kLayers; ++k) z.push_back(z.back() + 2e-3 * std::pow(1.5, k));
+    return z;
+}
+
+pv::VertexId vertex(int i, int j, int k) { return (k * (kColumns + 1) + j) * (kColumns + 1) + i; }
+
+// The block of hexahedra, its interior vertices moved sideways by up to half the thinner of their
+// two layers: every layer's angles need fixing, no layer's height does.
+pv::Mesh wobbly_block() {
+    const auto z = layer_tops();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-0.5, 0.5);
+    std::vector<double> xyz;
+    for (int k = 0; k <= kLayers; ++k)
+        for (int j = 0; j <= kColumns; ++j)
+            for (int i = 0; i <= kColumns; ++i) {
+                double x = static_cast<double>(i) / kColumns, y = static_cast<double>(j) / kColumns;
+                if (i > 0 && i < kColumns && j > 0 && j < kColumns && k > 0 && k < kLayers) {
+                    const double local = std::min(z[k + 1] - z[k], z[k] - z[k - 1]);
+                    x += u(rng) * local;
+                    y += u(rng) * local;
+                }
+                xyz.insert(xyz.end(), {x, y, z[k]});
+            }
+    std::vector<pv::CellType> types;
+    std::vector<pv::VertexId> cells;
+    for (int k = 0; k < kLayers; ++k)
+        for (int j = 0; j < kColumns; ++j)
+            for (int i = 0; i < kColumns; ++i) {
+                types.push_back(pv::CellType::Hexahedron);
+                cells.insert(cells.end(), {vertex(i, j, k), vertex(i + 1, j, k), vertex(i + 1, j + 1, k), vertex(i, j + 1, k),
+                                           vertex(i, j, k + 1), vertex(i + 1, j, k + 1), vertex(i + 1, j + 1, k + 1),
+                                           vertex(i, j + 1, k + 1)});
+            }
+    pv::Mesh mesh = pv::Mesh::from_cells(std::move(xyz), types, std::move(cells));
+    mesh.fix_boundary();
+    return mesh;
+}
+
+// Per layer, its mean height over the columns.
+std::vector<double> mean_heights(const pv::Mesh& mesh) {
+    std::vector<double> out;
+    for (int k = 0; k < kLayers; ++k) {
+        double sum = 0.0;
+        for (int j = 0; j <= kColumns; ++j)
+            for (int i = 0; i <= kColumns; ++i) sum += mesh.point(vertex(i, j, k + 1))[2] - mesh.point(vertex(i, j, k))[2];
+        out.push_back(sum / ((kColumns + 1) * (kColumns + 1)));
+    }
+    return out;
+}
+
+double worst_scaled_jacobian(const pv::Mesh& mesh) {
+    return pv::QualityAssessor({"scaled_jacobian"}).assess(mesh).metrics.front().all.min;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(targets_solver)
+
+BOOST_AUTO_TEST_CASE(a_boundary_layer_keeps_its_heights_with_size_and_aspect_kept) {
+    const pv::Mesh input = wobbly_block();
+    BOOST_TEST_REQUIRE(pv::count_orientations(input).inverted == 0);
+    const auto heights = mean_heights(input);
+
+    // Pulled toward cubes, the layers lose their heights (and the scaled Jacobian may fall).
+    pv::Mesh ideal = input;
+    pv::GlobalSolver().improve(ideal);
+    const auto pulled = mean_heights(ideal);
+    BOOST_TEST(pulled[0] > 1.2 * heights[0]);
+
+    pv::Mesh kept = input;
+    const pv::TargetOptions targets = pv::TargetOptions::from("size,aspect");
+    pv::set_targets(kept, targets);
+    pv::GlobalSolverOptions options;
+    options.shape_metric = targets.metric(options.shape_metric);
+    BOOST_TEST(options.shape_metric == "shape_size");
+    const auto summary = pv::GlobalSolver(options).improve(kept);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    pv::test::check_never_worse(summary);
+    BOOST_TEST(summary.after.inverted == 0);
+    const auto after = mean_heights(kept);
+    for (int k = 0; k < kLayers; ++k) BOOST_TEST(std::abs(after[k] / heights[k] - 1.0) < 0.05, "layer " << k);
+    BOOST_TEST(worst_scaled_jacobian(kept) > worst_scaled_jacobian(input) + 0.1);
+}
+
+BOOST_AUTO_TEST_CASE(a_mesh_of_cells_with_targets_never_loses_scaled_jacobian) {
+    for (const char* name : {"mesquite/hexes/cub_fru.vtk", "mesquite/quads/horse20x10_2_4.vtk"}) {
+        BOOST_TEST_CONTEXT(name) {
+            pv::Mesh mesh = pv::test::shared_mesh(name);
+            const double before = worst_scaled_jacobian(mesh);
+            pv::set_targets(mesh, pv::TargetOptions::from("aspect"));
+            const auto summary = pv::GlobalSolver().improve(mesh);
+            BOOST_TEST_MESSAGE(summary.brief_report());
+            BOOST_TEST(worst_scaled_jacobian(mesh) >= before);
+            const pv::MetricReport* reported = summary.after.metric("scaled_jacobian");
+            BOOST_TEST_REQUIRE(reported != nullptr);
+            BOOST_TEST(reported->all.min >= before);
+        }
+    }
+}
+
+BOOST_AUTO_TEST_CASE(the_local_smoother_rates_against_targets_too) {
+    pv::Mesh mesh = wobbly_block();
+    const double before = worst_scaled_jacobian(mesh);
+    pv::set_targets(mesh, pv::TargetOptions::from("size,aspect"));
+    pv::LocalSolverOptions options;
+    options.metric = "shape_size";
+    options.termination.max_iterations = 20;
+    const auto summary = pv::LocalSolver(options).improve(mesh);
+    pv::test::check_never_worse(summary);
+    BOOST_TEST(summary.worst_after > summary.worst_before);
+    BOOST_TEST(worst_scaled_jacobian(mesh) >= before);
+}
+
+BOOST_AUTO_TEST_CASE(the_target_wrappers_set_their_targets_and_hand_back_the_mesh_without_them) {
+    for (int job = 0; job < 2; ++job) {
+        pv::Mesh mesh = wobbly_block();
+        const auto heights = mean_heights(mesh);
+        const auto result = (job == 0 ? pv::wrappers::size_adapt_shape() : pv::wrappers::boundary_layer_shape()).run(mesh);
+        BOOST_TEST_REQUIRE(result.success, result.message);
+        BOOST_TEST(!mesh.has_targets());  // the queue's targets were the queue's
+        const auto& summary = std::get<pv::Summary>(result.steps[1].outcome);
+        BOOST_TEST(summary.quality_metric == (job == 0 ? "shape_size" : "shape_size_orient"));
+        BOOST_TEST(summary.worst_after > summary.worst_before);
+        const auto after = mean_heights(mesh);
+        for (int k = 0; k < kLayers; ++k) BOOST_TEST(std::abs(after[k] / heights[k] - 1.0) < 0.05, "layer " << k);
+    }
+}
+
+BOOST_AUTO_TEST_SUITE_END()
