@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Sets up Paloverde on Debian bookworm and runs the main job or every test.
-#   bash scripts/setup.sh run     install packages, build, untangle + improve the bundled example
-#   bash scripts/setup.sh test    install packages, build, run every test
-#   bash scripts/setup.sh build   install packages and build only
+#   bash scripts/setup.sh run     install the packages the program needs, build the library and the
+#                                 `paloverde` program only, untangle + improve the bundled example
+#   bash scripts/setup.sh test    install every package, build everything, run every test
+#   bash scripts/setup.sh build   install every package and build everything
 #   bash scripts/setup.sh sanitize   build with AddressSanitizer + UBSan (build-sanitize/) and run
 #                                    the tests there (all but the install check, which links a
 #                                    downstream program without the sanitizers)
@@ -13,7 +14,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Every Debian package the project needs, in one place.
+# Every Debian package the library, the program and the tests need, in one place.
 PACKAGES=(
   build-essential cmake
   libopenmpi-dev openmpi-bin          # MPI
@@ -24,7 +25,11 @@ PACKAGES=(
   libcli11-dev nlohmann-json3-dev     # command line, JSON
   libyaml-cpp-dev                     # config files (paloverde run)
   zlib1g-dev                          # compressed .vtu
-  python3-matplotlib                  # plots of examples/compare_methods.py
+)
+# For the example scripts and the benchmark meshes only (`run` leaves them out: matplotlib alone brings
+# numpy, fonts and image libraries).
+EXAMPLE_PACKAGES=(
+  python3-matplotlib                  # plots of examples/compare_methods.py, solver_race.py, study.py
   tetgen                              # benchmark meshes (docs/global_solver.md)
 )
 # For `fuzz` only: clang, its libFuzzer runtime and its OpenMP (the config target links the
@@ -45,25 +50,26 @@ install_packages() {  # also installs the packages given as arguments
 }
 
 BUILD_DIR=${PALOVERDE_BUILD_DIR:-build}
-build() {
+build() {  # builds the targets given as arguments (--target NAME), or everything
   cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
-  cmake --build "$BUILD_DIR" -j "$(nproc)"
+  cmake --build "$BUILD_DIR" -j "$(nproc)" "$@"
 }
 
 case "${1:-}" in
   run)
     install_packages
-    build
+    # The program and the library it links, not the tests, examples and benchmarks.
+    build --target paloverde_cli
     "$BUILD_DIR/bin/paloverde" improve examples/data/tangled_cube.vtk -o "$BUILD_DIR/tangled_cube_improved.vtk"
     echo "Improved mesh written to $BUILD_DIR/tangled_cube_improved.vtk"
     ;;
   test)
-    install_packages
+    install_packages "${EXAMPLE_PACKAGES[@]}"
     build
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)"
     ;;
   build)
-    install_packages
+    install_packages "${EXAMPLE_PACKAGES[@]}"
     build
     ;;
   sanitize)

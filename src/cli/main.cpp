@@ -39,7 +39,8 @@ int main(int argc, char** argv) {
     const bool root = MpiSession::rank() == 0;
     // Every rank runs the command, and its errors are thrown on every rank: rank 0 tells.
     const Silence others(!root);
-    CLI::App app{"Paloverde: untangle and improve tetrahedral and triangle meshes by moving vertices"};
+    CLI::App app{"Paloverde: untangle and improve meshes by moving vertices: tetrahedra, hexahedra, wedges and "
+                 "pyramids (mixed too), planar triangles and quadrilaterals"};
     app.require_subcommand(1);
     int exit_code = kDone;
     add_quality_command(app, exit_code);

@@ -39,7 +39,7 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         json["input_orientation"] = nlohmann::json::parse(config::to_json(o));
         if (options->json) std::cout << json.dump(2) << "\n";
         else
-            std::cout << options->mesh << ": " << to_string(file.mesh.kind()) << " mesh; "
+            std::cout << options->mesh << ": " << describe_cells(file.mesh) << "; "
                       << o.describe(file.mesh.kind()) << "\n" << report.to_text();
         if (!options->json_file.empty()) write_text_file(options->json_file, json.dump(2) + "\n");
         exit_code = kDone;

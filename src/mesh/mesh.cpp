@@ -538,4 +538,22 @@ std::vector<std::uint8_t> boundary_vertices(const Mesh& mesh) {
     return boundary;
 }
 
+std::string describe_cells(const Mesh& mesh) {
+    std::array<ElementId, kCellTypeCount> count{};
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) ++count[static_cast<std::size_t>(mesh.cell_type(c))];
+    const auto types = std::count_if(count.begin(), count.end(), [](ElementId n) { return n > 0; });
+    if (types <= 1) return std::string(cell_info(mesh.cell_type(0)).name) + " mesh";
+    std::string out = "mixed mesh:";
+    for (const CellInfo& info : all_cell_infos()) {
+        const ElementId n = count[static_cast<std::size_t>(info.type)];
+        if (n == 0) continue;
+        // Every name takes an s but the two Greek ones: hexahedra, tetrahedra.
+        std::string name(info.name);
+        if (n > 1 && name.ends_with("hedron")) name.replace(name.size() - 2, 2, "a");
+        else if (n > 1) name += "s";
+        out += (out.back() == ':' ? " " : ", ") + std::to_string(n) + " " + name;
+    }
+    return out;
+}
+
 }  // namespace paloverde

@@ -161,6 +161,30 @@ BOOST_AUTO_TEST_CASE(bad_usage_exits_two) {
     BOOST_TEST(run_cli("quality --help").exit_code == 0);
 }
 
+// The help and the quality report name the cell types the program handles, not only simplices.
+BOOST_AUTO_TEST_CASE(help_and_quality_name_the_cell_types) {
+    const auto help = run_cli("--help");
+    BOOST_TEST(help.exit_code == 0);
+    BOOST_TEST_INFO(help.output);
+    BOOST_TEST(!has(help.output, "tetrahedral and triangle meshes"));
+    for (const char* type : {"tetrahedra", "hexahedra", "wedges", "pyramids", "triangles", "quadrilaterals"})
+        BOOST_TEST(has(help.output, type), type);
+    struct Case {
+        std::string mesh, words;
+    };
+    for (const Case& c : {Case{"tets/tet_4_tangled.vtk", ": tetrahedron mesh; "},
+                          Case{"hexes/hexes_4by2by2.vtk", ": hexahedron mesh; "},
+                          Case{"quads/quads_4by2.vtk", ": quadrilateral mesh; "},
+                          Case{"mixed/mixed-hex-pyr-tet.vtk", ": mixed mesh: 445 tetrahedra, 305 hexahedra, 190 pyramids; "},
+                          Case{"mixed/hybrid_3quad_1tri_tangled.vtk", ": mixed mesh: 1 triangle, 3 quadrilaterals; "}}) {
+        const auto result = run_cli("quality " + quoted(pv::test::shared_data("mesquite/" + c.mesh)));
+        BOOST_TEST_CONTEXT(c.mesh << ": " << result.output) {
+            BOOST_TEST(result.exit_code == 0);
+            BOOST_TEST(has(result.output, c.words));
+        }
+    }
+}
+
 BOOST_AUTO_TEST_CASE(convert_round_trips_through_every_writable_format) {
     const pv::test::ScratchDir dir("cli_convert");
     const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "paloverde/core/types.hpp"
@@ -200,6 +201,10 @@ private:
 // underflow; solvers and the assessor work at unit scale instead.
 int unit_scale_exponent(std::span<const double> xyz);
 void scale_coordinates(std::span<double> xyz, int exponent);
+
+// What the mesh is made of, for reports: "tetrahedron mesh", "hexahedron mesh" (one cell type),
+// or "mixed mesh: 120 hexahedra, 40 wedges" (its types in the order of CellType).
+std::string describe_cells(const Mesh& mesh);
 
 // Throws MeshError naming two elements (cells, for a mesh with cells) with the same set of
 // vertices, if there are any.
