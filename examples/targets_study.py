@@ -173,7 +173,7 @@ def main():
         # Through Paloverde's reader: VTK's vertex order for the wedges (Gmsh mirrors them).
         subprocess.run([args.paloverde, "convert", w(geo + ".msh"), w(geo + "_input.vtk"), "--ascii"],
                        check=True, capture_output=True)
-    shift_sideways(w("boundary_layer_input.vtk"), w("boundary_layer.vtk"), (0, 0, 0), (1, 1, 0.5), amount=0.25)
+    shift_sideways(w("boundary_layer_input.vtk"), w("boundary_layer.vtk"), (0, 0, 0), (1, 1, 0.07), amount=0.25)
     subprocess.run([args.paloverde, "perturb", w("size_graded_input.vtk"), "-o", w("size_graded.vtk"), "--amount",
                     "0.15", "--seed", "3"], check=True, capture_output=True)
 

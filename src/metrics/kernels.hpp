@@ -307,13 +307,13 @@ struct ShapeSize {
     static constexpr bool rates_size = true;
     double tet(const double* x, double* g, const MetricScale& s) const {
         const TetGeometry t(x);
-        double dm[12];
+        double dm[12] = {};
         const double m = MeanRatio::of(t, g ? dm : nullptr);
         return shape_orientation_size<4>(m, dm, 1.0, nullptr, t.volume, t.dvolume, g, s.reference_volume);
     }
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);
-        double dm[9];
+        double dm[9] = {};
         const double m = triangle_shape(t, g ? dm : nullptr);
         return shape_orientation_size<3>(m, dm, 1.0, nullptr, t.area, t.darea, g, s.reference_volume);
     }

@@ -57,9 +57,40 @@ Matrix inverse(const Matrix& m, int d) {
     return out;
 }
 
+Matrix transpose(const Matrix& m, int d) {
+    Matrix out{};
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) out[i][j] = m[j][i];
+    return out;
+}
+
+// The rotation (or reflection) U of the polar decomposition x = U P, P symmetric positive
+// definite: the orthogonal matrix nearest x, by Newton's iteration U <- (g U + U^-T / g) / 2 with
+// Higham's scaling g, which converges in a few steps even for a thin boundary layer's corner.
+Matrix polar_rotation(const Matrix& x, int d) {
+    Matrix u = x;
+    for (int step = 0; step < 60; ++step) {
+        const Matrix inverse_transpose = transpose(inverse(u, d), d);
+        double norm = 0.0, inverse_norm = 0.0;
+        for (int i = 0; i < d; ++i)
+            for (int j = 0; j < d; ++j) norm += u[i][j] * u[i][j], inverse_norm += inverse_transpose[i][j] * inverse_transpose[i][j];
+        const double g = std::sqrt(std::sqrt(inverse_norm / norm));
+        double change = 0.0;
+        for (int i = 0; i < d; ++i)
+            for (int j = 0; j < d; ++j) {
+                const double next = 0.5 * (g * u[i][j] + inverse_transpose[i][j] / g);
+                change = std::max(change, std::abs(next - u[i][j]));
+                u[i][j] = next;
+            }
+        if (change <= 1e-15) break;
+    }
+    return u;
+}
+
 // A corner's factors W = lambda V Q D (targets.hpp).
 struct Factors {
     double lambda = 1.0;
+    Matrix frame{};  // the corner's edge matrix itself
     Matrix v{}, q{}, d{};
     bool valid = false;     // not degenerate: every factor is usable
     bool positive = false;  // positively oriented: V is a rotation
@@ -69,6 +100,7 @@ struct Factors {
 // layer corners would lose their small edge's direction to rounding otherwise).
 Factors factor(const Matrix& x, int d) {
     Factors f;
+    f.frame = x;
     Matrix r{};
     std::array<std::array<double, 3>, 3> q{};  // q[j]: column j of V
     double largest = 0.0;
@@ -276,12 +308,17 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             const Factors& f = source == TargetSource::Input ? in : source == TargetSource::Reference ? ref : id;
             return f.valid ? f : id;
         };
-        const Factors& oriented = pick(options.orientation);
-        const Matrix& v = oriented.positive ? oriented.v : id.v;
         const Factors& sized = pick(options.size);
         const double lambda = &sized != &id ? sized.lambda : std::pow(scale * determinant(ideal, d), 1.0 / d);
-        // W / lambda = V Q D, and the map that carries W to lambda times the regular corner.
-        const Matrix shape = product(v, product(pick(options.skew).q, pick(options.aspect).d, d), d);
+        // W / lambda = V Q D. The orientation V is chosen so that W's polar rotation is the
+        // source corner's: a corner's orientation then does not depend on which of its edges is
+        // listed first (QR's V does), and the corners of one sheared cell agree on it. With every
+        // factor from one corner, V is QR's and W is that corner.
+        const Factors& oriented = pick(options.orientation);
+        const Matrix& source = oriented.positive ? oriented.frame : id.frame;
+        const Matrix skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
+        const Matrix v = product(polar_rotation(source, d), transpose(polar_rotation(skew_aspect, d), d), d);
+        const Matrix shape = product(v, skew_aspect, d);
         const Matrix map = product(inverse(shape, d), regular, d);
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) maps[e][i][j] = i < d && j < d ? map[i][j] : 0.0;

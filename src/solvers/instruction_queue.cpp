@@ -8,7 +8,7 @@
 namespace paloverde {
 
 InstructionQueue& InstructionQueue::assess(std::string label, QualityAssessor assessor) {
-    steps_.push_back({std::move(label), std::make_shared<const QualityAssessor>(std::move(assessor)), nullptr});
+    steps_.push_back({std::move(label), std::make_shared<const QualityAssessor>(std::move(assessor)), nullptr, std::nullopt});
     return *this;
 }
 
@@ -20,7 +20,7 @@ InstructionQueue& InstructionQueue::improve(std::unique_ptr<Solver> solver) {
 
 InstructionQueue& InstructionQueue::improve(std::string label, std::unique_ptr<Solver> solver) {
     if (!solver) throw OptionError("InstructionQueue::improve needs a solver, got none");
-    steps_.push_back({std::move(label), nullptr, std::shared_ptr<Solver>(std::move(solver))});
+    steps_.push_back({std::move(label), nullptr, std::shared_ptr<Solver>(std::move(solver)), std::nullopt});
     attach(steps_.back());
     return *this;
 }

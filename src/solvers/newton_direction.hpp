@@ -53,8 +53,8 @@ public:
     // `curvature` from the gradient pass that gave `gradient`). Lambda per free owned
     // vertex: damping * its block's trace / 3 (Marquardt), plus 1e-8 of the mean trace so that
     // every block is invertible; the line search reins in vertices whose steps come out too long
-    // (a Levenberg term, damping * the mean trace, measured worse: 0.12 against 0.17 on
-    // cube-clip-5 after 150 iterations). CG stops when the preconditioned
+    // (a Levenberg term, damping * the mean trace, damps every vertex alike, and the worst
+    // element then rose more slowly). CG stops when the preconditioned
     // residual falls below `tolerance` of its start, after `max_products` products, or at
     // non-positive curvature (Steihaug). Collective; the direction is complete at owned vertices
     // (ghosts: the caller's halo update).

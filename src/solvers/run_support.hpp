@@ -16,6 +16,7 @@
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/mesh_part.hpp"
@@ -138,13 +139,19 @@ private:
     }
     QualityReport assess() const { return assessor_.assess(part_); }
     // A mesh of cells with targets (the command line's default for cells) is judged by its users'
-    // measure too: a valid input's minimum corner scaled Jacobian is never lowered. -inf where it
-    // does not apply (no cells, no targets, an inverted input).
+    // measure too: a valid input's minimum corner scaled Jacobian over its cells (hexahedra,
+    // wedges, pyramids, quadrilaterals; a mixed mesh's simplices are rated by the solver's metric)
+    // is never lowered. -inf where it does not apply (no cells, no targets, an inverted input).
     bool guards_scaled_jacobian() const { return mesh_.has_cells() && mesh_.has_targets(); }
     double worst_scaled_jacobian(const QualityReport& report) const {
-        const MetricReport* r = report.metric("scaled_jacobian");
-        if (!r || summary.before.inverted > 0) return -INFINITY;
-        return r->movable.count > 0 ? r->movable.min : r->all.min;
+        if (summary.before.inverted > 0) return -INFINITY;
+        double worst = INFINITY;
+        for (const QualityReport::TypeReport& type : report.by_type) {
+            if (type.type == cell_info(CellType::Tetrahedron).name || type.type == cell_info(CellType::Triangle).name) continue;
+            for (const auto& [metric, value] : type.worst)
+                if (metric == "scaled_jacobian") worst = std::min(worst, value);
+        }
+        return std::isfinite(worst) ? worst : -INFINITY;
     }
     void hand_back_input(const std::string& why) {
         std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
