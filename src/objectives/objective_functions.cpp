@@ -152,7 +152,7 @@ void ObjectiveFunction::restore_state(std::span<const double> state) { check_sta
 
 void ObjectiveFunction::hold_still(std::span<const double>, const Reducer&) {}
 
-void LogBarrier::limit_first_gap(double fraction, double ideal) {
+void LogBarrier::focus_on_band(double fraction, double ideal) {
     first_gap_fraction_ = fraction;
     ideal_ = ideal;
 }
@@ -162,14 +162,13 @@ double LogBarrier::worst(std::span<const double> q, const Reducer& reducer) cons
     return std::min(reducer.min(local_min(q)), still);
 }
 
-void LogBarrier::keep_t(std::span<const double> q, const Reducer& reducer) {
+void LogBarrier::keep_weighting(std::span<const double> q, const Reducer& reducer) {
     if (mu_ <= 0.0) return;
     const double qmin = worst(q, reducer);
     // A wider focus can take in an element below t: outside the focus it was no term, and a Newton
     // step lifted the focus's own elements past it. Solved for at this mu with the many more
-    // terms, t would sink far below the worst (cub_wedge_like, handed over by hand at iteration
-    // 60: from 0.5206 to 0.408, and the steps then gave up 0.11 of the worst quality); it keeps
-    // its gap below the worst instead.
+    // terms, t would sink far below the worst and the steps would then trade the worst elements
+    // for the rest; it keeps its gap below the worst instead.
     if (!(t_ < qmin)) {
         if (!(gap_ratio_ > 0.0)) return;  // no gap known yet: update() solves for t
         t_ = qmin - gap_ratio_ * mu_;

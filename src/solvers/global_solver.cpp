@@ -30,7 +30,7 @@ void GlobalSolverOptions::validate() const {
     metric_options.validate();
     termination.validate();
     untangle_termination.validate();
-    make_objective(objective, objective_options);
+    const auto made = make_objective(objective, objective_options);
     auto metric = make_metric(shape_metric, metric_options);
     if (!metric->has_gradient())
         throw OptionError("shape_metric '" + shape_metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
@@ -44,7 +44,7 @@ void GlobalSolverOptions::validate() const {
     if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
         throw OptionError("newton_tolerance must be a positive number");
     if (newton_cg_iterations < 1) throw OptionError("newton_cg_iterations must be >= 1");
-    if (direction == Direction::Newton && improve_shape && objective != "log_barrier")
+    if (direction == Direction::Newton && improve_shape && !made->is_continuation())
         throw OptionError("direction newton needs the log_barrier objective (its curvature), not '" + objective + "'");
     if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
@@ -419,21 +419,10 @@ private:
     std::vector<double> passes_history_;  // gradient passes so far (a Newton step takes one per product)
     // The histories start over from their last entries (a wider focus).
     void restart_histories();
-    // The log-barrier's mu; 0 for the other objectives.
-    double barrier_mu() const {
-        const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
-        return barrier ? barrier->mu() : 0.0;
-    }
-    // The log-barrier's t; 0 for the other objectives.
-    double barrier_t() const {
-        const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
-        return barrier ? barrier->t() : 0.0;
-    }
-    // The log-barrier's weight on its worst element; 1 for the other objectives.
-    double barrier_worst_weight() const {
-        const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_);
-        return barrier ? barrier->worst_weight() : 1.0;
-    }
+    // The objective's subproblem: its scale (the barrier's mu), its floor (t), the worst's share.
+    double barrier_mu() const { return objective_.subproblem_scale(); }
+    double barrier_t() const { return objective_.subproblem_floor(); }
+    double barrier_worst_weight() const { return objective_.worst_share(); }
     // Newton directions (shape phase): the damping factor, adapted to how the last step went.
     detail::NewtonDirection newton_{work_};
     double newton_damping_ = 1e-2;
@@ -518,8 +507,7 @@ void Phase::hold_near_worst() {
     const Stats s = stats(q_);
     focus_base_ = s.worst;
     focus_top_ = s.worst + kPolishBand * (metric_.ideal_value() - s.worst);
-    auto& objective = dynamic_cast<MeanAboveFloor&>(objective_);
-    objective.set_floor(focus_top_, kPolishMu * std::max(s.mean - focus_top_, 1e-3 * std::abs(focus_top_) + 1e-12));
+    objective_.set_floor(focus_top_, kPolishMu * std::max(s.mean - focus_top_, 1e-3 * std::abs(focus_top_) + 1e-12));
     // An element at the top itself is held too: the line search keeps the moving ones above it.
     const Mesh& mesh = work_.mesh();
     moving_.assign(static_cast<std::size_t>(mesh.num_vertices()), 1);
@@ -595,10 +583,8 @@ void Phase::record(const Stats& s, double objective, double step, double gain) {
     r.best_worst_quality = best_worst_;
     r.mean_quality = s.mean;
     r.inverted = s.bad / work_.copies();  // an inverted element's copies are all inverted
-    if (const auto* barrier = dynamic_cast<const LogBarrier*>(&objective_)) {
-        r.mu = barrier->mu();
-        r.t = barrier->t();
-    }
+    r.mu = objective_.subproblem_scale();
+    r.t = objective_.subproblem_floor();
     r.objective = objective;
     r.step = step;
     r.gain = gain;
@@ -616,9 +602,8 @@ bool Phase::line_search(double objective, double max_direction) {
     // vertices is damped until it no longer blocks: one tangle does not freeze the mesh.
     const double floor = objective_.domain_floor();
     // In the shape phase, the barrier's own terms also judge the damped vertices (below).
-    const auto* barrier = options_.damped_vertex_ascent && !untangling_ && !stage_.finish
-                              ? dynamic_cast<const LogBarrier*>(&objective_)
-                              : nullptr;
+    const bool barrier =
+        options_.damped_vertex_ascent && !untangling_ && !stage_.finish && objective_.is_continuation();
     std::vector<VertexId> damped, once_damped;
     ++gap_round_;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
@@ -662,7 +647,7 @@ bool Phase::line_search(double objective, double max_direction) {
         }
         for (VertexId v : free) stamp_[v] = 0;
         if (blocked) continue;
-        if (barrier && !damp_where_barrier_falls(once_damped, s, barrier->t())) continue;
+        if (barrier && !damp_where_barrier_falls(once_damped, s, objective_.subproblem_floor())) continue;
         // The Armijo test uses the slope of the damped step actually taken.
         const double slope = detail::free_owned_sums<1>(work_, [&](std::size_t v, auto& acc) {
             double d = 0.0;
@@ -987,8 +972,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         // terms would choose a looser barrier, under which conjugate gradients let its elements
         // sink toward t. Focused, it starts no looser than the band. (The finish's fresh barrier
         // weighs its focus alone, Newton steps following its central path: its mu comes from it.)
-        if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focusing_)
-            barrier->limit_first_gap(band_, metric_.ideal_value());
+        if (focusing_) objective_.focus_on_band(band_, metric_.ideal_value());
         if (!focus_alone()) objective_.update(work_.counted(q_, counted_), reducer_);
         if (focusing_) {
             if (stage_.polish) hold_near_worst();
@@ -1331,8 +1315,7 @@ PhaseResult Phase::run(const detail::SolverState* resume) {
         if (focusing_ && !stage_.polish && (widen || s.worst >= focus_base_ + 0.5 * (focus_top_ - focus_base_))) {
             refocus();
             // A barrier over its focus alone keeps its t, and the weight on the worst, as its focus changes.
-            if (auto* barrier = dynamic_cast<LogBarrier*>(&objective_); barrier && focus_alone())
-                barrier->keep_t(work_.counted(q_, counted_), reducer_);
+            if (focus_alone()) objective_.keep_weighting(work_.counted(q_, counted_), reducer_);
             objective_.update(work_.counted(q_, counted_), reducer_);
             objective = objective_value(q_);
             objective_.weights(q_, weight_);
@@ -1492,7 +1475,7 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         if (sliding) sliding_vertices.emplace(work, *sliding);
         // Where conjugate gradients stall, the barrier's subproblems have become too ill-conditioned
         // for first-order steps; Newton steps go on from the best iterate (docs/global_solver.md).
-        const bool finish = options.finish == GlobalSolverOptions::Finish::Newton && options.objective == "log_barrier" &&
+        const bool finish = options.finish == GlobalSolverOptions::Finish::Newton && objective->is_continuation() &&
                             options.direction != GlobalSolverOptions::Direction::Newton && !sliding;
         // A run resumed from a checkpoint of the finish goes straight back to it, and to its part.
         const bool resume_finish = resume && resume->numbers.contains("finish") && resume->number("finish") != 0.0;
