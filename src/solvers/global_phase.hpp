@@ -8,7 +8,9 @@
 //   focus.cpp            which vertices move (focus_band, the polish's held elements)
 //   phase_checkpoint.cpp the phase's state in checkpoints
 //   quality_stats.cpp    whole-mesh figures of the qualities
-// global_solver.cpp runs the stages one after another (next_stage).
+//   global_untangle.cpp  the untangling stage (energy, barrier rounds, local sweeps)
+//   shape_stages.cpp     the shape stages and their order (next_stage)
+// global_solver.cpp holds the solver's entry and runs the two.
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -54,7 +56,7 @@ double worst_counted(const Workspace& work, std::span<const double> all, std::ve
 // Newton steps at one mu before its subproblem counts as out of reach.
 inline constexpr int kNewtonStepsAtOneMu = 50;
 
-// The stages of the global solver, in the order it may run them; next_stage (global_solver.cpp)
+// The stages of the global solver, in the order it may run them; next_stage (shape_stages.cpp)
 // says which follows which. Shape: the conjugate gradients' (or steepest ascent's, or Newton's)
 // shape phase; ShapeThenFinish: the same where the Newton finish follows it and it may hand over;
 // Finish: Newton steps on the shape phase's barrier, counting on from its iterations;
@@ -284,5 +286,13 @@ private:
     std::vector<double> focus_start_q_;
     std::optional<std::uint64_t> focus_start_;
 };
+
+// The global solver's stages after one another (solve() in global_solver.cpp runs them).
+// Untangling (global_untangle.cpp): TargetReached once untangled, else how the run ends (reason
+// and message). Resets `resume` once it has resumed from it.
+PhaseResult untangle(const PhaseContext& context, std::vector<double>& xyz, std::optional<SolverState>& resume);
+// The shape stages (shape_stages.cpp) from `before`, how the untangling ended: how the run ends.
+PhaseResult improve_shape(const PhaseContext& context, std::vector<double>& xyz, const SlidingBoundary* sliding,
+                          const std::optional<SolverState>& resume, PhaseResult before);
 
 }  // namespace paloverde::detail

@@ -20,7 +20,7 @@ bool Phase::line_search(double objective, double max_direction) {
     ++gap_round_;
     for (int attempt = 0; attempt < 40; ++attempt, step_ *= 0.5) {
         const double s = step_ * length / max_direction;
-        // Only free vertices move: elsewhere trial_x_ holds x_ already (Phase::run, focus_on_moving).
+        // Only free vertices move: elsewhere trial_x_ holds x_ already (Phase::prepare, focus_on_moving).
         const auto free = work_.free_vertices();
         const auto count = static_cast<std::ptrdiff_t>(free.size());
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(work_.movable_elements()) > kParallelThreshold)
