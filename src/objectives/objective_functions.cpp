@@ -140,8 +140,10 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     gap_ratio_ = std::exp(s - log_mu);
 }
 
-// 0.5% of the elements, at least 10,000: after 40 iterations this was the best of the measured
-// choices on both the 2M- and the 9M-tet benchmark meshes (docs/benchmarks.md).
+// 0.5% of the elements, at least 10,000: a share of the mesh, so that the first t stands below
+// the many elements near the worst on a mesh of any size rather than within reach of a few, and a
+// floor, so that a small mesh's first barrier is not so tight that one element drives the steps
+// (the measurements behind the numbers: docs/benchmarks.md).
 double LogBarrier::automatic_active(double elements) const {
     return initial_active_ > 0.0 ? initial_active_ : std::max(1e4, 0.005 * elements);
 }
