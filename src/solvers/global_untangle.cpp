@@ -108,10 +108,9 @@ private:
     // The energy's result into `result`; how the run ends where the energy ends it.
     std::optional<PhaseResult> energy(bool resume_energy, PhaseResult& result) {
         const TerminationCriterion& limits = options_.untangle_termination;
-        const auto energy =
-            energy_untangle(work_, xyz_, limits.max_iterations, limits.max_seconds, context_.summary,
-                                    context_.observer, context_.start, context_.checkpointer,
-                                    resume_energy ? &*resume_ : nullptr);
+        const auto energy = energy_untangle(work_, xyz_, limits.max_iterations, limits.max_seconds, context_.summary,
+                                            context_.observer, context_.start, context_.checkpointer,
+                                            resume_energy ? &*resume_ : nullptr);
         if (resume_energy) resume_.reset();
         result = {energy.reason, energy.message};
         if (!ends_run(result)) return std::nullopt;
