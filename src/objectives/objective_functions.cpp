@@ -140,8 +140,10 @@ void LogBarrier::update(std::span<const double> q, const Reducer& reducer) {
     gap_ratio_ = std::exp(s - log_mu);
 }
 
-// 0.5% of the elements, at least 10,000: after 40 iterations this was the best of the measured
-// choices on both the 2M- and the 9M-tet benchmark meshes (docs/benchmarks.md).
+// 0.5% of the elements, at least 10,000: a share of the mesh, so that the first t stands below
+// the many elements near the worst on a mesh of any size rather than within reach of a few, and a
+// floor, so that a small mesh's first barrier is not so tight that one element drives the steps
+// (the measurements behind the numbers: docs/benchmarks.md).
 double LogBarrier::automatic_active(double elements) const {
     return initial_active_ > 0.0 ? initial_active_ : std::max(1e4, 0.005 * elements);
 }
@@ -152,7 +154,7 @@ void ObjectiveFunction::restore_state(std::span<const double> state) { check_sta
 
 void ObjectiveFunction::hold_still(std::span<const double>, const Reducer&) {}
 
-void LogBarrier::limit_first_gap(double fraction, double ideal) {
+void LogBarrier::focus_on_band(double fraction, double ideal) {
     first_gap_fraction_ = fraction;
     ideal_ = ideal;
 }
@@ -162,14 +164,13 @@ double LogBarrier::worst(std::span<const double> q, const Reducer& reducer) cons
     return std::min(reducer.min(local_min(q)), still);
 }
 
-void LogBarrier::keep_t(std::span<const double> q, const Reducer& reducer) {
+void LogBarrier::keep_weighting(std::span<const double> q, const Reducer& reducer) {
     if (mu_ <= 0.0) return;
     const double qmin = worst(q, reducer);
     // A wider focus can take in an element below t: outside the focus it was no term, and a Newton
     // step lifted the focus's own elements past it. Solved for at this mu with the many more
-    // terms, t would sink far below the worst (cub_wedge_like, handed over by hand at iteration
-    // 60: from 0.5206 to 0.408, and the steps then gave up 0.11 of the worst quality); it keeps
-    // its gap below the worst instead.
+    // terms, t would sink far below the worst and the steps would then trade the worst elements
+    // for the rest; it keeps its gap below the worst instead.
     if (!(t_ < qmin)) {
         if (!(gap_ratio_ > 0.0)) return;  // no gap known yet: update() solves for t
         t_ = qmin - gap_ratio_ * mu_;

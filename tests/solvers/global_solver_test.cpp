@@ -610,8 +610,8 @@ BOOST_AUTO_TEST_CASE(the_finish_starts_a_fresh_barrier_where_the_worst_rose_far_
 // than 1 / (1 - t)): tire's fresh barrier (min_progress 0.1, as above) starts at 5.9 against 0.83.
 // Where Newton steps lifted the focus past a still element (the whole mesh's worst below t: here
 // at the refocuses of iterations 15, 16 and 17), the refocus that takes it in cannot keep t;
-// keep_t then keeps t's gap below that element (objective_gradient_test), and one step later t
-// stands within 0.01 of it. Without keep_t the first refocus (44 to 92 vertices, before the
+// keep_weighting then keeps t's gap below that element (objective_gradient_test), and one step later t
+// stands within 0.01 of it. Without keep_weighting the first refocus (44 to 92 vertices, before the
 // one-window handover) dropped t by 0.19, and the run ended on 0.190 instead of 0.219.
 BOOST_AUTO_TEST_CASE(the_fresh_barrier_weighs_its_focus_alone_and_keeps_t_on_a_refocus) {
     auto mesh = shared_mesh("mesquite/tets/tire.vtk");

@@ -348,7 +348,7 @@ struct GrowingFocus {
 };
 
 // A barrier over a focus alone (the finish's fresh barrier): when the focus takes in more elements,
-// keep_t sets mu so that t stays where it was; with mu kept, t would sink far below the worst.
+// keep_weighting sets mu so that t stays where it was; with mu kept, t would sink far below the worst.
 BOOST_AUTO_TEST_CASE(barrier_keeps_t_when_its_focus_grows) {
     const auto [small, large] = GrowingFocus();
     const pv::Reducer serial;
@@ -359,7 +359,7 @@ BOOST_AUTO_TEST_CASE(barrier_keeps_t_when_its_focus_grows) {
     pv::LogBarrier kept_mu(0.8, mu);
     kept_mu.update(large, serial);
     BOOST_TEST(0.2 - kept_mu.t() > 2.0 * gap);
-    barrier.keep_t(large, serial);
+    barrier.keep_weighting(large, serial);
     BOOST_TEST(barrier.mu() < 0.5 * mu);
     barrier.update(large, serial);
     BOOST_TEST(std::abs(barrier.t() - t) <= 1e-9 * gap);
@@ -379,7 +379,7 @@ BOOST_AUTO_TEST_CASE(barrier_keeps_its_gap_when_the_focus_brings_an_element_belo
     pv::LogBarrier kept_mu(0.8, mu);
     kept_mu.update(large, serial);
     BOOST_TEST(worst - kept_mu.t() > 2.0 * gap);  // the root at the old mu
-    barrier.keep_t(large, serial);
+    barrier.keep_weighting(large, serial);
     BOOST_TEST(barrier.t() < worst);
     BOOST_TEST(std::abs((worst - barrier.t()) - gap) <= 1e-12);
     BOOST_TEST(barrier.mu() < mu);

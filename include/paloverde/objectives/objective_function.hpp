@@ -54,6 +54,33 @@ public:
     // out the still elements' terms, a constant while they stand still. Collective; a call with
     // no still element on any process forgets them.
     virtual void hold_still(std::span<const double> counted, const Reducer& reducer);
+
+    // What a solver asks of an objective that is a sequence of subproblems (a continuation, like
+    // the log-barrier's as mu shrinks) rather than one problem. The defaults are those of one
+    // problem: no subproblems, nothing to adjust.
+
+    // Whether advance() moves to a next subproblem whose solutions follow a central path toward
+    // the max-min problem: what Newton steps need to follow.
+    virtual bool is_continuation() const { return false; }
+    // The current subproblem's scale in quality units (the barrier's mu): a step that gains little
+    // against it has all but solved the subproblem. 0 without subproblems.
+    virtual double subproblem_scale() const { return 0.0; }
+    // The level every term measures its element's quality from, log(q - level), which climbs to the
+    // worst quality as the subproblems go on (the barrier's t). 0 without subproblems.
+    virtual double subproblem_floor() const { return 0.0; }
+    // The worst element's share of the objective's pull (the weights summing to 1): how much the
+    // steps still work for it. 1 where nothing else pulls.
+    virtual double worst_share() const { return 1.0; }
+    // Before the first update(): the solver moves only the elements within `fraction` of the way
+    // from the worst quality to `ideal`, holding the rest still (a focus). An objective that would
+    // choose its first subproblem from every element chooses it no looser than that band.
+    virtual void focus_on_band(double /*fraction*/, double /*ideal*/) {}
+    // The solver's set of terms changed (a focus over them alone moved): an objective whose pull on
+    // its worst elements depends on how many terms it has keeps that pull as it was. Collective.
+    virtual void keep_weighting(std::span<const double> /*counted*/, const Reducer& /*reducer*/) {}
+    // The level the solver keeps its moving elements above, and how softly (an element within
+    // `softness` of it weighs twice). Objectives whose domain is their own ignore it.
+    virtual void set_floor(double /*floor*/, double /*softness*/) {}
 };
 
 // The log-barrier of Sastry & Shontz:  F(mu, t) = t + mu * sum_i log(q_i - t),  t < min q.
@@ -79,27 +106,26 @@ public:
     void restore_state(std::span<const double> state) override;
     // The still elements' qualities, binned: 16,384 bins between the lowest and the highest, each
     // standing at its middle. A focus's nearest still element lies at least half its band above
-    // t, so a bin moves each term by little: on fandisk-9M half a bin is 2.7e-5, half the band
-    // 0.012, a term moves by 0.2% at most.
+    // t, and half a bin is a small fraction of that, so a bin moves each term by little.
     void hold_still(std::span<const double> counted, const Reducer& reducer) override;
     // With the automatic first mu: t starts at most `fraction` of the way from the worst quality
-    // to `ideal` below the worst. For a solver that moves only the elements within that band of
-    // the worst, holding the rest still (a focus): a barrier that weighed the still elements like
-    // the worst would only pull t, and with it the worst element, down (tire: no better element
-    // in the first 20 iterations).
-    void limit_first_gap(double fraction, double ideal);
+    // to `ideal` below the worst. A barrier that weighed the still elements outside a focus like
+    // the worst would only pull t, and with it the worst element, down.
+    void focus_on_band(double fraction, double ideal) override;
     // Sets mu so that t stays where it stands for these terms (before an automatic first mu:
     // nothing). A barrier over a focus alone keeps its t, and the weight on its worst elements,
     // when the focus changes: with mu kept, ten times the terms would put t ten times farther
     // below the worst (the gap is about mu times the terms near it). Where a term lies at or
     // below t, t keeps its gap below the worst instead. Collective.
-    void keep_t(std::span<const double> counted, const Reducer& reducer);
+    void keep_weighting(std::span<const double> counted, const Reducer& reducer) override;
+    bool is_continuation() const override { return true; }
+    double subproblem_scale() const override { return mu_; }
+    double subproblem_floor() const override { return t_; }
+    // The worst element's weight mu / (worst - t) at the last t solve. 1 before the first solve.
+    double worst_share() const override { return gap_ratio_ > 0.0 ? 1.0 / gap_ratio_ : 1.0; }
 
     double mu() const { return mu_; }
     double t() const { return t_; }
-    // The worst element's weight mu / (worst - t) at the last t solve (the weights sum to 1): how
-    // much of the barrier's pull the worst element has. 1 before the first solve.
-    double worst_weight() const { return gap_ratio_ > 0.0 ? 1.0 / gap_ratio_ : 1.0; }
 
 private:
     double automatic_active(double elements) const;
@@ -115,7 +141,7 @@ private:
     // how many elements each stands for.
     std::vector<double> still_quality_, still_count_;
     double still_total_ = 0.0;
-    double first_gap_fraction_ = 0.0, ideal_ = 0.0;  // limit_first_gap; 0: no limit
+    double first_gap_fraction_ = 0.0, ideal_ = 0.0;  // focus_on_band; 0: no limit
 };
 
 // The p-mean of the qualities, (1/n sum q_i^p)^(1/p) (Mesquite's LPtoP, normalized). A negative
@@ -161,7 +187,7 @@ class MeanAboveFloor final : public ObjectiveFunction {
 public:
     std::string_view name() const override { return "mean_above_floor"; }
     // floor: finite; mu > 0. Throws OptionError otherwise.
-    void set_floor(double floor, double mu);
+    void set_floor(double floor, double mu) override;
     double domain_floor() const override { return floor_; }
     void update(std::span<const double>, const Reducer&) override {}
     double value(std::span<const double> counted, const Reducer& reducer) const override;

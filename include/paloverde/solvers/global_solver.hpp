@@ -63,7 +63,7 @@ struct GlobalSolverOptions {
     // The Newton finish's band, as a fraction of focus_band (< 1: with 1 nothing focuses), in
     // (0, 1]. Where the conjugate gradients stall the qualities have piled up above the worst, and
     // the whole band holds far more vertices than the few worst elements the Newton steps work on:
-    // a third of it cuts fandisk-9M's finish from 27 s to half a second, to the same result
+    // a third of it makes the finish's steps far cheaper on a large mesh, to the same result
     // (docs/global_solver.md, "The finish's focus").
     double finish_band = 1.0 / 3.0;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
@@ -98,8 +98,9 @@ struct GlobalSolverOptions {
     bool renumber = true;             // reverse Cuthill-McKee order while solving
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the boundary
     // fixed, a shape phase in which they move too, on the input's boundary, along feature curves,
-    // corners fixed (mesh/boundary_surface.hpp; docs/global_solver.md). Serial runs only; no
-    // checkpoints, no newton directions.
+    // corners fixed (mesh/boundary_surface.hpp; docs/global_solver.md). Serial and distributed
+    // runs alike (a part slides on the whole mesh's boundary); no checkpoints, no newton
+    // directions, no Newton finish.
     enum class Boundary { Fixed, Slide };
     Boundary boundary = Boundary::Fixed;
     SurfaceOptions surface;           // with slide: the feature angle
