@@ -32,6 +32,11 @@ EXAMPLE_PACKAGES=(
   python3-matplotlib                  # plots of examples/compare_methods.py, solver_race.py, study.py
   tetgen                              # benchmark meshes (docs/global_solver.md)
 )
+# The Python package and its tests (wrappers/python, tests/python): `run` leaves them out too.
+PYTHON_PACKAGES=(
+  python3-dev pybind11-dev            # the extension module
+  python3-numpy python3-meshio python3-pytest
+)
 # For `fuzz` only: clang, its libFuzzer runtime and its OpenMP (the config target links the
 # whole library).
 FUZZ_PACKAGES=(clang libclang-rt-dev libomp-dev)
@@ -50,8 +55,10 @@ install_packages() {  # also installs the packages given as arguments
 }
 
 BUILD_DIR=${PALOVERDE_BUILD_DIR:-build}
-build() {  # builds the targets given as arguments (--target NAME), or everything
-  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
+build() {  # PYTHON=ON|OFF, then the targets given as arguments (--target NAME), or everything
+  local python=$1
+  shift
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DPALOVERDE_PYTHON="$python"
   cmake --build "$BUILD_DIR" -j "$(nproc)" "$@"
 }
 
@@ -59,18 +66,18 @@ case "${1:-}" in
   run)
     install_packages
     # The program and the library it links, not the tests, examples and benchmarks.
-    build --target paloverde_cli
+    build OFF --target paloverde_cli
     "$BUILD_DIR/bin/paloverde" improve examples/data/tangled_cube.vtk -o "$BUILD_DIR/tangled_cube_improved.vtk"
     echo "Improved mesh written to $BUILD_DIR/tangled_cube_improved.vtk"
     ;;
   test)
-    install_packages "${EXAMPLE_PACKAGES[@]}"
-    build
+    install_packages "${EXAMPLE_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
+    build ON
     ctest --test-dir "$BUILD_DIR" --output-on-failure -j "$(nproc)"
     ;;
   build)
-    install_packages "${EXAMPLE_PACKAGES[@]}"
-    build
+    install_packages "${EXAMPLE_PACKAGES[@]}" "${PYTHON_PACKAGES[@]}"
+    build ON
     ;;
   sanitize)
     install_packages

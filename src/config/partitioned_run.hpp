@@ -27,6 +27,9 @@ void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std:
 // input.mesh read, with the fixed flags input.fixed and input.fixed_vertices ask for; the file's
 // own `fixed` field is dropped from the fields written back.
 MeshFile read_input(const RunSpec& spec);
+// Sets the spec's targets (`targets`) on the mesh, a reference read with `read` in the mesh's
+// orientation (`flipped`); `name` names the mesh in errors.
+void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name);
 
 // "file:line:column" (or the flag) where `key` was set; "" for a default.
 std::string origin(const RunSpec& spec, const std::string& key);

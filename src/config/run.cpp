@@ -67,6 +67,23 @@ std::string origin(const RunSpec& spec, const std::string& key) {
     return it == spec.origins.end() ? std::string() : it->second;
 }
 
+void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name) {
+    const TargetOptions targets = spec.targets.options(mesh.has_cells());
+    if (!targets.any()) return;
+    const std::string& path = spec.targets.reference;
+    std::optional<MeshFile> reference;
+    if (!path.empty()) {
+        // Held the way the input is, so that its corners are the input's.
+        read.orientation = flipped ? OrientationMode::Flipped : OrientationMode::AsIs;
+        reference = read_mesh(path, read);
+    }
+    try {
+        set_targets(mesh, targets, reference ? &reference->mesh : nullptr);
+    } catch (const MeshError& e) {
+        throw MeshError("'" + (path.empty() ? name : path) + "': " + e.what());
+    }
+}
+
 MeshFile read_input(const RunSpec& spec) {
     const InputSpec& in = spec.input;
     ReadOptions read;
@@ -99,21 +116,7 @@ MeshFile read_input(const RunSpec& spec) {
     }
     // The flags written with the output are the ones used, not the file's.
     std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
-    if (const TargetOptions targets = spec.targets.options(mesh.has_cells()); targets.any()) {
-        const std::string& path = spec.targets.reference;
-        std::optional<MeshFile> reference;
-        if (!path.empty()) {
-            // Held the way the input is, so that its corners are the input's.
-            ReadOptions as_input = read;
-            as_input.orientation = file.orientation.flipped ? OrientationMode::Flipped : OrientationMode::AsIs;
-            reference = read_mesh(path, as_input);
-        }
-        try {
-            set_targets(mesh, targets, reference ? &reference->mesh : nullptr);
-        } catch (const MeshError& e) {
-            throw MeshError("'" + (path.empty() ? in.mesh : path) + "': " + e.what());
-        }
-    }
+    set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh);
     return file;
 }
 
@@ -344,6 +347,35 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
         r.mesh_written = detail::replace_method(spec.output.mesh, r.name);
         write_mesh(r.mesh_written, file.mesh, write, file.point_fields, file.cell_fields);
     }, result);
+    detail::write_reports(spec, result);
+    return result;
+}
+
+RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks) {
+    if (spec.partitioned() || detail::world_size() > 1)
+        throw ConfigError(detail::origin(spec, "partition.parts"), "partition.parts",
+                          "a mesh in memory is improved serially; partitioned runs read their input from files");
+    std::vector<detail::BuiltQueue> queues;
+    for (const auto& m : spec.methods()) queues.push_back(detail::build_queue_of(m.queue, spec.threads));
+    if (mesh.num_elements() == 0) throw MeshError("the mesh has no elements");
+    // Its own targets (set from C++) are kept; the spec's replace them for the run only.
+    const std::vector<CornerMap> maps(mesh.target_maps().begin(), mesh.target_maps().end());
+    const std::vector<double> volumes(mesh.target_volumes().begin(), mesh.target_volumes().end());
+    detail::set_run_targets(spec, mesh, ReadOptions{}, mesh.elements_flipped(), "the mesh");
+    RunResult result;
+    result.input = "(in memory)";
+    result.kind = mesh.kind();
+    try {
+        detail::run_methods(spec, hooks, mesh, queues, [&](MethodResult& r) {
+            if (spec.output.mesh.empty()) return;
+            r.mesh_written = detail::replace_method(spec.output.mesh, r.name);
+            write_mesh(r.mesh_written, mesh, WriteOptions{.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary});
+        }, result);
+    } catch (...) {
+        maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
+        throw;
+    }
+    maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
     detail::write_reports(spec, result);
     return result;
 }

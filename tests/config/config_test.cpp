@@ -402,6 +402,25 @@ BOOST_AUTO_TEST_CASE(registry_names_build_the_objects) {
     }
 }
 
+BOOST_AUTO_TEST_CASE(a_run_on_a_mesh_in_memory_is_the_run_on_its_file) {
+    const cfg::RunSpec spec = cfg::parse_config("input: {mesh: " + quoted(tangled()) + "}\nthreads: 1\n", "run.yaml");
+    const cfg::RunResult from_file = cfg::run(spec);
+    pv::Mesh mesh = pv::read_mesh(tangled()).mesh;
+    const std::vector<double> input(mesh.coordinates().begin(), mesh.coordinates().end());
+    const cfg::RunResult in_memory = cfg::run(mesh, cfg::parse_config("threads: 1\n", "improve()"));
+    BOOST_TEST(in_memory.exit_code() == 0);
+    BOOST_TEST(in_memory.methods.front().before.inverted == 9);
+    BOOST_TEST(in_memory.methods.front().after.inverted == 0);
+    BOOST_TEST(in_memory.methods.front().worst_after == from_file.methods.front().worst_after);
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (mesh.fixed()[v])
+            for (int d = 0; d < 3; ++d) BOOST_TEST(mesh.coordinates()[3 * v + d] == input[3 * v + d]);
+    BOOST_TEST(!mesh.has_targets());
+    // A partitioned spec needs files.
+    BOOST_CHECK_EXCEPTION(cfg::run(mesh, cfg::parse_config("partition: {parts: 2}\n", "improve()")), cfg::ConfigError,
+                          [](const cfg::ConfigError& e) { return has(e.what(), "serially"); });
+}
+
 BOOST_AUTO_TEST_SUITE_END()
 
 BOOST_AUTO_TEST_SUITE(config_cli)

@@ -14,3 +14,12 @@ run(${CMAKE_COMMAND} -S "${SOURCE_DIR}/tests/install/consumer" -B "${WORK_DIR}/c
     -G "${GENERATOR}" -DCMAKE_PREFIX_PATH=${prefix} -DCMAKE_BUILD_TYPE=Release)
 run(${CMAKE_COMMAND} --build "${WORK_DIR}/consumer")
 run(${CMAKE_COMMAND} -E env LD_LIBRARY_PATH=${prefix}/lib "${WORK_DIR}/consumer/consumer")
+# The Python package, where the build has one: imported from the prefix by the python3 it was built for.
+if(PYTHON)
+  file(GLOB package_dirs "${prefix}/lib/python3*/dist-packages")
+  if(NOT package_dirs)
+    message(FATAL_ERROR "the Python package was not installed under ${prefix}/lib/python3*/dist-packages")
+  endif()
+  run(${CMAKE_COMMAND} -E env PYTHONPATH=${package_dirs} LD_LIBRARY_PATH=${prefix}/lib
+      "${PYTHON}" -c "import paloverde; print('paloverde', paloverde.Mesh)")
+endif()

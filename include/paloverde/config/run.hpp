@@ -105,5 +105,11 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);
 // exceptions, and rank 0 writes the files other than pieces. Hooks are called on every rank
 // that passes them.
 RunResult run(const RunSpec& spec, const RunHooks& hooks = {});
+// The same on a mesh already in memory (the Python package's improve): `input` is not read (the
+// mesh's own fixed vertices stay), targets are set for the run as for a file and the mesh's own
+// put back after it, the last method's result is left in `mesh` (a study's methods each start
+// from the input), output.mesh and the reports are written if set. Serial only: a partitioned
+// spec, or a call under mpirun with more than one rank, throws ConfigError.
+RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks = {});
 
 }  // namespace paloverde::config
