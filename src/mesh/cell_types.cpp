@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include "small_matrix.hpp"
+
 namespace paloverde {
 
 namespace {
@@ -55,29 +57,10 @@ const std::array<double, 3> kIdealWedge[] = {{0, 0, 0}, {0.5, kR3 / 2, 0}, {1, 0
 const std::array<double, 3> kIdealPyramid[] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
                                                {0.5, 0.5, std::numbers::sqrt2 / 2}};
 
-using Matrix = std::array<std::array<double, 3>, 3>;  // m[row][column]
+using Matrix = detail::SmallMatrix;  // m[row][column]
 
-double determinant(const Matrix& m, int d) {
-    if (d == 2) return m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-}
-
-Matrix inverse(const Matrix& m, int d) {
-    const double det = determinant(m, d);
-    Matrix out{};
-    if (d == 2) {
-        out[0][0] = m[1][1] / det, out[0][1] = -m[0][1] / det;
-        out[1][0] = -m[1][0] / det, out[1][1] = m[0][0] / det;
-        return out;
-    }
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
-            out[i][j] = (m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]) / det;
-        }
-    return out;
-}
+using detail::determinant;
+using detail::inverse;
 
 // The frame's edge vectors as columns: m[row = coordinate][column = neighbour].
 Matrix frame_matrix(std::span<const std::array<double, 3>> x, const Frame& f, int d) {

@@ -7,6 +7,7 @@
 
 #include "core/exact_sums.hpp"
 #include "geometry.hpp"
+#include "mesh/small_matrix.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 
@@ -35,27 +36,8 @@ Matrix product(const Matrix& a, const Matrix& b, int d) {
     return out;
 }
 
-double determinant(const Matrix& m, int d) {
-    if (d == 2) return m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    return m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-           m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-}
-
-Matrix inverse(const Matrix& m, int d) {
-    const double det = determinant(m, d);
-    Matrix out{};
-    if (d == 2) {
-        out[0][0] = m[1][1] / det, out[0][1] = -m[0][1] / det;
-        out[1][0] = -m[1][0] / det, out[1][1] = m[0][0] / det;
-        return out;
-    }
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) {
-            const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
-            out[i][j] = (m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]) / det;
-        }
-    return out;
-}
+using detail::determinant;
+using detail::inverse;
 
 Matrix transpose(const Matrix& m, int d) {
     Matrix out{};
