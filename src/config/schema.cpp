@@ -32,7 +32,11 @@ TargetOptions TargetsSpec::options(bool cells) const {
     };
     const bool automatic = std::find(keep.begin(), keep.end(), "auto") != keep.end();
     TargetOptions o = TargetOptions::from(joined(keep), TargetSource::Input);
-    if (automatic && cells) o.aspect = TargetSource::Input;
+    // auto keeps a cell's aspect unless the reference is asked for it.
+    const bool aspect_from_reference =
+        std::find(from_reference.begin(), from_reference.end(), "aspect") != from_reference.end() ||
+        std::find(from_reference.begin(), from_reference.end(), "all") != from_reference.end();
+    if (automatic && cells && !aspect_from_reference) o.aspect = TargetSource::Input;
     if (reference.empty()) return o;
     if (from_reference.empty()) {  // every factor not kept
         for (TargetSource* f : {&o.size, &o.orientation, &o.aspect, &o.skew})

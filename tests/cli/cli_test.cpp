@@ -152,6 +152,10 @@ BOOST_AUTO_TEST_CASE(improve_keeps_what_it_is_told_and_refuses_what_it_does_not_
     BOOST_TEST_REQUIRE(result.exit_code == 0);
     const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
     BOOST_TEST(std::abs(summary["worst_before"].get<double>() - 1.0) < 1e-9);
+    // Asking the reference for the aspect overrides the default that keeps a cell's own.
+    result = run_cli("improve -q " + quoted(input) + " -o " + quoted(dir / "same.vtk") + " --reference " + quoted(input) +
+                     " --set 'targets.from_reference=[size,aspect,skew]' --iterations 1");
+    BOOST_TEST(result.exit_code == 0, result.output);
 }
 
 BOOST_AUTO_TEST_CASE(bad_usage_exits_two) {
