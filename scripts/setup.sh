@@ -17,6 +17,7 @@ cd "$(dirname "$0")/.."
 # Every Debian package the library, the program and the tests need, in one place.
 PACKAGES=(
   build-essential cmake
+  ccache                              # rebuilds (three builds in CI) compile only what changed
   libopenmpi-dev openmpi-bin          # MPI
   libmetis-dev                        # partitioning
   libcgal-dev                         # exact predicates
@@ -54,11 +55,22 @@ install_packages() {  # also installs the packages given as arguments
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 }
 
+# Compiles go through ccache where it is installed. Paths are taken relative to the checkout and
+# the build directory is left out of the hash, so that another clone (CI's) reuses the objects.
+# (Called once the packages are installed.)
+LAUNCHER=()
+use_compiler_cache() {
+  command -v ccache >/dev/null || return 0
+  LAUNCHER=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  export CCACHE_BASEDIR="$PWD" CCACHE_NOHASHDIR=true
+}
+
 BUILD_DIR=${PALOVERDE_BUILD_DIR:-build}
 build() {  # PYTHON=ON|OFF, then the targets given as arguments (--target NAME), or everything
   local python=$1
   shift
-  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DPALOVERDE_PYTHON="$python"
+  use_compiler_cache
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DPALOVERDE_PYTHON="$python" "${LAUNCHER[@]}"
   cmake --build "$BUILD_DIR" -j "$(nproc)" "$@"
 }
 
@@ -81,13 +93,15 @@ case "${1:-}" in
     ;;
   sanitize)
     install_packages
-    cmake --preset sanitize
+    use_compiler_cache
+    cmake --preset sanitize "${LAUNCHER[@]}"
     cmake --build --preset sanitize -j "$(nproc)"
     ctest --preset sanitize
     ;;
   fuzz)
     install_packages "${FUZZ_PACKAGES[@]}"
-    cmake --preset fuzz
+    use_compiler_cache
+    cmake --preset fuzz "${LAUNCHER[@]}"
     cmake --build --preset fuzz -j "$(nproc)"
     ctest --preset fuzz
     ;;

@@ -17,6 +17,7 @@ enum ExitCode : int { kDone = 0, kError = 1, kUsage = 2, kTargetNotReached = 3 }
 void add_quality_command(CLI::App& app, int& exit_code);
 void add_convert_command(CLI::App& app, int& exit_code);
 void add_improve_command(CLI::App& app, int& exit_code);
+void add_morph_command(CLI::App& app, int& exit_code);
 void add_perturb_command(CLI::App& app, int& exit_code);
 void add_run_command(CLI::App& app, int& exit_code);
 void add_partition_command(CLI::App& app, int& exit_code);

@@ -18,19 +18,24 @@ std::string help_of(std::string_view kind, std::string_view name, std::string_vi
 }  // namespace
 
 // `improve` is a one-step run: each flag stands for a config key (docs/cli.md lists them), so
-// `--print-config` turns a command line into the equivalent config file.
-void add_improve_command(CLI::App& app, int& exit_code) {
+// `--print-config` turns a command line into the equivalent config file. `morph` is the same run
+// on a mesh whose boundary a point field moves (input.displacement), the input its reference.
+namespace {
+void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
         std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle;
-        std::string checkpoint, checkpoint_every, resume, keep, reference;
+        std::string checkpoint, checkpoint_every, resume, keep, reference, displacement;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
     };
     auto o = std::make_shared<Options>();
-    CLI::App* cmd = app.add_subcommand(
-        "improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's quality: a run of "
-                   "one improve step, each flag a config key (see --print-config)");
+    CLI::App* cmd =
+        morph ? app.add_subcommand("morph", "Move a mesh's boundary by a displacement field and bring the interior along: "
+                                            "untangled, each element pulled toward its shape and size in the input (the "
+                                            "motion followed in steps where one does not untangle); the flags of improve")
+              : app.add_subcommand("improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's "
+                                              "quality: a run of one improve step, each flag a config key (see --print-config)");
     std::vector<std::string> methods = config::names_of("solver");
     methods.push_back("smart-laplace");  // the spelling of earlier versions
     cmd->add_option("input", o->input, "Mesh to improve (input.mesh)")->required()->type_name("IN");
@@ -79,10 +84,20 @@ void add_improve_command(CLI::App& app, int& exit_code) {
                     "element; auto (the default): a mesh with cells keeps its aspect, one of tetrahedra or triangles "
                     "nothing (docs/targets.md)")
         ->type_name("FACTORS");
-    cmd->add_option("--reference", o->reference,
-                    "targets.reference: a mesh with the input's connectivity whose elements are the targets (every "
-                    "factor --keep does not keep)")
-        ->type_name("REF");
+    if (morph) {
+        cmd->add_option("--displacement", o->displacement,
+                        "input.displacement: the point field of IN (three components) that moves its fixed (boundary) "
+                        "vertices; IN is the reference: every element's size, aspect and skew are taken from it "
+                        "(targets.from_reference; its orientation is not, the motion turns elements)")
+            ->required()
+            ->type_name("FIELD");
+    } else {
+        cmd->add_option("--reference", o->reference,
+                        "targets.reference: a mesh with the input's connectivity whose elements are the targets (every "
+                        "factor --keep does not keep); its coordinates are where the boundary started: when the "
+                        "input does not untangle, the boundary's motion is followed from there in steps")
+            ->type_name("REF");
+    }
     cmd->add_option("--fixed", o->fixed, "input.fixed: auto, boundary, file or none (which vertices stay put)")
         ->type_name("MODE");
     add_orientation_option(*cmd, o->orientation, "input.orientation: ");
@@ -112,7 +127,7 @@ void add_improve_command(CLI::App& app, int& exit_code) {
     stop_on_signals(*cmd);
     cmd->footer("Exit codes: 0 done, 1 error (including \"could not untangle\"), 2 bad usage, 3 --target not reached "
                 "(the mesh is valid), 4 interrupted by Ctrl-C or SIGTERM (the best mesh so far was written).");
-    cmd->callback([o, &exit_code] {
+    cmd->callback([o, &exit_code, morph] {
         std::vector<config::Override> set;
         auto flag = [&](const std::string& key, const std::string& value, const std::string& source, bool literal = false) {
             set.push_back({key + "=" + value, source, literal});
@@ -157,6 +172,15 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         }
         if (!o->keep.empty()) flag("targets.keep", "[" + o->keep + "]", "--keep");
         if (!o->reference.empty()) flag("targets.reference", o->reference, "--reference", true);
+        if (morph) {
+            flag("input.displacement", o->displacement, "--displacement", true);
+            // What the elements do not keep comes from the input, but not the orientation.
+            std::string from;
+            for (const char* factor : {"size", "aspect", "skew"})
+                if (o->keep.find(factor) == std::string::npos && o->keep.find("all") == std::string::npos)
+                    from += (from.empty() ? "" : ",") + std::string(factor);
+            if (!from.empty()) flag("targets.from_reference", "[" + from + "]", "morph");
+        }
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
         if (!o->orientation.empty()) flag("input.orientation", o->orientation, "--orientation");
         if (!o->threads.empty()) flag("threads", o->threads, "--threads");
@@ -178,5 +202,10 @@ void add_improve_command(CLI::App& app, int& exit_code) {
         exit_code = execute(spec, o->report);
     });
 }
+
+}  // namespace
+
+void add_improve_command(CLI::App& app, int& exit_code) { add_improving_command(app, exit_code, false); }
+void add_morph_command(CLI::App& app, int& exit_code) { add_improving_command(app, exit_code, true); }
 
 }  // namespace paloverde::cli

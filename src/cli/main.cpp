@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
     int exit_code = kDone;
     add_quality_command(app, exit_code);
     add_improve_command(app, exit_code);
+    add_morph_command(app, exit_code);
     add_convert_command(app, exit_code);
     add_perturb_command(app, exit_code);
     add_run_command(app, exit_code);

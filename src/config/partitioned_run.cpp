@@ -258,7 +258,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     }
     // Each part's targets from its own elements, the ideal size the whole mesh's (a reference is
     // refused for partitioned runs by RunSpec::check_runnable).
-    set_targets(MeshPart(part), spec.targets.options(part.mesh.has_cells()));
+    set_targets(MeshPart(part), spec.targets.options(part.mesh.has_cells(), !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
     int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;
     MPI_Bcast(&kept, 1, MPI_INT, 0, comm);

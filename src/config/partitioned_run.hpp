@@ -28,8 +28,10 @@ void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std:
 // own `fixed` field is dropped from the fields written back.
 MeshFile read_input(const RunSpec& spec);
 // Sets the spec's targets (`targets`) on the mesh, a reference read with `read` in the mesh's
-// orientation (`flipped`); `name` names the mesh in errors.
-void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name);
+// orientation (`flipped`), or `reference` itself (input.displacement); `name` names the mesh in
+// errors. With a reference, its coordinates too (Mesh::reference_coordinates: morphing).
+void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name,
+                     const Mesh* reference = nullptr);
 
 // "file:line:column" (or the flag) where `key` was set; "" for a default.
 std::string origin(const RunSpec& spec, const std::string& key);

@@ -302,6 +302,10 @@ Tables::Tables() {
                 "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in a shape phase "
                 "after the run with them fixed (feature curves kept, corners fixed; not with direction newton).")
         .object("surface", &GlobalSolverOptions::surface, surface, surface_help)
+        .real("smallest_motion_step", &GlobalSolverOptions::smallest_motion_step,
+              "Morphing (a mesh with reference coordinates: --reference, or morph): when the mesh does not untangle as it "
+              "is, the boundary's motion is followed from the reference in steps, halved down to this fraction of "
+              "the whole motion, in (0, 1].")
         .object("checkpoint", &GlobalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 
@@ -328,6 +332,10 @@ Tables::Tables() {
                 "Boundary vertices: fixed (the fixed flags decide), or slide on the input's boundary in the shape "
                 "sweeps (feature curves kept, corners fixed).")
         .object("surface", &LocalSolverOptions::surface, surface, surface_help)
+        .real("smallest_motion_step", &LocalSolverOptions::smallest_motion_step,
+              "Morphing (a mesh with reference coordinates: --reference, or morph): when the mesh does not untangle as it "
+              "is, the boundary's motion is followed from the reference in steps, halved down to this fraction of "
+              "the whole motion, in (0, 1].")
         .object("checkpoint", &LocalSolverOptions::checkpoint, checkpoint,
                 "Checkpoints of a long run, at sweep boundaries: file, every_iterations, every_seconds; and resume (docs/robustness.md).");
 
@@ -428,6 +436,15 @@ Tables::Tables() {
                         "global", &global_kind, {{"metric"}, "boundary_layer_shape rates with shape_size_orient"},
                         [] { return SolverOptions(GlobalSolverOptions{}); },
                         [](const SolverOptions& o) { return wrappers::boundary_layer_shape(options_as<GlobalSolverOptions>(o, "boundary_layer_shape")); },
+                        global_target});
+    wrappers.push_back({"deforming_domain",
+                        "Morphing: a mesh whose boundary moved from its reference (input.displacement or "
+                        "targets.reference); every element pulled toward its size, aspect and skew in the reference: "
+                        "assess, untangle (following the motion in steps where needed) and improve with the global "
+                        "solver rating shape_size, assess",
+                        "global", &global_kind, {{"metric"}, "deforming_domain rates with shape_size"},
+                        [] { return SolverOptions(GlobalSolverOptions{}); },
+                        [](const SolverOptions& o) { return wrappers::deforming_domain(options_as<GlobalSolverOptions>(o, "deforming_domain")); },
                         global_target});
     wrappers.push_back({"untangle_then_improve",
                         "Assess, untangle, then improve the shape, each with the global solver, assess: the default job.",

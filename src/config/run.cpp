@@ -67,22 +67,57 @@ std::string origin(const RunSpec& spec, const std::string& key) {
     return it == spec.origins.end() ? std::string() : it->second;
 }
 
-void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name) {
-    const TargetOptions targets = spec.targets.options(mesh.has_cells());
-    if (!targets.any()) return;
+void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name,
+                     const Mesh* reference) {
+    const TargetOptions targets = spec.targets.options(mesh.has_cells(), reference != nullptr);
     const std::string& path = spec.targets.reference;
-    std::optional<MeshFile> reference;
+    std::optional<MeshFile> file;
     if (!path.empty()) {
         // Held the way the input is, so that its corners are the input's.
         read.orientation = flipped ? OrientationMode::Flipped : OrientationMode::AsIs;
-        reference = read_mesh(path, read);
+        file = read_mesh(path, read);
+        reference = &file->mesh;
     }
     try {
-        set_targets(mesh, targets, reference ? &reference->mesh : nullptr);
+        if (targets.any()) set_targets(mesh, targets, reference);
+        else if (reference) check_reference(mesh, *reference);
+        if (reference) mesh.set_reference_coordinates({reference->coordinates().begin(), reference->coordinates().end()});
     } catch (const MeshError& e) {
         throw MeshError("'" + (path.empty() ? name : path) + "': " + e.what());
     }
 }
+
+namespace {
+// Morphing (input.displacement): the point field `name` moves the fixed vertices; the mesh as it
+// was is handed back, the reference.
+Mesh displace_fixed_vertices(MeshFile& file, const std::string& name, const std::string& path) {
+    const auto field = std::find_if(file.point_fields.begin(), file.point_fields.end(),
+                                    [&](const Field& f) { return f.name == name; });
+    std::string names;
+    for (const Field& f : file.point_fields) names += (names.empty() ? "" : ", ") + f.name;
+    if (field == file.point_fields.end())
+        throw MeshError("'" + path + "' has no point field '" + name + "' to displace it by (its point fields: " +
+                        (names.empty() ? std::string("none") : names) + ")");
+    Mesh& mesh = file.mesh;
+    if (field->components != 3)
+        throw MeshError("'" + path + "': the displacement field '" + name + "' has " + std::to_string(field->components) +
+                        " components per point; a displacement has 3 (x, y, z)");
+    Mesh reference = mesh;
+    auto xyz = mesh.coordinates();
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const auto i = 3 * static_cast<std::size_t>(v);
+        for (std::size_t c = i; c < i + 3; ++c)
+            if (!std::isfinite(field->values[c]))
+                throw MeshError("'" + path + "': the displacement field '" + name + "' is not finite at vertex " +
+                                std::to_string(v));
+        if (mesh.fixed()[static_cast<std::size_t>(v)])
+            for (std::size_t c = i; c < i + 3; ++c) xyz[c] += field->values[c];
+    }
+    // The output is the moved mesh: a displacement written with it would move it again.
+    file.point_fields.erase(field);
+    return reference;
+}
+}  // namespace
 
 MeshFile read_input(const RunSpec& spec) {
     const InputSpec& in = spec.input;
@@ -116,7 +151,12 @@ MeshFile read_input(const RunSpec& spec) {
     }
     // The flags written with the output are the ones used, not the file's.
     std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
-    set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh);
+    if (in.displacement.empty()) {
+        set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh);
+    } else {
+        const Mesh reference = displace_fixed_vertices(file, in.displacement, in.mesh);
+        set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh, &reference);
+    }
     return file;
 }
 
@@ -358,9 +398,18 @@ RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks) {
     std::vector<detail::BuiltQueue> queues;
     for (const auto& m : spec.methods()) queues.push_back(detail::build_queue_of(m.queue, spec.threads));
     if (mesh.num_elements() == 0) throw MeshError("the mesh has no elements");
+    if (!spec.input.displacement.empty())
+        throw ConfigError(detail::origin(spec, "input.displacement"), "input.displacement",
+                          "a mesh in memory has no point fields: move its boundary and give the undeformed mesh's "
+                          "coordinates as its reference (Mesh::set_reference_coordinates) instead");
     // Its own targets (set from C++) are kept; the spec's replace them for the run only.
     const std::vector<CornerMap> maps(mesh.target_maps().begin(), mesh.target_maps().end());
     const std::vector<double> volumes(mesh.target_volumes().begin(), mesh.target_volumes().end());
+    const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
+    const auto put_back = [&] {
+        maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
+        reference.empty() ? mesh.clear_reference_coordinates() : mesh.set_reference_coordinates(reference);
+    };
     detail::set_run_targets(spec, mesh, ReadOptions{}, mesh.elements_flipped(), "the mesh");
     RunResult result;
     result.input = "(in memory)";
@@ -372,10 +421,10 @@ RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks) {
             write_mesh(r.mesh_written, mesh, WriteOptions{.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary});
         }, result);
     } catch (...) {
-        maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
+        put_back();
         throw;
     }
-    maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
+    put_back();
     detail::write_reports(spec, result);
     return result;
 }

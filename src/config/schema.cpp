@@ -21,7 +21,7 @@ void InputSpec::validate() const {
         if (v < 0) throw OptionError("fixed_vertices must be vertex ids >= 0 (got " + std::to_string(v) + ")");
 }
 
-TargetOptions TargetsSpec::options(bool cells) const {
+TargetOptions TargetsSpec::options(bool cells, bool input_is_reference) const {
     auto joined = [](const std::vector<std::string>& words) {
         std::string out;
         for (const auto& w : words) {
@@ -37,7 +37,7 @@ TargetOptions TargetsSpec::options(bool cells) const {
         std::find(from_reference.begin(), from_reference.end(), "aspect") != from_reference.end() ||
         std::find(from_reference.begin(), from_reference.end(), "all") != from_reference.end();
     if (automatic && cells && !aspect_from_reference) o.aspect = TargetSource::Input;
-    if (reference.empty()) return o;
+    if (reference.empty() && !input_is_reference) return o;
     if (from_reference.empty()) {  // every factor not kept
         for (TargetSource* f : {&o.size, &o.orientation, &o.aspect, &o.skew})
             if (*f == TargetSource::Ideal) *f = TargetSource::Reference;
@@ -57,8 +57,6 @@ TargetOptions TargetsSpec::options(bool cells) const {
 }
 
 void TargetsSpec::validate() const {
-    if (!from_reference.empty() && reference.empty())
-        throw OptionError("from_reference needs a reference mesh (reference: FILE)");
     const bool alone = std::none_of(keep.begin(), keep.end(), [](const std::string& w) { return w == "none" || w == "auto"; });
     if (!alone && keep.size() > 1)
         throw OptionError("keep: auto and none stand alone (got " + std::to_string(keep.size()) + " words)");
@@ -136,6 +134,12 @@ void RunSpec::check_runnable() const {
     if (study.size() > 1 && !output.mesh.empty() && output.mesh.find("{method}") == std::string::npos)
         throw ConfigError(origin_of(*this, "output.mesh"), "output.mesh",
                           "a study writes one mesh per method: put {method} in the name (e.g. out_{method}.vtu)");
+    if (!input.displacement.empty() && !targets.reference.empty())
+        throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
+                          "input.displacement makes the input its own reference: leave targets.reference empty");
+    if (partitioned() && !input.displacement.empty())
+        throw ConfigError(origin_of(*this, "input.displacement"), "input.displacement",
+                          "a displaced mesh's reference is not carried to the ranks' parts yet: run it serially (partition.parts: 1)");
     if (partitioned() && !targets.reference.empty())
         throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
                           "a reference mesh is not carried to the ranks' parts yet: run this mesh serially (partition.parts: 1)");
@@ -166,7 +170,11 @@ const Table<InputSpec>& input_table() {
                      {"flipped", OrientationMode::Flipped}},
                     "The file's element orientation convention. auto: flip every element (two corners swapped) "
                     "when the elements' total signed volume is negative (the mirror convention); as_is: the file's "
-                    "order; flipped: flip every element. Outputs keep the file's order. Pieces decide together.");
+                    "order; flipped: flip every element. Outputs keep the file's order. Pieces decide together.")
+            .text("displacement", &InputSpec::displacement,
+                  "Morphing: the name of a point field of the mesh, three components, that moves its fixed (boundary) "
+                  "vertices; the mesh as read is the reference (targets), and the interior follows it "
+                  "(docs/morphing.md). Empty: none.");
         return t;
     }();
     return t;
@@ -544,7 +552,11 @@ namespace {
 // With size or orientation kept, a solver step whose metric was not set rates with the metric
 // that measures them (TargetOptions::metric): a shape metric alone would let them drift.
 void choose_target_metrics(RunSpec& spec) {
-    const TargetOptions targets = spec.targets.options(false);  // auto keeps no size
+    if (!spec.targets.from_reference.empty() && spec.targets.reference.empty() && spec.input.displacement.empty())
+        throw ConfigError(origin_of(spec, "targets.from_reference"), "targets.from_reference",
+                          "from_reference needs a reference mesh (targets.reference: FILE, or input.displacement)");
+    // auto keeps no size
+    const TargetOptions targets = spec.targets.options(false, !spec.input.displacement.empty());
     if (!targets.any()) return;
     auto choose = [&](std::vector<StepSpec>& queue, const std::string& path) {
         for (std::size_t i = 0; i < queue.size(); ++i) {

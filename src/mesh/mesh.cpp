@@ -175,8 +175,19 @@ void Mesh::clear_targets() noexcept {
     target_volumes_.clear();
 }
 
+void Mesh::set_reference_coordinates(std::vector<double> xyz) {
+    if (xyz.size() != coordinates_.size())
+        throw MeshError("reference coordinates: " + std::to_string(xyz.size() / 3) + " points given for " +
+                        std::to_string(num_vertices()) + " vertices");
+    for (std::size_t i = 0; i < xyz.size(); ++i)
+        if (!std::isfinite(xyz[i]))
+            throw MeshError("reference coordinates: vertex " + std::to_string(i / 3) + " has a coordinate that is not finite");
+    reference_coordinates_ = std::move(xyz);
+}
+
 void Mesh::scale(int exponent) {
     scale_coordinates(coordinates_, exponent);
+    scale_coordinates(reference_coordinates_, exponent);
     const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
     for (double& v : target_volumes_) v = std::ldexp(v, d * exponent);
 }

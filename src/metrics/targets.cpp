@@ -163,6 +163,8 @@ Matrix ideal_frame(const Mesh& mesh, ElementId e, const Matrix& regular, int d) 
     return product(regular, inverse(corner_map(maps[e]), d), d);
 }
 
+}  // namespace
+
 void check_reference(const Mesh& mesh, const Mesh& reference) {
     if (reference.kind() != mesh.kind() || reference.num_vertices() != mesh.num_vertices() ||
         reference.num_cells() != mesh.num_cells() || reference.num_elements() != mesh.num_elements())
@@ -177,8 +179,6 @@ void check_reference(const Mesh& mesh, const Mesh& reference) {
                             "a reference must have the mesh's connectivity");
     }
 }
-
-}  // namespace
 
 TargetOptions TargetOptions::from(std::string_view list, TargetSource source) {
     TargetOptions o;
@@ -263,7 +263,7 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
     }
     if (options.uses(TargetSource::Reference) && !reference)
         throw OptionError("targets from a reference mesh (" + options.list(TargetSource::Reference) +
-                          ") need the reference mesh");
+                          ") need the reference mesh (targets.reference, input.displacement, or Mesh::set_reference_coordinates)");
     if (reference) check_reference(mesh, *reference);
     if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
         throw MeshError("targets are for volume meshes and planar 2D meshes: the triangles do not lie in one plane");

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "paloverde/core/error.hpp"
+#include "boundary_motion.hpp"
 #include "checkpointer.hpp"
 #include "global_phase.hpp"
 #include "run_support.hpp"
@@ -18,6 +19,8 @@
 namespace paloverde {
 
 void GlobalSolverOptions::validate() const {
+    if (!(smallest_motion_step > 0.0 && smallest_motion_step <= 1.0))
+        throw OptionError("smallest_motion_step must be in (0, 1] (got " + std::to_string(smallest_motion_step) + ")");
     objective_options.validate();
     metric_options.validate();
     termination.validate();
@@ -143,6 +146,14 @@ GlobalSolver::GlobalSolver(GlobalSolverOptions options) : options_(std::move(opt
 
 Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
+    if (options_.untangle && detail::has_boundary_motion(part)) {
+        detail::refuse_checkpoints_of_motion(options_.checkpoint);
+        return detail::follow_boundary_motion(part, options_.smallest_motion_step, [&] { return run_once(part); });
+    }
+    return run_once(part);
+}
+
+Summary GlobalSolver::run_once(MeshPart part) {
     if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
     // The sliding run is a shape phase from the valid mesh the first run left: untangling would
     // not keep the boundary on the surface.

@@ -11,6 +11,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
+#include "boundary_motion.hpp"
 #include "checkpointer.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
@@ -20,6 +21,8 @@
 namespace paloverde {
 
 void LocalSolverOptions::validate() const {
+    if (!(smallest_motion_step > 0.0 && smallest_motion_step <= 1.0))
+        throw OptionError("smallest_motion_step must be in (0, 1] (got " + std::to_string(smallest_motion_step) + ")");
     metric_options.validate();
     termination.validate();
     untangle_termination.validate();
@@ -195,6 +198,15 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
+    if (options_.untangle && detail::has_boundary_motion(whole_or_part)) {
+        detail::refuse_checkpoints_of_motion(options_.checkpoint);
+        return detail::follow_boundary_motion(whole_or_part, options_.smallest_motion_step,
+                                              [&] { return run_once(whole_or_part); });
+    }
+    return run_once(whole_or_part);
+}
+
+Summary LocalSolver::run_once(MeshPart whole_or_part) {
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
                                       [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {

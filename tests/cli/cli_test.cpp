@@ -158,6 +158,68 @@ BOOST_AUTO_TEST_CASE(improve_keeps_what_it_is_told_and_refuses_what_it_does_not_
     BOOST_TEST(result.exit_code == 0, result.output);
 }
 
+// Morphing (docs/morphing.md): a point field moves the boundary, the interior follows; no motion
+// hands the input back bit for bit; a field that is missing or is not a displacement is refused.
+BOOST_AUTO_TEST_CASE(morph_moves_the_boundary_by_the_field_and_brings_the_interior_along) {
+    const pv::test::ScratchDir dir("cli_morph");
+    const auto source = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk"));
+    const pv::Mesh& mesh = source.mesh;
+    auto with_field = [&](const std::string& name, int components, auto value) {
+        pv::Field f{"displacement", components, {}};
+        for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+            for (int c = 0; c < components; ++c) f.values.push_back(value(v, c));
+        pv::write_mesh(dir / name, mesh, pv::WriteOptions{}, std::vector<pv::Field>{f});
+        return dir / name;
+    };
+    const auto still = with_field("still.vtk", 3, [](pv::VertexId, int) { return 0.0; });
+    auto result = run_cli("morph -q " + quoted(still) + " -o " + quoted(dir / "still_out.vtk") + " --displacement displacement");
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    const auto in = pv::read_mesh(still), back = pv::read_mesh(dir / "still_out.vtk");
+    BOOST_TEST(std::equal(back.mesh.coordinates().begin(), back.mesh.coordinates().end(), in.mesh.coordinates().begin(),
+                          in.mesh.coordinates().end()));
+
+    // The whole boundary turned by 15 degrees about the tire's axis (z) through its centre.
+    double centre[3] = {0.0, 0.0, 0.0};
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        for (int c = 0; c < 3; ++c) centre[c] += mesh.coordinates()[3 * v + c] / mesh.num_vertices();
+    const double a = 15.0 * 3.14159265358979 / 180.0;
+    auto turn = [&](pv::VertexId v, int c) {
+        const double x = mesh.coordinates()[3 * v] - centre[0], y = mesh.coordinates()[3 * v + 1] - centre[1];
+        return c == 0 ? std::cos(a) * x - std::sin(a) * y - x : c == 1 ? std::sin(a) * x + std::cos(a) * y - y : 0.0;
+    };
+    const auto turned = with_field("turned.vtk", 3, turn);
+    result = run_cli("morph -q " + quoted(turned) + " -o " + quoted(dir / "turned_out.vtk") +
+                     " --displacement displacement --summary " + quoted(dir / "s.json"));
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    const auto summary = nlohmann::json::parse(read_text(dir / "s.json"));
+    BOOST_TEST(summary["inverted_before"].get<long>() > 0);
+    BOOST_TEST(summary["inverted_after"].get<long>() == 0);
+    const auto out = pv::read_mesh(dir / "turned_out.vtk");
+    BOOST_TEST(!out.point_field("displacement"));  // spent, not written to move the mesh again
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        if (!mesh.fixed()[static_cast<std::size_t>(v)]) continue;
+        for (int c = 0; c < 3; ++c)
+            BOOST_TEST(out.mesh.coordinates()[3 * v + c] == mesh.coordinates()[3 * v + c] + turn(v, c));
+    }
+
+    result = run_cli("morph -q " + quoted(turned) + " -o " + quoted(dir / "x.vtk") + " --displacement velocity");
+    BOOST_TEST(result.exit_code == 1);
+    BOOST_TEST(has(result.output, "no point field 'velocity'"), result.output);
+    BOOST_TEST(has(result.output, "displacement"), result.output);
+    const auto scalar = with_field("scalar.vtk", 1, [](pv::VertexId, int) { return 0.0; });
+    result = run_cli("morph -q " + quoted(scalar) + " -o " + quoted(dir / "x.vtk") + " --displacement displacement");
+    BOOST_TEST(result.exit_code == 1);
+    BOOST_TEST(has(result.output, "has 1 components"), result.output);
+    // The displaced input is its own reference: another is refused.
+    std::ofstream(dir / "both.yaml") << "input: {mesh: '" << turned.string() << "', displacement: displacement}\n"
+                                     << "targets: {reference: '" << turned.string() << "'}\noutput: {mesh: '"
+                                     << (dir / "x.vtk").string() << "'}\n";
+    result = run_cli("run " + quoted(dir / "both.yaml"));
+    BOOST_TEST(result.exit_code == 2);
+    BOOST_TEST(has(result.output, "its own reference"), result.output);
+    BOOST_TEST(!std::filesystem::exists(dir / "x.vtk"));
+}
+
 BOOST_AUTO_TEST_CASE(bad_usage_exits_two) {
     BOOST_TEST(run_cli("").exit_code == 2);
     BOOST_TEST(run_cli("frobnicate").exit_code == 2);

@@ -66,4 +66,8 @@ InstructionQueue boundary_layer_shape(GlobalSolverOptions options) {
     return with_targets(TargetOptions::from("size,aspect,orientation"), std::move(options));
 }
 
+InstructionQueue deforming_domain(GlobalSolverOptions options) {
+    return with_targets(TargetOptions::from("size,aspect,skew", TargetSource::Reference), std::move(options));
+}
+
 }  // namespace paloverde::wrappers

@@ -46,6 +46,9 @@ struct InputSpec {
     FixedVertices fixed = FixedVertices::Auto;
     std::vector<long long> fixed_vertices;  // fixed as well: 0-based vertex ids in file order
     OrientationMode orientation = OrientationMode::Auto;  // the file's convention (orientation.hpp)
+    // Morphing: a point field of the mesh (three components) that moves its fixed vertices; the mesh
+    // as read is then the reference (targets.reference) and the interior follows (docs/morphing.md).
+    std::string displacement;
     void validate() const;                // throws OptionError naming the field
 };
 
@@ -59,8 +62,9 @@ struct TargetsSpec {
     std::vector<std::string> keep{"auto"};    // size, orientation, aspect, skew, all, auto, none
     std::string reference;                    // a mesh with the input's connectivity
     std::vector<std::string> from_reference;  // with a reference; empty: every factor not kept
-    // The targets for a mesh with cells (`cells`) or without.
-    TargetOptions options(bool cells) const;
+    // The targets for a mesh with cells (`cells`) or without; `input_is_reference`: the input as
+    // read is the reference (input.displacement).
+    TargetOptions options(bool cells, bool input_is_reference = false) const;
     void validate() const;
 };
 

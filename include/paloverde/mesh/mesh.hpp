@@ -95,9 +95,18 @@ public:
     // reverses orientation, or whose volume is not a finite positive number.
     void set_targets(std::vector<CornerMap> maps, std::vector<double> volumes);
     void clear_targets() noexcept;
-    // Multiplies every coordinate by 2^exponent, and the target volumes with them: exact, and
-    // harmless to orientation (unit_scale_exponent).
+    // Multiplies every coordinate by 2^exponent, and the target volumes and reference
+    // coordinates with them: exact, and harmless to orientation (unit_scale_exponent).
     void scale(int exponent);
+
+    // Morphing: where the vertices were before the boundary moved (the undeformed mesh), three
+    // coordinates per vertex; empty when the mesh carries no motion. Solvers that untangle apply
+    // the motion of the vertices that do not move freely in steps from there when the mesh as it
+    // is does not untangle (solvers/boundary_motion.hpp). Throws MeshError for a wrong size or a
+    // coordinate that is not finite.
+    std::span<const double> reference_coordinates() const noexcept { return reference_coordinates_; }
+    void set_reference_coordinates(std::vector<double> xyz);
+    void clear_reference_coordinates() noexcept { reference_coordinates_.clear(); }
 
     // Vertex -> incident elements, compressed rows.
     std::span<const ElementId> elements_of(VertexId v) const noexcept {
@@ -193,6 +202,7 @@ private:
     std::vector<std::uint8_t> corner_map_;
     std::vector<CornerMap> target_maps_;
     std::vector<double> target_volumes_;
+    std::vector<double> reference_coordinates_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

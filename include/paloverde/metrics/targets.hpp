@@ -59,5 +59,7 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted 
 // mesh that is not planar.
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale);
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference = nullptr);
+// Throws MeshError unless `reference` has the mesh's element kind, counts and connectivity.
+void check_reference(const Mesh& mesh, const Mesh& reference);
 
 }  // namespace paloverde

@@ -105,6 +105,10 @@ struct GlobalSolverOptions {
     Boundary boundary = Boundary::Fixed;
     SurfaceOptions surface;           // with slide: the feature angle
     int threads = 0;                  // 0: OpenMP's default; results do not depend on it
+    // Morphing (Mesh::reference_coordinates): when the mesh as it is does not untangle, the
+    // boundary's motion is followed from the reference in steps, halved down to this fraction of
+    // the whole motion before giving up; in (0, 1].
+    double smallest_motion_step = 1.0 / 64.0;
     CheckpointOptions checkpoint;     // periodic checkpoints, resuming (checkpoint.hpp)
 
     void validate() const;  // throws OptionError
@@ -120,6 +124,7 @@ public:
     Summary improve(MeshPart part) override;
 
 private:
+    Summary run_once(MeshPart part);  // without following a boundary motion in steps
     GlobalSolverOptions options_;
 };
 

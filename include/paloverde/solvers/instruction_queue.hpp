@@ -39,8 +39,9 @@ public:
     InstructionQueue& improve(std::unique_ptr<Solver> solver);
     InstructionQueue& improve(std::string label, std::unique_ptr<Solver> solver);
     // Sets the mesh's targets (metrics/targets.hpp) from its coordinates at this point of the
-    // queue: the steps after it rate every element against its target. The queue hands the mesh
-    // back with the targets it had before.
+    // queue, and the factors from a reference from its reference coordinates
+    // (Mesh::reference_coordinates): the steps after it rate every element against its target.
+    // The queue hands the mesh back with the targets it had before.
     InstructionQueue& targets(TargetOptions options);
     // The steps of `other`, after these (its solvers are shared, not copied).
     InstructionQueue& append(const InstructionQueue& other);

@@ -52,6 +52,10 @@ struct LocalSolverOptions {
     Boundary boundary = Boundary::Fixed;
     SurfaceOptions surface;          // with slide: the feature angle
     int threads = 0;                 // 0: OpenMP's default; results do not depend on it
+    // Morphing (Mesh::reference_coordinates): when the mesh as it is does not untangle, the
+    // boundary's motion is followed from the reference in steps, halved down to this fraction of
+    // the whole motion before giving up; in (0, 1].
+    double smallest_motion_step = 1.0 / 64.0;
     CheckpointOptions checkpoint;    // periodic checkpoints (at sweep boundaries), resuming
 
     void validate() const;  // throws OptionError naming the field
@@ -68,6 +72,7 @@ public:
     Summary improve(MeshPart part) override;
 
 private:
+    Summary run_once(MeshPart whole_or_part);  // without following a boundary motion in steps
     // What a sweep needs of the mesh: the elements whose statistics this process counts, the
     // reductions and ghost updates (no-ops serially), the colors of the vertices it moves.
     struct Domain {

@@ -32,5 +32,12 @@ InstructionQueue size_adapt_shape(GlobalSolverOptions options = {});
 // angles are made ideal (Mesquite's viscous-CFD job for tetrahedra; the same for hexahedra,
 // wedges and quadrilaterals, whose ideal angles are right angles). The layers keep their heights.
 InstructionQueue boundary_layer_shape(GlobalSolverOptions options = {});
+// Mesquite's deforming-domain job (morphing): a mesh whose boundary moved away from its reference
+// coordinates (Mesh::set_reference_coordinates: the undeformed mesh) with the interior left
+// behind. Every element is pulled toward the size, aspect and skew it has in the reference, not its
+// orientation (the motion turns elements); the motion is followed in steps where one run does not
+// untangle (options.smallest_motion_step). Throws OptionError on a mesh without reference
+// coordinates.
+InstructionQueue deforming_domain(GlobalSolverOptions options = {});
 
 }  // namespace paloverde::wrappers

@@ -1,0 +1,35 @@
+#pragma once
+// Morphing: a mesh whose boundary moved away from its reference (undeformed) position
+// (Mesh::reference_coordinates) while the interior stayed behind. A solver that untangles runs on
+// the mesh as it is; when that leaves inverted elements, it starts again from the reference, which
+// is valid, and moves the boundary there in fractions of the whole motion (the classic
+// incremental scheme), each fraction untangled and improved before the next, its size chosen as
+// it goes: halved when a fraction does not untangle, doubled after one that does.
+#include <functional>
+
+#include "paloverde/parallel/mesh_part.hpp"
+#include "paloverde/solvers/checkpoint.hpp"
+#include "paloverde/solvers/summary.hpp"
+
+namespace paloverde::detail {
+
+// The part carries a motion: reference coordinates from which a vertex that does not move
+// freely (fixed, or sliding on the boundary) has moved. Collective.
+bool has_boundary_motion(MeshPart part);
+
+// Runs `solve` (one whole run of a solver on the part as it is) and, if it leaves inverted
+// elements or less than half the reference's worst quality, follows the motion in steps down to
+// `smallest_fraction` of it, a step accepted when it leaves a valid mesh with at least half the
+// worst quality of the step before (any valid one at the smallest step); the better of the first
+// run and the steps is kept. A motion that cannot be
+// followed ends with the boundary where it was given and the fewer inverted elements of the first
+// run and of a last run from the furthest valid step, reason CannotUntangle and a message that
+// says how far the motion was followed. One Summary of every run: before is the mesh as given.
+// Collective.
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const std::function<Summary()>& solve);
+
+// Throws OptionError for checkpoints on a part that carries a motion: a run in steps is several
+// solver runs, and a checkpoint holds one.
+void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint);
+
+}  // namespace paloverde::detail

@@ -1,0 +1,178 @@
+// Morphing (solvers/boundary_motion.hpp): a mesh whose boundary moved away from its reference
+// coordinates, the interior left behind. The solvers follow a motion a valid mesh exists for, in
+// steps where one run does not untangle; an impossible motion ends with the boundary where it was
+// given, the fewest inverted elements found and a message that says so; no motion changes nothing.
+#include <boost/test/unit_test.hpp>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/core/error.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/wrappers.hpp"
+
+namespace pv = paloverde;
+
+namespace {
+
+constexpr int kSectors = 24, kRings = 6;
+constexpr double kInner = 0.5, kOuter = 1.5;
+
+// A planar ring of triangles between two circles, the boundary fixed.
+pv::Mesh ring() {
+    std::vector<double> xyz;
+    for (int r = 0; r <= kRings; ++r)
+        for (int s = 0; s < kSectors; ++s) {
+            const double radius = kInner + (kOuter - kInner) * r / kRings;
+            const double angle = 2.0 * std::numbers::pi * s / kSectors;
+            xyz.insert(xyz.end(), {radius * std::cos(angle), radius * std::sin(angle), 0.0});
+        }
+    auto id = [](int r, int s) { return static_cast<pv::VertexId>(r * kSectors + (s % kSectors)); };
+    std::vector<pv::VertexId> triangles;
+    for (int r = 0; r < kRings; ++r)
+        for (int s = 0; s < kSectors; ++s)
+            triangles.insert(triangles.end(), {id(r, s), id(r, s + 1), id(r + 1, s + 1), id(r, s), id(r + 1, s + 1), id(r + 1, s)});
+    pv::Mesh mesh(pv::ElementKind::Triangle, std::move(xyz), std::move(triangles));
+    mesh.fix_boundary();
+    return mesh;
+}
+
+// The ring with its reference coordinates, the inner circle's vertices moved by `move`.
+template <class Move>
+pv::Mesh moved_ring(Move move) {
+    pv::Mesh mesh = ring();
+    mesh.set_reference_coordinates({mesh.coordinates().begin(), mesh.coordinates().end()});
+    auto xyz = mesh.coordinates();
+    for (int s = 0; s < kSectors; ++s) move(&xyz[3 * static_cast<std::size_t>(s)]);
+    return mesh;
+}
+
+pv::Mesh turned_ring(double degrees) {
+    const double a = degrees * std::numbers::pi / 180.0;
+    return moved_ring([a](double* p) {
+        const double x = p[0], y = p[1];
+        p[0] = std::cos(a) * x - std::sin(a) * y;
+        p[1] = std::sin(a) * x + std::cos(a) * y;
+    });
+}
+
+long inverted(const pv::Mesh& mesh) { return pv::QualityAssessor({"aspect_ratio"}).assess(mesh).inverted; }
+
+// The fixed vertices are exactly where the motion put them.
+void check_boundary_kept(const pv::Mesh& given, const pv::Mesh& result) {
+    for (pv::VertexId v = 0; v < given.num_vertices(); ++v) {
+        if (!given.fixed()[static_cast<std::size_t>(v)]) continue;
+        for (int c = 0; c < 3; ++c) BOOST_TEST(result.coordinates()[3 * v + c] == given.coordinates()[3 * v + c]);
+    }
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(morph)
+
+BOOST_AUTO_TEST_CASE(a_turned_inner_circle_is_followed_by_the_global_and_the_local_solver) {
+    const pv::Mesh given = turned_ring(120.0);
+    BOOST_TEST_REQUIRE(inverted(given) > 0);
+    pv::Mesh global_mesh = given;
+    const pv::Summary global = pv::GlobalSolver().improve(global_mesh);
+    BOOST_TEST_INFO(global.message);
+    BOOST_TEST(global.valid());
+    BOOST_TEST(inverted(global_mesh) == 0);
+    check_boundary_kept(given, global_mesh);
+
+    pv::LocalSolverOptions local_options;
+    local_options.termination.max_iterations = 50;
+    pv::Mesh local_mesh = given;
+    const pv::Summary local = pv::LocalSolver(local_options).improve(local_mesh);
+    BOOST_TEST_INFO(local.message);
+    BOOST_TEST(local.valid());
+    BOOST_TEST(inverted(local_mesh) == 0);
+    check_boundary_kept(given, local_mesh);
+}
+
+BOOST_AUTO_TEST_CASE(the_deforming_domain_job_rates_against_the_undeformed_mesh) {
+    const pv::Mesh given = turned_ring(120.0);
+    pv::Mesh mesh = given;
+    const pv::QueueResult result = pv::wrappers::deforming_domain().run(mesh);
+    BOOST_TEST_INFO(result.message);
+    BOOST_TEST(result.success);
+    const auto& before = std::get<pv::QualityReport>(result.steps.front().outcome);
+    const auto& after = std::get<pv::QualityReport>(result.steps.back().outcome);
+    BOOST_TEST(before.inverted > 0);
+    BOOST_TEST(after.inverted == 0);
+    check_boundary_kept(given, mesh);
+    BOOST_TEST(!mesh.has_targets());  // handed back as it came
+    pv::Mesh plain = ring();
+    BOOST_CHECK_THROW(pv::wrappers::deforming_domain().run(plain), pv::OptionError);
+}
+
+BOOST_AUTO_TEST_CASE(a_motion_one_run_cannot_untangle_is_followed_in_steps) {
+    // Nearly a turn and a half, on an untangling budget of 5 iterations: one run from the interior
+    // left behind does not untangle it, runs from the previous step do.
+    const pv::Mesh given = turned_ring(500.0);
+    pv::Mesh mesh = given;
+    pv::GlobalSolverOptions options;
+    options.untangle_termination.max_iterations = 5;
+    const pv::Summary s = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_INFO(s.message);
+    BOOST_TEST(s.valid());
+    BOOST_TEST(s.message.find("steps") != std::string::npos);
+    BOOST_TEST(s.before.inverted == inverted(given));
+    check_boundary_kept(given, mesh);
+}
+
+BOOST_AUTO_TEST_CASE(an_impossible_motion_keeps_the_given_boundary_and_says_it_needs_remeshing) {
+    // The inner circle pushed through the outer one: no mesh of this boundary is valid.
+    const pv::Mesh given = moved_ring([](double* p) { p[0] += 1.6; });
+    pv::Mesh mesh = given;
+    pv::GlobalSolverOptions options;
+    options.untangle_termination.max_iterations = 50;
+    options.termination.max_iterations = 20;
+    options.smallest_motion_step = 1.0 / 8.0;
+    const pv::Summary s = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_INFO(s.message);
+    BOOST_TEST(!s.valid());
+    BOOST_TEST((s.reason == pv::TerminationReason::CannotUntangle));
+    BOOST_TEST(s.message.find("remeshing") != std::string::npos);
+    BOOST_TEST(s.after.inverted == inverted(mesh));
+    BOOST_TEST(s.after.inverted <= s.before.inverted);
+    check_boundary_kept(given, mesh);
+}
+
+BOOST_AUTO_TEST_CASE(reference_coordinates_where_the_boundary_is_change_nothing) {
+    pv::Mesh plain = turned_ring(0.0);
+    plain.clear_reference_coordinates();
+    // The interior disturbed, the boundary where the reference has it: no motion to follow.
+    auto xyz = plain.coordinates();
+    for (std::size_t i = 3 * kSectors; i < xyz.size() - 3 * kSectors; i += 3) xyz[i] += 0.02 * std::sin(7.0 * i);
+    pv::Mesh with_reference = plain;
+    const pv::Mesh reference = ring();
+    with_reference.set_reference_coordinates({reference.coordinates().begin(), reference.coordinates().end()});
+    const pv::Summary a = pv::GlobalSolver().improve(plain);
+    const pv::Summary b = pv::GlobalSolver().improve(with_reference);
+    BOOST_TEST(a.iterations == b.iterations);
+    for (std::size_t i = 0; i < xyz.size(); ++i) BOOST_TEST(plain.coordinates()[i] == with_reference.coordinates()[i]);
+}
+
+BOOST_AUTO_TEST_CASE(bad_reference_coordinates_and_steps_are_refused) {
+    pv::Mesh mesh = ring();
+    BOOST_CHECK_THROW(mesh.set_reference_coordinates(std::vector<double>(9, 0.0)), pv::MeshError);
+    std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
+    xyz[4] = std::nan("");
+    BOOST_CHECK_THROW(mesh.set_reference_coordinates(xyz), pv::MeshError);
+    pv::GlobalSolverOptions global;
+    global.smallest_motion_step = 0.0;
+    BOOST_CHECK_THROW(pv::GlobalSolver{global}, pv::OptionError);
+    pv::LocalSolverOptions local;
+    local.smallest_motion_step = 1.5;
+    BOOST_CHECK_THROW(pv::LocalSolver{local}, pv::OptionError);
+    // A run in steps is several runs: one checkpoint cannot hold it.
+    pv::Mesh moved = turned_ring(30.0);
+    global = {};
+    global.checkpoint.file = "never_written.ckpt";
+    BOOST_CHECK_THROW(pv::GlobalSolver(global).improve(moved), pv::OptionError);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
