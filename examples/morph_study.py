@@ -6,7 +6,8 @@ displacement field on their boundary, and `paloverde morph` on each; one CSV row
                                              [--threads 1] [--work DIR] [CASE ...]
 
 Cases: hole-30, hole-60, hole-90 (a block-shaped hole in a box of tetrahedra, turned about z),
-beam-45, beam-90 (a beam of tetrahedra bent in an arc, one end held), ellipse-30, ellipse-60 (a
+beam-45, beam-90 (a beam of tetrahedra bent in an arc, one end held), hexbeam-90 (the same beam of
+hexahedra), ellipse-30, ellipse-60 (a
 planar elliptic hole of triangles, pitched). Quality is relative to the undeformed mesh: the mean
 ratio of A W^-1, W the element in the input (1: the same shape; orientation and size ignored).
 """
@@ -63,6 +64,9 @@ def case(name, work):
     elif shape == "beam":
         m = gmsh("beam.geo", 3, os.path.join(work, "beam.msh"))
         cells, d = [c for c in m.cells if c.type == "tetra"], bent(m.points, degrees)
+    elif shape == "hexbeam":
+        m = gmsh("hexbeam.geo", 3, os.path.join(work, "hexbeam.msh"))
+        cells, d = [c for c in m.cells if c.type == "hexahedron"], bent(m.points, degrees)
     elif shape == "ellipse":
         m = gmsh("ellipse.geo", 2, os.path.join(work, "ellipse.msh"))
         p = m.points
@@ -79,7 +83,7 @@ def case(name, work):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("cases", nargs="*",
-                        default=["hole-30", "hole-60", "hole-90", "beam-45", "beam-90", "ellipse-30", "ellipse-60"])
+                        default=["hole-30", "hole-60", "hole-90", "beam-45", "beam-90", "hexbeam-90", "ellipse-30", "ellipse-60"])
     parser.add_argument("--paloverde", default="build/bin/paloverde")
     parser.add_argument("--csv", default=os.path.join(HERE, "..", "docs", "data", "morph.csv"))
     parser.add_argument("--threads", default="1")

@@ -28,6 +28,88 @@ void place(std::span<double> xyz, std::span<const double> free_from, std::span<c
             xyz[c] = !driven[v] ? free_from[c] : fraction == 1.0 ? given[c] : reference[c] + fraction * (given[c] - reference[c]);
 }
 
+// The free vertices carried along with the driven ones from `from` to `to` (whose driven vertices
+// are where they go): the harmonic extension of the driven vertices' displacement, each edge
+// weighted by its inverse squared length at `from`, so that small elements (by a moving wall, where
+// meshes are fine) move nearly rigidly and large ones take up the deformation. A predictor: the
+// solver untangles and improves from there. Conjugate gradients, Jacobi preconditioned.
+void carry_free_vertices(const Mesh& mesh, const std::vector<std::uint8_t>& driven, std::span<const double> from,
+                         std::span<double> to) {
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    std::vector<std::size_t> offsets{0};
+    std::vector<VertexId> neighbours, row;
+    std::vector<double> weights;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        row.clear();
+        for (ElementId e : mesh.elements_of(v))
+            for (VertexId u : mesh.element(e))
+                if (u != v) row.push_back(u);
+        std::sort(row.begin(), row.end());
+        row.erase(std::unique(row.begin(), row.end()), row.end());
+        for (VertexId u : row) {
+            double length2 = 0.0;
+            for (std::size_t c = 0; c < 3; ++c) {
+                const double d = from[3 * static_cast<std::size_t>(u) + c] - from[3 * static_cast<std::size_t>(v) + c];
+                length2 += d * d;
+            }
+            neighbours.push_back(u);
+            weights.push_back(length2 > 0.0 ? 1.0 / length2 : 0.0);
+        }
+        offsets.push_back(neighbours.size());
+    }
+    std::vector<double> diagonal(n, 0.0);
+    for (std::size_t v = 0; v < n; ++v)
+        for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k) diagonal[v] += weights[k];
+    // (A x)_v over the free vertices: the weighted Laplacian with the driven ones held at zero.
+    auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
+        for (std::size_t v = 0; v < n; ++v) {
+            if (driven[v]) continue;
+            double sum = diagonal[v] * x[v];
+            for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k)
+                if (!driven[static_cast<std::size_t>(neighbours[k])]) sum -= weights[k] * x[static_cast<std::size_t>(neighbours[k])];
+            y[v] = sum;
+        }
+    };
+    std::vector<double> x(n), r(n), z(n), p(n), q(n);
+    for (std::size_t c = 0; c < 3; ++c) {
+        double rz = 0.0, bb = 0.0;
+        for (std::size_t v = 0; v < n; ++v) {
+            x[v] = r[v] = z[v] = p[v] = q[v] = 0.0;
+            if (driven[v] || diagonal[v] == 0.0) continue;
+            for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k) {
+                const auto u = static_cast<std::size_t>(neighbours[k]);
+                if (driven[u]) r[v] += weights[k] * (to[3 * u + c] - from[3 * u + c]);
+            }
+            z[v] = p[v] = r[v] / diagonal[v];
+            rz += r[v] * z[v];
+            bb += r[v] * r[v];
+        }
+        for (std::size_t iteration = 0; iteration < 4 * n && rz > 0.0; ++iteration) {
+            apply(p, q);
+            double pq = 0.0;
+            for (std::size_t v = 0; v < n; ++v)
+                if (!driven[v]) pq += p[v] * q[v];
+            if (!(pq > 0.0)) break;
+            const double alpha = rz / pq;
+            double next = 0.0, rr = 0.0;
+            for (std::size_t v = 0; v < n; ++v) {
+                if (driven[v] || diagonal[v] == 0.0) continue;
+                x[v] += alpha * p[v];
+                r[v] -= alpha * q[v];
+                z[v] = r[v] / diagonal[v];
+                next += r[v] * z[v];
+                rr += r[v] * r[v];
+            }
+            if (rr <= 1e-24 * bb) break;
+            for (std::size_t v = 0; v < n; ++v)
+                if (!driven[v]) p[v] = z[v] + next / rz * p[v];
+            rz = next;
+        }
+        for (std::size_t v = 0; v < n; ++v)
+            if (!driven[v]) to[3 * v + c] = from[3 * v + c] + x[v];
+    }
+}
+
 // `run`'s work added to `total`'s, its history after total's.
 void add_work(Summary& total, const Summary& run) {
     const int first = total.history.empty() ? 0 : total.history.back().iteration + 1;
@@ -79,6 +161,19 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     const auto xyz = mesh.coordinates();
     const std::vector<double> given(xyz.begin(), xyz.end());
     const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
+    const std::vector<std::uint8_t> driven = driven_vertices(mesh);
+    // Serially, the interior is carried along with the boundary from the reference (a part alone
+    // would need the whole mesh's system): the first run starts from there if that inverts fewer
+    // elements than the interior where it was given.
+    const bool carry = part.distributed() == nullptr;
+    if (carry) {
+        std::vector<double> carried = given;
+        carry_free_vertices(mesh, driven, reference, carried);
+        const QualityAssessor count({"aspect_ratio"});
+        const long inverted_given = count.assess(part).inverted;
+        std::copy(carried.begin(), carried.end(), xyz.begin());
+        if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz.begin());
+    }
     Summary total = solve();
     if (total.reason == TerminationReason::Interrupted) return total;
     // A run is good enough when it keeps at least half the worst quality of where it started
@@ -98,7 +193,6 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     // The first run's result: kept if the steps do no better.
     const std::vector<double> first(xyz.begin(), xyz.end());
     const Summary first_run = total;
-    const std::vector<std::uint8_t> driven = driven_vertices(mesh);
     std::vector<double> valid = reference;  // the furthest accepted step's mesh; the reference at fraction 0
     double done = 0.0, step = 0.5;
     int steps = 0;
@@ -106,6 +200,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     while (done < 1.0 && step >= smallest_fraction) {
         const double next = std::min(1.0, done + step);
         place(xyz, valid, reference, given, driven, next);
+        if (carry) carry_free_vertices(mesh, driven, valid, xyz);
         last = solve();
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
@@ -114,7 +209,8 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
             valid.assign(xyz.begin(), xyz.end());
             done = next;
             ++steps;
-            step *= 2.0;
+            // Never past the end: a step halved after this one must try a nearer fraction.
+            step = std::min(2.0 * step, 1.0 - done);
             floor = 0.5 * last.worst_after;
         } else {
             step /= 2.0;
@@ -141,6 +237,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
         // The boundary where it was given, from the furthest valid step.
         if (done > 0.0) {
             place(xyz, valid, reference, given, driven, 1.0);
+            if (carry) carry_free_vertices(mesh, driven, valid, xyz);
             last = solve();
             add_work(total, last);
         }

@@ -1,10 +1,11 @@
 #pragma once
 // Morphing: a mesh whose boundary moved away from its reference (undeformed) position
-// (Mesh::reference_coordinates) while the interior stayed behind. A solver that untangles runs on
-// the mesh as it is; when that leaves inverted elements, it starts again from the reference, which
-// is valid, and moves the boundary there in fractions of the whole motion (the classic
-// incremental scheme), each fraction untangled and improved before the next, its size chosen as
-// it goes: halved when a fraction does not untangle, doubled after one that does.
+// (Mesh::reference_coordinates) while the interior stayed behind. The interior is carried along
+// (a harmonic extension of the boundary's displacement) and a solver that untangles runs once;
+// when that fails or loses too much quality, it starts again from the reference, which is valid,
+// and moves the boundary there in fractions of the whole motion (the classic incremental scheme),
+// each fraction carried, untangled and improved before the next, its size chosen as it goes:
+// halved when a fraction fails, doubled after one that is kept (docs/morphing.md).
 #include <functional>
 
 #include "paloverde/parallel/mesh_part.hpp"
@@ -17,7 +18,8 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
-// Runs `solve` (one whole run of a solver on the part as it is) and, if it leaves inverted
+// Runs `solve` (one whole run of a solver on the part; serially from the interior carried along
+// when that inverts fewer elements than the interior as given) and, if it leaves inverted
 // elements or less than half the reference's worst quality, follows the motion in steps down to
 // `smallest_fraction` of it, a step accepted when it leaves a valid mesh with at least half the
 // worst quality of the step before (any valid one at the smallest step); the better of the first
