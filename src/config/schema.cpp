@@ -38,22 +38,29 @@ TargetOptions TargetsSpec::options(bool cells, bool input_is_reference) const {
         std::find(from_reference.begin(), from_reference.end(), "all") != from_reference.end();
     if (automatic && cells && !aspect_from_reference) o.aspect = TargetSource::Input;
     if (reference.empty() && !input_is_reference) return o;
+    // The input as read is the reference: what it keeps, it keeps from there (not from the moved mesh).
+    const auto kept_from_reference = [&] {
+        if (input_is_reference)
+            for (TargetSource* f : {&o.size, &o.orientation, &o.aspect, &o.skew})
+                if (*f == TargetSource::Input) *f = TargetSource::Reference;
+        return o;
+    };
     if (from_reference.empty()) {  // every factor not kept
         for (TargetSource* f : {&o.size, &o.orientation, &o.aspect, &o.skew})
             if (*f == TargetSource::Ideal) *f = TargetSource::Reference;
-        return o;
+        return kept_from_reference();
     }
     const TargetOptions r = TargetOptions::from(joined(from_reference), TargetSource::Reference);
     const TargetSource* from[] = {&r.size, &r.orientation, &r.aspect, &r.skew};
     TargetSource* to[] = {&o.size, &o.orientation, &o.aspect, &o.skew};
     for (int i = 0; i < 4; ++i) {
         if (*from[i] != TargetSource::Reference) continue;
-        if (*to[i] == TargetSource::Input)
+        if (*to[i] == TargetSource::Input && !input_is_reference)
             throw OptionError("a factor cannot be both kept and taken from the reference (keep: " + joined(keep) +
                               "; from_reference: " + joined(from_reference) + ")");
         *to[i] = TargetSource::Reference;
     }
-    return o;
+    return kept_from_reference();
 }
 
 void TargetsSpec::validate() const {

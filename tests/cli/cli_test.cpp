@@ -202,6 +202,11 @@ BOOST_AUTO_TEST_CASE(morph_moves_the_boundary_by_the_field_and_brings_the_interi
             BOOST_TEST(out.mesh.coordinates()[3 * v + c] == mesh.coordinates()[3 * v + c] + turn(v, c));
     }
 
+    // What --keep names comes from the input as read (the reference), not from the moved mesh.
+    result = run_cli("morph -q " + quoted(turned) + " -o " + quoted(dir / "kept.vtk") +
+                     " --displacement displacement --keep orientation --summary " + quoted(dir / "k.json"));
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    BOOST_TEST(nlohmann::json::parse(read_text(dir / "k.json"))["inverted_after"].get<long>() == 0);
     result = run_cli("morph -q " + quoted(turned) + " -o " + quoted(dir / "x.vtk") + " --displacement velocity");
     BOOST_TEST(result.exit_code == 1);
     BOOST_TEST(has(result.output, "no point field 'velocity'"), result.output);
