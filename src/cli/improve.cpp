@@ -174,12 +174,8 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         if (!o->reference.empty()) flag("targets.reference", o->reference, "--reference", true);
         if (morph) {
             flag("input.displacement", o->displacement, "--displacement", true);
-            // What the elements do not keep comes from the input, but not the orientation.
-            std::string from;
-            for (const char* factor : {"size", "aspect", "skew"})
-                if (o->keep.find(factor) == std::string::npos && o->keep.find("all") == std::string::npos)
-                    from += (from.empty() ? "" : ",") + std::string(factor);
-            if (!from.empty()) flag("targets.from_reference", "[" + from + "]", "morph");
+            // Everything but the orientation comes from the input as read (--keep may add it).
+            flag("targets.from_reference", "[size,aspect,skew]", "morph");
         }
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
         if (!o->orientation.empty()) flag("input.orientation", o->orientation, "--orientation");

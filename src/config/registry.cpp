@@ -198,7 +198,8 @@ Tables::Tables() {
               "Converged when the worst quality rose by less than this (relative) over progress_window iterations, >= 0.")
         .integer("progress_window", &TerminationCriterion::progress_window, "Iterations that min_progress looks back over, >= 1.")
         .real("gradient_tolerance", &TerminationCriterion::gradient_tolerance,
-              "Stop when the gradient norm falls below this fraction of its first value, in [0, 1).");
+              "Global solver only (the local and Laplace sweeps have no whole gradient): stop when the gradient "
+              "norm falls below this fraction of its first value, in [0, 1).");
 
     metric.real("hybrid_sharpness", &MetricOptions::hybrid_sharpness,
                 "Steepness alpha of the untangling metric's logistic blend, per unit of scale-free volume, > 0.");

@@ -241,8 +241,6 @@ std::string_view to_string(MeshFormat format) {
 void WriteOptions::validate(const std::filesystem::path& path) const {
     const MeshFormat f = format == MeshFormat::FromExtension ? format_from_extension(path) : format;
     if (f == MeshFormat::TetGen) throw OptionError("writing TetGen .node/.ele files is not supported; use .vtk, .vtu, .msh or .mesh");
-    if (f == MeshFormat::Gmsh && gmsh_version != "2.2")
-        throw OptionError("gmsh_version '" + gmsh_version + "' cannot be written; the Gmsh writer writes version 2.2");
 }
 
 const Field* MeshFile::point_field(std::string_view name) const {

@@ -42,8 +42,7 @@ struct ReadOptions {
 struct WriteOptions {
     MeshFormat format = MeshFormat::FromExtension;
     Encoding encoding = Encoding::Binary;  // .mesh (Medit) is always text: its binary form is .meshb
-    // Gmsh only: the file version to write. 2.2 is the one supported.
-    std::string gmsh_version = "2.2";
+    // (Gmsh files are written in format version 2.2, which every Gmsh since 2.x and meshio read.)
     // Writes a `fixed` point field (where the format can hold one) so a round trip keeps them.
     bool write_fixed = true;
     void validate(const std::filesystem::path& path) const;  // throws OptionError

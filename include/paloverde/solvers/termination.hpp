@@ -13,7 +13,8 @@ struct TerminationCriterion {
     // 1e-3 in absolute terms) over the last `progress_window` iterations.
     double min_progress = 1e-6;
     int progress_window = 10;
-    // Stop when the gradient norm falls below this fraction of its first value.
+    // Stop when the gradient norm falls below this fraction of its first value (the global
+    // solver's; the local and Laplace sweeps have no whole gradient and do not read it).
     double gradient_tolerance = 1e-12;
 
     void validate() const;  // throws OptionError naming the field
