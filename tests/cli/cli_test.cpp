@@ -1,5 +1,6 @@
 // The `paloverde` command line end to end: output, exit codes, and clear errors for bad input.
 #include <boost/test/unit_test.hpp>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -215,6 +216,10 @@ BOOST_AUTO_TEST_CASE(morph_moves_the_boundary_by_the_field_and_brings_the_interi
     result = run_cli("morph -q " + quoted(scalar) + " -o " + quoted(dir / "x.vtk") + " --displacement displacement");
     BOOST_TEST(result.exit_code == 1);
     BOOST_TEST(has(result.output, "has 1 components"), result.output);
+    const auto broken = with_field("nan.vtk", 3, [](pv::VertexId v, int c) { return v == 7 && c == 1 ? std::nan("") : 0.0; });
+    result = run_cli("morph -q " + quoted(broken) + " -o " + quoted(dir / "x.vtk") + " --displacement displacement");
+    BOOST_TEST(result.exit_code == 1);
+    BOOST_TEST(has(result.output, "not finite at vertex 7"), result.output);
     // The displaced input is its own reference: another is refused.
     std::ofstream(dir / "both.yaml") << "input: {mesh: '" << turned.string() << "', displacement: displacement}\n"
                                      << "targets: {reference: '" << turned.string() << "'}\noutput: {mesh: '"
