@@ -256,8 +256,9 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
         // The whole mesh is as large as all the parts together: rank 0 keeps it only to write it.
         if (!writes_whole) file = MeshFile();
     }
-    // Each part's targets from its own elements, the ideal size the whole mesh's (a reference is
-    // refused for partitioned runs by RunSpec::check_runnable).
+    // Each part's targets from its own elements, the ideal size the whole mesh's, and from its own
+    // reference coordinates (scattered with the whole mesh's; RunSpec::check_runnable refuses a
+    // reference for pieces).
     set_targets(MeshPart(part), spec.targets.options(part.mesh.has_cells(), !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
     int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;

@@ -144,12 +144,16 @@ void RunSpec::check_runnable() const {
     if (!input.displacement.empty() && !targets.reference.empty())
         throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
                           "input.displacement makes the input its own reference: leave targets.reference empty");
-    if (partitioned() && !input.displacement.empty())
+    // A reference travels from the whole mesh to the parts; pieces read as they are have none.
+    const bool from_pieces = !input.pieces.empty() || std::filesystem::path(input.mesh).extension() == ".pvtu";
+    if (from_pieces && !input.displacement.empty())
         throw ConfigError(origin_of(*this, "input.displacement"), "input.displacement",
-                          "a displaced mesh's reference is not carried to the ranks' parts yet: run it serially (partition.parts: 1)");
-    if (partitioned() && !targets.reference.empty())
+                          "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
+                          "(partition.parts splits it)");
+    if (from_pieces && !targets.reference.empty())
         throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
-                          "a reference mesh is not carried to the ranks' parts yet: run this mesh serially (partition.parts: 1)");
+                          "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
+                          "(partition.parts splits it)");
 }
 
 namespace detail {

@@ -104,6 +104,7 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
         // the whole mesh too.
         out.coordinates.reserve(3 * vertices.size());
         out.fixed.reserve(vertices.size());
+        if (!whole.reference_coordinates().empty()) out.reference.reserve(3 * vertices.size());
         out.canonical.reserve(vertices.size());
         out.owner.reserve(vertices.size());
         (with_cells ? out.cell_connectivity : out.connectivity).reserve(sizes[p].ids);
@@ -114,6 +115,8 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
             local[v] = static_cast<VertexId>(i);
             for (int c = 0; c < 3; ++c) out.coordinates.push_back(whole.coordinates()[3 * static_cast<std::size_t>(v) + c]);
             out.fixed.push_back(whole.fixed()[v]);
+            if (!whole.reference_coordinates().empty())
+                for (int c = 0; c < 3; ++c) out.reference.push_back(whole.reference_coordinates()[3 * static_cast<std::size_t>(v) + c]);
             out.canonical.push_back(canonical[v]);
             out.owner.push_back(part[v]);
         }
@@ -248,6 +251,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
             send_vector(part.cell_types, p, 7, comm);
             send_vector(part.cell_connectivity, p, 8, comm);
             send_vector(part.cell_order, p, 9, comm);
+            send_vector(part.reference, p, 10, comm);
             part = {};
         }
         mine = std::move(split.parts[0]);
@@ -261,6 +265,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
         mine.cell_types = receive_vector<std::uint8_t>(0, 7, comm);
         mine.cell_connectivity = receive_vector<std::int32_t>(0, 8, comm);
         mine.cell_order = receive_vector<std::int64_t>(0, 9, comm);
+        mine.reference = receive_vector<double>(0, 10, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
     out.mesh.set_elements_flipped(header[3] != 0);

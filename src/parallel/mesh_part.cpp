@@ -1,6 +1,7 @@
 #include "paloverde/parallel/mesh_part.hpp"
 
 #include <algorithm>
+#include <optional>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
@@ -32,9 +33,15 @@ void set_targets(MeshPart part, const TargetOptions& options, const Mesh* refere
         part.mesh().clear_targets();
         return;
     }
-    if (reference && part.distributed())
-        throw OptionError("targets from a reference mesh are not carried to the ranks' parts yet: run serially");
     const Mesh& mesh = part.mesh();
+    // Without one given, the reference is the part itself at its reference coordinates (those of
+    // the whole mesh's reference travel with a part like its coordinates).
+    std::optional<Mesh> own;
+    if (!reference && options.uses(TargetSource::Reference) && !mesh.reference_coordinates().empty()) {
+        own.emplace(mesh);
+        std::copy(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end(), own->coordinates().begin());
+        reference = &*own;
+    }
     std::vector<std::uint8_t> counted(static_cast<std::size_t>(mesh.num_elements()));
     for (ElementId e = 0; e < mesh.num_elements(); ++e) counted[static_cast<std::size_t>(e)] = part.counts(e);
     const double sum = part.reducer().total(ideal_size_sum(mesh, counted));

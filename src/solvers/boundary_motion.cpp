@@ -1,11 +1,13 @@
 #include "boundary_motion.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
+#include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 
 namespace paloverde::detail {
@@ -32,24 +34,39 @@ void place(std::span<double> xyz, std::span<const double> free_from, std::span<c
 // are where they go): the harmonic extension of the driven vertices' displacement, each edge
 // weighted by its inverse squared length at `from`, so that small elements (by a moving wall, where
 // meshes are fine) move nearly rigidly and large ones take up the deformation. A predictor: the
-// solver untangles and improves from there. Conjugate gradients, Jacobi preconditioned.
-void carry_free_vertices(const Mesh& mesh, const std::vector<std::uint8_t>& driven, std::span<const double> from,
+// solver untangles and improves from there. Conjugate gradients, Jacobi preconditioned, on the
+// vertices the part owns (their rows are whole: a part holds every element around them), ghosts
+// refreshed from their owners. Each row adds its neighbours in the order of their positions at
+// `from` and the dot products are exact sums, so the result is the same bits however the mesh is
+// split. Collective.
+void carry_free_vertices(MeshPart part, const std::vector<std::uint8_t>& driven, std::span<const double> from,
                          std::span<double> to) {
+    const Mesh& mesh = part.mesh();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    auto position = [&](VertexId v) {
+        const auto i = 3 * static_cast<std::size_t>(v);
+        return std::array<double, 3>{from[i], from[i + 1], from[i + 2]};
+    };
+    // The unknowns: free vertices this part owns.
+    std::vector<std::size_t> unknowns;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (!driven[static_cast<std::size_t>(v)] && part.owns(v)) unknowns.push_back(static_cast<std::size_t>(v));
     std::vector<std::size_t> offsets{0};
     std::vector<VertexId> neighbours, row;
     std::vector<double> weights;
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+    for (std::size_t v : unknowns) {
         row.clear();
-        for (ElementId e : mesh.elements_of(v))
+        for (ElementId e : mesh.elements_of(static_cast<VertexId>(v)))
             for (VertexId u : mesh.element(e))
-                if (u != v) row.push_back(u);
+                if (static_cast<std::size_t>(u) != v) row.push_back(u);
         std::sort(row.begin(), row.end());
         row.erase(std::unique(row.begin(), row.end()), row.end());
+        // (Vertices at one position have weight 0: their order changes no sum.)
+        std::stable_sort(row.begin(), row.end(), [&](VertexId a, VertexId b) { return position(a) < position(b); });
         for (VertexId u : row) {
             double length2 = 0.0;
             for (std::size_t c = 0; c < 3; ++c) {
-                const double d = from[3 * static_cast<std::size_t>(u) + c] - from[3 * static_cast<std::size_t>(v) + c];
+                const double d = from[3 * static_cast<std::size_t>(u) + c] - from[3 * v + c];
                 length2 += d * d;
             }
             neighbours.push_back(u);
@@ -57,57 +74,90 @@ void carry_free_vertices(const Mesh& mesh, const std::vector<std::uint8_t>& driv
         }
         offsets.push_back(neighbours.size());
     }
-    std::vector<double> diagonal(n, 0.0);
-    for (std::size_t v = 0; v < n; ++v)
-        for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k) diagonal[v] += weights[k];
-    // (A x)_v over the free vertices: the weighted Laplacian with the driven ones held at zero.
-    auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
-        for (std::size_t v = 0; v < n; ++v) {
-            if (driven[v]) continue;
-            double sum = diagonal[v] * x[v];
-            for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k)
-                if (!driven[static_cast<std::size_t>(neighbours[k])]) sum -= weights[k] * x[static_cast<std::size_t>(neighbours[k])];
-            y[v] = sum;
+    const std::size_t m = unknowns.size();
+    std::vector<double> diagonal(m, 0.0);
+    for (std::size_t i = 0; i < m; ++i)
+        for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) diagonal[i] += weights[k];
+    // Per local vertex (ghosts refreshed before each product); per unknown.
+    // The three coordinates are three systems with one matrix, solved side by side (one ghost
+    // update and one reduction per step for all three). Per local vertex (p, ghosts refreshed before
+    // each product) or per unknown (the rest), three values each.
+    std::vector<double> p(3 * n, 0.0), x(3 * m, 0.0), r(3 * m, 0.0), z(3 * m, 0.0), q(3 * m, 0.0);
+    // q = A p over the unknowns: the weighted Laplacian with the driven vertices held at zero.
+    auto apply = [&] {
+        part.halo().update(p, 3);
+        for (std::size_t i = 0; i < m; ++i) {
+            double sum[3];
+            for (std::size_t c = 0; c < 3; ++c) sum[c] = diagonal[i] * p[3 * unknowns[i] + c];
+            for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+                const auto u = static_cast<std::size_t>(neighbours[k]);
+                if (!driven[u])
+                    for (std::size_t c = 0; c < 3; ++c) sum[c] -= weights[k] * p[3 * u + c];
+            }
+            for (std::size_t c = 0; c < 3; ++c) q[3 * i + c] = sum[c];
         }
     };
-    std::vector<double> x(n), r(n), z(n), p(n), q(n);
-    for (std::size_t c = 0; c < 3; ++c) {
-        double rz = 0.0, bb = 0.0;
-        for (std::size_t v = 0; v < n; ++v) {
-            x[v] = r[v] = z[v] = p[v] = q[v] = 0.0;
-            if (driven[v] || diagonal[v] == 0.0) continue;
-            for (std::size_t k = offsets[v]; k < offsets[v + 1]; ++k) {
-                const auto u = static_cast<std::size_t>(neighbours[k]);
-                if (driven[u]) r[v] += weights[k] * (to[3 * u + c] - from[3 * u + c]);
+    // Per coordinate c, the totals over the whole mesh of term(i, c) (K values each).
+    auto totals = [&]<int K>(auto term) {
+        auto sums = exact_sums<3 * K>(m, [&](std::size_t i, auto& acc) {
+            if (diagonal[i] == 0.0) return;  // an unknown without edges stays (its terms are 0)
+            for (std::size_t c = 0; c < 3; ++c) {
+                const auto values = term(3 * i + c);
+                for (int k = 0; k < K; ++k) acc[static_cast<std::size_t>(K) * c + static_cast<std::size_t>(k)].add(values[k]);
             }
-            z[v] = p[v] = r[v] / diagonal[v];
-            rz += r[v] * z[v];
-            bb += r[v] * r[v];
+        });
+        part.reducer().sum(sums);
+        std::array<std::array<double, K>, 3> out;
+        for (std::size_t c = 0; c < 3; ++c)
+            for (int k = 0; k < K; ++k) out[c][static_cast<std::size_t>(k)] = sums[static_cast<std::size_t>(K) * c + static_cast<std::size_t>(k)].value();
+        return out;
+    };
+    for (std::size_t i = 0; i < m; ++i) {
+        if (diagonal[i] == 0.0) continue;
+        for (std::size_t k = offsets[i]; k < offsets[i + 1]; ++k) {
+            const auto u = static_cast<std::size_t>(neighbours[k]);
+            if (driven[u])
+                for (std::size_t c = 0; c < 3; ++c) r[3 * i + c] += weights[k] * (to[3 * u + c] - from[3 * u + c]);
         }
-        for (std::size_t iteration = 0; iteration < 4 * n && rz > 0.0; ++iteration) {
-            apply(p, q);
-            double pq = 0.0;
-            for (std::size_t v = 0; v < n; ++v)
-                if (!driven[v]) pq += p[v] * q[v];
-            if (!(pq > 0.0)) break;
-            const double alpha = rz / pq;
-            double next = 0.0, rr = 0.0;
-            for (std::size_t v = 0; v < n; ++v) {
-                if (driven[v] || diagonal[v] == 0.0) continue;
-                x[v] += alpha * p[v];
-                r[v] -= alpha * q[v];
-                z[v] = r[v] / diagonal[v];
-                next += r[v] * z[v];
-                rr += r[v] * r[v];
-            }
-            if (rr <= 1e-24 * bb) break;
-            for (std::size_t v = 0; v < n; ++v)
-                if (!driven[v]) p[v] = z[v] + next / rz * p[v];
-            rz = next;
-        }
-        for (std::size_t v = 0; v < n; ++v)
-            if (!driven[v]) to[3 * v + c] = from[3 * v + c] + x[v];
+        for (std::size_t c = 0; c < 3; ++c) z[3 * i + c] = p[3 * unknowns[i] + c] = r[3 * i + c] / diagonal[i];
     }
+    const auto start = totals.template operator()<2>([&](std::size_t j) { return std::array<double, 2>{r[j] * z[j], r[j] * r[j]}; });
+    double rz[3], bb[3];
+    bool active[3];
+    for (std::size_t c = 0; c < 3; ++c) rz[c] = start[c][0], bb[c] = start[c][1], active[c] = rz[c] > 0.0;
+    const double limit = 4.0 * part.reducer().total(static_cast<double>(m));
+    for (double iteration = 0; iteration < limit && (active[0] || active[1] || active[2]); ++iteration) {
+        apply();
+        const auto pq = totals.template operator()<1>([&](std::size_t j) { return std::array<double, 1>{p[3 * unknowns[j / 3] + j % 3] * q[j]}; });
+        double alpha[3];
+        for (std::size_t c = 0; c < 3; ++c) {
+            if (active[c] && !(pq[c][0] > 0.0)) active[c] = false;
+            alpha[c] = active[c] ? rz[c] / pq[c][0] : 0.0;
+        }
+        for (std::size_t i = 0; i < m; ++i) {
+            if (diagonal[i] == 0.0) continue;
+            for (std::size_t c = 0; c < 3; ++c) {
+                if (!active[c]) continue;
+                const std::size_t j = 3 * i + c;
+                x[j] += alpha[c] * p[3 * unknowns[i] + c];
+                r[j] -= alpha[c] * q[j];
+                z[j] = r[j] / diagonal[i];
+            }
+        }
+        const auto next = totals.template operator()<2>([&](std::size_t j) { return std::array<double, 2>{r[j] * z[j], r[j] * r[j]}; });
+        double beta[3];
+        for (std::size_t c = 0; c < 3; ++c) {
+            if (active[c] && next[c][1] <= 1e-24 * bb[c]) active[c] = false;
+            beta[c] = active[c] ? next[c][0] / rz[c] : 0.0;
+            if (active[c]) rz[c] = next[c][0];
+        }
+        for (std::size_t i = 0; i < m; ++i)
+            for (std::size_t c = 0; c < 3; ++c)
+                if (active[c]) p[3 * unknowns[i] + c] = z[3 * i + c] + beta[c] * p[3 * unknowns[i] + c];
+    }
+    for (std::size_t i = 0; i < m; ++i)
+        for (std::size_t c = 0; c < 3; ++c) to[3 * unknowns[i] + c] = from[3 * unknowns[i] + c] + x[3 * i + c];
+    part.halo().update(to, 3);
 }
 
 // `run`'s work added to `total`'s, its history after total's.
@@ -158,21 +208,20 @@ void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint) {
 
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const std::function<Summary()>& solve) {
     Mesh& mesh = part.mesh();
-    const auto xyz = mesh.coordinates();
-    const std::vector<double> given(xyz.begin(), xyz.end());
+    // The mesh's coordinates now: a solver run on a distributed part may hand them back in a new array.
+    const auto xyz = [&mesh] { return mesh.coordinates(); };
+    const std::vector<double> given(xyz().begin(), xyz().end());
     const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
     const std::vector<std::uint8_t> driven = driven_vertices(mesh);
-    // Serially, the interior is carried along with the boundary from the reference (a part alone
-    // would need the whole mesh's system): the first run starts from there if that inverts fewer
-    // elements than the interior where it was given.
-    const bool carry = part.distributed() == nullptr;
-    if (carry) {
+    // The interior carried along with the boundary from the reference: the first run starts from
+    // there if that inverts fewer elements than the interior where it was given.
+    {
         std::vector<double> carried = given;
-        carry_free_vertices(mesh, driven, reference, carried);
+        carry_free_vertices(part, driven, reference, carried);
         const QualityAssessor count({"aspect_ratio"});
         const long inverted_given = count.assess(part).inverted;
-        std::copy(carried.begin(), carried.end(), xyz.begin());
-        if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz.begin());
+        std::copy(carried.begin(), carried.end(), xyz().begin());
+        if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz().begin());
     }
     Summary total = solve();
     if (total.reason == TerminationReason::Interrupted) return total;
@@ -180,10 +229,10 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     // from (the reference, then the last step): a run that loses more has left elements pressed
     // against the moved boundary, which smaller steps avoid.
     auto worst_at = [&](std::span<const double> at) {
-        const std::vector<double> now(xyz.begin(), xyz.end());
-        std::copy(at.begin(), at.end(), xyz.begin());
+        const std::vector<double> now(xyz().begin(), xyz().end());
+        std::copy(at.begin(), at.end(), xyz().begin());
         const QualityReport r = QualityAssessor({total.quality_metric}).assess(part);
-        std::copy(now.begin(), now.end(), xyz.begin());
+        std::copy(now.begin(), now.end(), xyz().begin());
         const MetricReport& m = r.metrics.front();
         return m.movable.count > 0 ? m.movable.min : m.all.min;
     };
@@ -191,7 +240,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     if (total.valid() && total.worst_after >= floor) return total;
 
     // The first run's result: kept if the steps do no better.
-    const std::vector<double> first(xyz.begin(), xyz.end());
+    const std::vector<double> first(xyz().begin(), xyz().end());
     const Summary first_run = total;
     std::vector<double> valid = reference;  // the furthest accepted step's mesh; the reference at fraction 0
     double done = 0.0, step = 0.5;
@@ -199,14 +248,14 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     Summary last;
     while (done < 1.0 && step >= smallest_fraction) {
         const double next = std::min(1.0, done + step);
-        place(xyz, valid, reference, given, driven, next);
-        if (carry) carry_free_vertices(mesh, driven, valid, xyz);
+        place(xyz(), valid, reference, given, driven, next);
+        carry_free_vertices(part, driven, valid, xyz());
         last = solve();
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
         // At the smallest step, any valid result goes on.
         if (last.valid() && (last.worst_after >= floor || step < 2.0 * smallest_fraction)) {
-            valid.assign(xyz.begin(), xyz.end());
+            valid.assign(xyz().begin(), xyz().end());
             done = next;
             ++steps;
             // Never past the end: a step halved after this one must try a nearer fraction.
@@ -220,12 +269,12 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     const bool first_better = first_run.valid() && (done < 1.0 || first_run.worst_after >= last.worst_after);
     if (last.reason == TerminationReason::Interrupted) {
         // A step's mesh has its boundary short of where it was given: the first run's has not.
-        std::copy(first.begin(), first.end(), xyz.begin());
+        std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
         why << "interrupted while following the boundary's motion in steps, at " << percent(done)
             << " of it; the mesh handed back is the first run's";
     } else if (first_better) {
-        std::copy(first.begin(), first.end(), xyz.begin());
+        std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
         why << "one run untangled the whole motion; following it in steps (" << percent(done)
             << " of it followed) did no better; that run: " << first_run.message;
@@ -236,13 +285,13 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     } else {
         // The boundary where it was given, from the furthest valid step.
         if (done > 0.0) {
-            place(xyz, valid, reference, given, driven, 1.0);
-            if (carry) carry_free_vertices(mesh, driven, valid, xyz);
+            place(xyz(), valid, reference, given, driven, 1.0);
+            carry_free_vertices(part, driven, valid, xyz());
             last = solve();
             add_work(total, last);
         }
         if (done == 0.0 || last.after.inverted >= first_run.after.inverted) {
-            std::copy(first.begin(), first.end(), xyz.begin());
+            std::copy(first.begin(), first.end(), xyz().begin());
             last = first_run;
         }
         why << "the boundary's motion cannot be followed without remeshing: the furthest valid mesh is at "

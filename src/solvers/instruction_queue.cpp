@@ -77,13 +77,7 @@ QueueResult InstructionQueue::run(MeshPart part) const {
         if (step.targets) {
             if (!kept) kept.emplace(part.mesh());
             // Targets from a reference: the mesh at its reference coordinates (morphing).
-            std::optional<Mesh> reference;
-            if (step.targets->uses(TargetSource::Reference) && !part.mesh().reference_coordinates().empty()) {
-                reference.emplace(part.mesh());
-                const auto from = part.mesh().reference_coordinates();
-                std::copy(from.begin(), from.end(), reference->coordinates().begin());
-            }
-            set_targets(part, *step.targets, reference ? &*reference : nullptr);
+            set_targets(part, *step.targets);
             continue;
         }
         if (step.assessor) {

@@ -594,6 +594,37 @@ BOOST_AUTO_TEST_CASE(mpirun_improves_a_mesh_of_hexahedra) {
     BOOST_TEST(pv::read_mesh(dir / "whole.vtk").mesh.num_cells() == hexahedra.num_cells());
 }
 
+// Morphing on the ranks (docs/morphing.md): the reference travels with the parts, and `morph`
+// under mpirun writes the serial mesh bit for bit.
+BOOST_AUTO_TEST_CASE(mpirun_morph_gives_the_serial_mesh) {
+    const int ranks = launch().ranks;
+    const pv::test::ScratchDir dir("mpirun_morph_np" + std::to_string(ranks));
+    const auto source = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk"));
+    const pv::Mesh& mesh = source.mesh;
+    // The boundary turned by 15 degrees about the z axis.
+    const double a = 15.0 * 3.14159265358979 / 180.0;
+    pv::Field turn{"displacement", 3, {}};
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const double x = mesh.coordinates()[3 * v], y = mesh.coordinates()[3 * v + 1];
+        turn.values.insert(turn.values.end(), {std::cos(a) * x - std::sin(a) * y - x, std::sin(a) * x + std::cos(a) * y - y, 0.0});
+    }
+    pv::write_mesh(dir / "turned.vtu", mesh, pv::WriteOptions{}, std::vector<pv::Field>{turn});
+    const std::string options = " --displacement displacement --iterations 20";
+    const auto serial = run_cli("morph -q " + quoted(dir / "turned.vtu") + " -o " + quoted(dir / "serial.vtu") + options);
+    BOOST_TEST_REQUIRE(serial.exit_code == 0, serial.output);
+    const auto r = mpirun_cli(dir, "morph -q " + quoted(dir / "turned.vtu") + " -o " + quoted(dir / "parts.vtu") + options +
+                                       " --set partition.parts=" + std::to_string(ranks));
+    BOOST_TEST_INFO(r.err);
+    BOOST_TEST(r.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 0), boost::test_tools::per_element());
+    BOOST_TEST(relative_difference(dir / "serial.vtu", dir / "parts.vtu") == 0.0);
+    // Pieces carry no reference: refused on every rank, said once.
+    const auto pieces = mpirun_cli(dir, "morph -q " + quoted(dir / "turned.vtu") + " -o " + quoted(dir / "x.pvtu") + options +
+                                            " --set partition.parts=" + std::to_string(ranks) + " --set input.mesh=" +
+                                            quoted(dir / "in.pvtu"));
+    BOOST_TEST(pieces.exit_codes == std::vector<int>(static_cast<std::size_t>(ranks), 2), boost::test_tools::per_element());
+    BOOST_TEST(count_of(pieces.err, "carries no reference") == 1u, pieces.err);
+}
+
 BOOST_AUTO_TEST_CASE(mpirun_bad_input_fails_on_every_rank_and_says_so_once) {
     const int ranks = launch().ranks;
     const pv::test::ScratchDir dir("mpirun_bad_np" + std::to_string(launch().ranks));

@@ -40,8 +40,10 @@ private:
 };
 
 // Sets the targets of the part's elements (metrics/targets.hpp), the ideal size being the whole
-// mesh's: the same targets, bit for bit, however the mesh is split. Collective. A reference mesh
-// is the whole mesh's reference, for a serial run only (throws OptionError for a part).
+// mesh's: the same targets, bit for bit, however the mesh is split. Collective. `reference` has the
+// part's own connectivity; without it, factors from the reference come from the part's mesh at its
+// reference coordinates (Mesh::reference_coordinates, which a DistributedMesh's parts get from the
+// whole mesh's).
 void set_targets(MeshPart part, const TargetOptions& options, const Mesh* reference = nullptr);
 
 }  // namespace paloverde
