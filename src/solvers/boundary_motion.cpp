@@ -9,6 +9,7 @@
 #include "paloverde/assess/quality_assessor.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
+#include "run_support.hpp"
 
 namespace paloverde::detail {
 
@@ -206,7 +207,10 @@ void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint) {
                           "and checkpoint.resume");
 }
 
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const std::function<Summary()>& solve) {
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve) {
+    const auto start = Clock::now();
+    // What is left of max_seconds (> 0), or 0 when spent or when there is no limit.
+    auto seconds_left = [&] { return max_seconds > 0.0 ? std::max(0.0, max_seconds - part.reducer().max(seconds_since(start))) : 0.0; };
     Mesh& mesh = part.mesh();
     // The mesh's coordinates now: a solver run on a distributed part may hand them back in a new array.
     const auto xyz = [&mesh] { return mesh.coordinates(); };
@@ -223,7 +227,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
         std::copy(carried.begin(), carried.end(), xyz().begin());
         if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz().begin());
     }
-    Summary total = solve();
+    Summary total = solve(max_seconds);
     if (total.reason == TerminationReason::Interrupted) return total;
     // A run is good enough when it keeps at least half the worst quality of where it started
     // from (the reference, then the last step): a run that loses more has left elements pressed
@@ -246,11 +250,17 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     double done = 0.0, step = 0.5;
     int steps = 0;
     Summary last;
+    bool out_of_time = false;
     while (done < 1.0 && step >= smallest_fraction) {
+        const double seconds = seconds_left();
+        if (max_seconds > 0.0 && seconds == 0.0) {
+            out_of_time = true;
+            break;
+        }
         const double next = std::min(1.0, done + step);
         place(xyz(), valid, reference, given, driven, next);
         carry_free_vertices(part, driven, valid, xyz());
-        last = solve();
+        last = solve(seconds);
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
         // At the smallest step, any valid result goes on.
@@ -267,12 +277,13 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     }
     std::ostringstream why;
     const bool first_better = first_run.valid() && (done < 1.0 || first_run.worst_after >= last.worst_after);
-    if (last.reason == TerminationReason::Interrupted) {
+    if (last.reason == TerminationReason::Interrupted || out_of_time) {
         // A step's mesh has its boundary short of where it was given: the first run's has not.
         std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
-        why << "interrupted while following the boundary's motion in steps, at " << percent(done)
-            << " of it; the mesh handed back is the first run's";
+        why << (out_of_time ? "the time limit ran out" : "interrupted") << " while following the boundary's motion in steps, at "
+            << percent(done) << " of it; the mesh handed back is the first run's (" << first_run.after.inverted
+            << " inverted)";
     } else if (first_better) {
         std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
@@ -284,10 +295,11 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
             << last.message;
     } else {
         // The boundary where it was given, from the furthest valid step.
-        if (done > 0.0) {
+        const double seconds = seconds_left();
+        if (done > 0.0 && (max_seconds == 0.0 || seconds > 0.0)) {
             place(xyz(), valid, reference, given, driven, 1.0);
             carry_free_vertices(part, driven, valid, xyz());
-            last = solve();
+            last = solve(seconds);
             add_work(total, last);
         }
         if (done == 0.0 || last.after.inverted >= first_run.after.inverted) {
@@ -300,6 +312,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const st
     }
     const bool followed = first_better || done == 1.0;
     total.reason = last.reason == TerminationReason::Interrupted ? TerminationReason::Interrupted
+                   : out_of_time                                  ? TerminationReason::TimeLimit
                    : followed                                     ? last.reason
                                                                   : TerminationReason::CannotUntangle;
     total.message = why.str();

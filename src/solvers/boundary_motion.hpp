@@ -6,11 +6,13 @@
 // and moves the boundary there in fractions of the whole motion (the classic incremental scheme),
 // each fraction carried, untangled and improved before the next, its size chosen as it goes:
 // halved when a fraction fails, doubled after one that is kept (docs/morphing.md).
+#include <algorithm>
 #include <functional>
 
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
+#include "paloverde/solvers/termination.hpp"
 
 namespace paloverde::detail {
 
@@ -18,17 +20,29 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
-// Runs `solve` (one whole run of a solver on the part; serially from the interior carried along
-// when that inverts fewer elements than the interior as given) and, if it leaves inverted
-// elements or less than half the reference's worst quality, follows the motion in steps down to
+// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own).
+using MotionRun = std::function<Summary(double seconds)>;
+
+// Runs `solve` (one whole run of a solver on the part; from the interior carried along when that
+// inverts fewer elements than the interior as given) and, if it leaves inverted elements or less
+// than half the reference's worst quality, follows the motion in steps down to
 // `smallest_fraction` of it, a step accepted when it leaves a valid mesh with at least half the
 // worst quality of the step before (any valid one at the smallest step); the better of the first
-// run and the steps is kept. A motion that cannot be
-// followed ends with the boundary where it was given and the fewer inverted elements of the first
-// run and of a last run from the furthest valid step, reason CannotUntangle and a message that
-// says how far the motion was followed. One Summary of every run: before is the mesh as given.
-// Collective.
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, const std::function<Summary()>& solve);
+// run and the steps is kept. A motion that cannot be followed ends with the boundary where it was
+// given and the fewer inverted elements of the first run and of a last run from the furthest
+// valid step, reason CannotUntangle and a message that says how far the motion was followed.
+// `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
+// process's clock decides), and once it is spent the first run's mesh is handed back, reason
+// TimeLimit. One Summary of every run: before is the mesh as given. Collective.
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve);
+
+// A solver's options with its time limits (shape and untangling) at most `seconds`, > 0.
+template <class Options>
+Options within_seconds(Options options, double seconds) {
+    for (TerminationCriterion* t : {&options.termination, &options.untangle_termination})
+        t->max_seconds = t->max_seconds > 0.0 ? std::min(t->max_seconds, seconds) : seconds;
+    return options;
+}
 
 // Throws OptionError for checkpoints on a part that carries a motion: a run in steps is several
 // solver runs, and a checkpoint holds one.

@@ -148,7 +148,14 @@ Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     if (options_.untangle && detail::has_boundary_motion(part)) {
         detail::refuse_checkpoints_of_motion(options_.checkpoint);
-        return detail::follow_boundary_motion(part, options_.smallest_motion_step, [&] { return run_once(part); });
+        // The time limit bounds the steps together: each run gets what is left of it.
+        return detail::follow_boundary_motion(part, options_.smallest_motion_step, options_.termination.max_seconds,
+                                              [&](double seconds) {
+                                                  if (seconds == 0.0) return run_once(part);
+                                                  GlobalSolver within(detail::within_seconds(options_, seconds));
+                                                  within.set_observer(observer());
+                                                  return within.run_once(part);
+                                              });
     }
     return run_once(part);
 }

@@ -88,6 +88,57 @@ BOOST_AUTO_TEST_CASE(a_motion_one_run_cannot_untangle_is_followed_in_steps) {
     check_boundary_kept(given, mesh);
 }
 
+BOOST_AUTO_TEST_CASE(a_sliding_boundary_follows_the_motion_and_stays_on_the_moved_boundary) {
+    // The boundary placed by the motion, then slid along the moved boundary's edges: every
+    // boundary vertex stays on its circle's polygon (between the chords' midpoints and the circle).
+    const pv::Mesh given = turned_ring(120.0);
+    pv::Mesh mesh = given;
+    pv::GlobalSolverOptions options;
+    options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
+    const pv::Summary s = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_INFO(s.message);
+    BOOST_TEST(s.valid());
+    BOOST_TEST(inverted(mesh) == 0);
+    const double chord = std::cos(std::numbers::pi / kSectors);
+    long moved = 0;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        if (!given.fixed()[static_cast<std::size_t>(v)]) continue;
+        const double* p = &mesh.coordinates()[3 * static_cast<std::size_t>(v)];
+        const double* q = &given.coordinates()[3 * static_cast<std::size_t>(v)];
+        const double r = std::hypot(p[0], p[1]), circle = v < kSectors ? pv::test::kInner : pv::test::kOuter;
+        BOOST_TEST(r >= circle * chord - 1e-12);
+        BOOST_TEST(r <= circle + 1e-12);
+        moved += p[0] != q[0] || p[1] != q[1];
+    }
+    BOOST_TEST(moved > 0);  // they did slide
+}
+
+BOOST_AUTO_TEST_CASE(the_time_limit_bounds_the_steps_together) {
+    // The motion of the test above, on a time limit spent by the first run: no step starts, and
+    // the first run's mesh comes back with the boundary where it was given.
+    const pv::Mesh given = turned_ring(500.0);
+    for (const bool global : {true, false}) {
+        pv::Mesh mesh = given;
+        pv::Summary s;
+        if (global) {
+            pv::GlobalSolverOptions options;
+            options.untangle_termination.max_iterations = 5;
+            options.termination.max_seconds = 1e-9;
+            s = pv::GlobalSolver(options).improve(mesh);
+        } else {
+            pv::LocalSolverOptions options;
+            options.untangle_termination.max_iterations = 1;
+            options.termination.max_seconds = 1e-9;
+            s = pv::LocalSolver(options).improve(mesh);
+        }
+        BOOST_TEST_INFO((global ? "global: " : "local: ") << s.message);
+        BOOST_TEST((s.reason == pv::TerminationReason::TimeLimit));
+        BOOST_TEST(s.message.find("time limit ran out") != std::string::npos);
+        BOOST_TEST(s.after.inverted == inverted(mesh));
+        check_boundary_kept(given, mesh);
+    }
+}
+
 BOOST_AUTO_TEST_CASE(an_impossible_motion_keeps_the_given_boundary_and_says_it_needs_remeshing) {
     // The inner circle pushed through the outer one: no mesh of this boundary is valid.
     const pv::Mesh given = moved_ring([](double* p) { p[0] += 1.6; });
