@@ -6,7 +6,8 @@ improved with and without targets, and the measures their users read.
         [--csv docs/data/targets.csv]
 
 Makes the cases (a graded block of hexahedra and the same cut into tetrahedra; a Gmsh wall with a
-boundary layer of wedges under tetrahedra; a Gmsh tetrahedral mesh graded by a size field), runs
+boundary layer of wedges under tetrahedra; a Gmsh tetrahedral mesh graded by a size field, whose
+size function the study also gives as a point field for --size-field), runs
 `paloverde improve` on each with the command line the table names, and writes one CSV row per run:
 the largest change of a layer's mean height and of one vertical edge's (layered cases), the first
 layer's thickness after over before, the median relative change of the elements' volumes, the
@@ -145,6 +146,18 @@ def wall_layers(points, mesh, top):
     return np.array(sorted(edges))
 
 
+def add_size_field(unperturbed, path):
+    """The point field `size`: the edge length size_graded.geo's Threshold field asks for at each
+    vertex's unperturbed position (0.02 within 0.05 of the edge x = y = 0, 0.15 beyond 0.6, linear
+    between): the sizes the mesh was made with."""
+    p = meshio.read(unperturbed).points
+    d = np.hypot(p[:, 0], p[:, 1])
+    size = 0.02 + (0.15 - 0.02) * np.clip((d - 0.05) / (0.6 - 0.05), 0.0, 1.0)
+    mesh = meshio.read(path)
+    mesh.point_data["size"] = size
+    meshio.write(path, mesh, binary=False)
+
+
 def run(paloverde, mesh, out, extra):
     command = [paloverde, "improve", mesh, "-o", out, "-q", "--threads", "1", "--summary", out + ".json"] + extra
     start = time.perf_counter()
@@ -176,12 +189,13 @@ def main():
     shift_sideways(w("boundary_layer_input.vtk"), w("boundary_layer.vtk"), (0, 0, 0), (1, 1, 0.07), amount=0.25)
     subprocess.run([args.paloverde, "perturb", w("size_graded_input.vtk"), "-o", w("size_graded.vtk"), "--amount",
                     "0.15", "--seed", "3"], check=True, capture_output=True)
+    add_size_field(w("size_graded_input.vtk"), w("size_graded.vtk"))
 
     cases = [
         ("block_hex", "layers", [[], ["--keep", "none"], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
         ("block_tet", "layers", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
         ("boundary_layer", "wall", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
-        ("size_graded", "volumes", [[], ["--keep", "size"]]),
+        ("size_graded", "volumes", [[], ["--keep", "size"], ["--size-field", "size"]]),
     ]
     rows = []
     for name, kind, runs in cases:

@@ -25,7 +25,7 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
         std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle;
-        std::string checkpoint, checkpoint_every, resume, keep, reference, displacement;
+        std::string checkpoint, checkpoint_every, resume, keep, reference, displacement, size_field;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
     };
@@ -84,6 +84,10 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
                     "element; auto (the default): a mesh with cells keeps its aspect, one of tetrahedra or triangles "
                     "nothing (docs/targets.md)")
         ->type_name("FACTORS");
+    cmd->add_option("--size-field", o->size_field,
+                    "targets.size_field: a point field of the input, one value per vertex, the edge length wanted there; "
+                    "each element is sized by the mean of its vertices' values, its shape as --keep says")
+        ->type_name("FIELD");
     if (morph) {
         cmd->add_option("--displacement", o->displacement,
                         "input.displacement: the point field of IN (three components) that moves its fixed (boundary) "
@@ -172,10 +176,12 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         }
         if (!o->keep.empty()) flag("targets.keep", "[" + o->keep + "]", "--keep");
         if (!o->reference.empty()) flag("targets.reference", o->reference, "--reference", true);
+        if (!o->size_field.empty()) flag("targets.size_field", o->size_field, "--size-field", true);
         if (morph) {
             flag("input.displacement", o->displacement, "--displacement", true);
-            // Everything but the orientation comes from the input as read (--keep may add it).
-            flag("targets.from_reference", "[size,aspect,skew]", "morph");
+            // Everything but the orientation comes from the input as read (--keep may add it), the
+            // size from the size field where one is given.
+            flag("targets.from_reference", o->size_field.empty() ? "[size,aspect,skew]" : "[aspect,skew]", "morph");
         }
         if (!o->fixed.empty()) flag("input.fixed", o->fixed, "--fixed");
         if (!o->orientation.empty()) flag("input.orientation", o->orientation, "--orientation");

@@ -90,14 +90,35 @@ void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool fli
 namespace {
 // Morphing (input.displacement): the point field `name` moves the fixed vertices; the mesh as it
 // was is handed back, the reference.
-Mesh displace_fixed_vertices(MeshFile& file, const std::string& name, const std::string& path) {
+// The point field `name` of `file`, read from `path` to `purpose`; MeshError naming the fields it
+// has when it has no such field.
+std::vector<Field>::iterator point_field(MeshFile& file, const std::string& name, const std::string& path,
+                                         const std::string& purpose) {
     const auto field = std::find_if(file.point_fields.begin(), file.point_fields.end(),
                                     [&](const Field& f) { return f.name == name; });
     std::string names;
     for (const Field& f : file.point_fields) names += (names.empty() ? "" : ", ") + f.name;
     if (field == file.point_fields.end())
-        throw MeshError("'" + path + "' has no point field '" + name + "' to displace it by (its point fields: " +
+        throw MeshError("'" + path + "' has no point field '" + name + "' " + purpose + " (its point fields: " +
                         (names.empty() ? std::string("none") : names) + ")");
+    return field;
+}
+
+// targets.size_field: the point field `name` gives the edge length wanted at each vertex.
+void set_edge_lengths(MeshFile& file, const std::string& name, const std::string& path) {
+    const auto field = point_field(file, name, path, "to size the elements by");
+    if (field->components != 1)
+        throw MeshError("'" + path + "': the size field '" + name + "' has " + std::to_string(field->components) +
+                        " components per point; a size field has 1 (the edge length wanted there)");
+    try {
+        file.mesh.set_target_edge_lengths(field->values);
+    } catch (const MeshError& e) {
+        throw MeshError("'" + path + "': the size field '" + name + "': " + e.what());
+    }
+}
+
+Mesh displace_fixed_vertices(MeshFile& file, const std::string& name, const std::string& path) {
+    const auto field = point_field(file, name, path, "to displace it by");
     Mesh& mesh = file.mesh;
     if (field->components != 3)
         throw MeshError("'" + path + "': the displacement field '" + name + "' has " + std::to_string(field->components) +
@@ -151,6 +172,7 @@ MeshFile read_input(const RunSpec& spec) {
     }
     // The flags written with the output are the ones used, not the file's.
     std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
+    if (!spec.targets.size_field.empty()) set_edge_lengths(file, spec.targets.size_field, in.mesh);
     if (in.displacement.empty()) {
         set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh);
     } else {

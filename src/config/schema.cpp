@@ -22,6 +22,19 @@ void InputSpec::validate() const {
 }
 
 TargetOptions TargetsSpec::options(bool cells, bool input_is_reference) const {
+    TargetOptions o = factors(cells, input_is_reference);
+    if (size_field.empty()) return o;
+    auto names_size = [](const std::vector<std::string>& words) {
+        return std::find(words.begin(), words.end(), "size") != words.end() ||
+               std::find(words.begin(), words.end(), "all") != words.end();
+    };
+    if (names_size(keep) || names_size(from_reference))
+        throw OptionError("size_field gives each element its size: leave size (and all) out of keep and from_reference");
+    o.size = TargetSource::Field;
+    return o;
+}
+
+TargetOptions TargetsSpec::factors(bool cells, bool input_is_reference) const {
     auto joined = [](const std::vector<std::string>& words) {
         std::string out;
         for (const auto& w : words) {
@@ -150,6 +163,9 @@ void RunSpec::check_runnable() const {
         throw ConfigError(origin_of(*this, "input.displacement"), "input.displacement",
                           "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
                           "(partition.parts splits it)");
+    if (from_pieces && !targets.size_field.empty())
+        throw ConfigError(origin_of(*this, "targets.size_field"), "targets.size_field",
+                          "a size field is read from a whole mesh: give it as input.mesh (partition.parts splits it)");
     if (from_pieces && !targets.reference.empty())
         throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
                           "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
@@ -209,7 +225,11 @@ const Table<TargetsSpec>& targets_table() {
                   "A mesh with the input's connectivity (any format) whose elements give the factors of "
                   "from_reference; empty: none.")
             .names("from_reference", &TargetsSpec::from_reference, factors, "factor",
-                   "Factors taken from the reference mesh; empty: every factor not kept.");
+                   "Factors taken from the reference mesh; empty: every factor not kept.")
+            .text("size_field", &TargetsSpec::size_field,
+                  "A point field of the input mesh, one value per vertex: the edge length wanted there (a size "
+                  "field). Each element's target size is the regular element's with edges of the mean of its "
+                  "vertices' lengths; shape factors as keep and from_reference say. Empty: none.");
         return t;
     }();
     return t;

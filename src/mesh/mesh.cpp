@@ -185,9 +185,21 @@ void Mesh::set_reference_coordinates(std::vector<double> xyz) {
     reference_coordinates_ = std::move(xyz);
 }
 
+void Mesh::set_target_edge_lengths(std::vector<double> lengths) {
+    if (lengths.size() != static_cast<std::size_t>(num_vertices()))
+        throw MeshError("target edge lengths: " + std::to_string(lengths.size()) + " given for " +
+                        std::to_string(num_vertices()) + " vertices");
+    for (std::size_t v = 0; v < lengths.size(); ++v)
+        if (!(lengths[v] > 0.0) || !std::isfinite(lengths[v]))
+            throw MeshError("target edge lengths: vertex " + std::to_string(v) + " has " + std::to_string(lengths[v]) +
+                            ", not a finite positive length");
+    target_edge_lengths_ = std::move(lengths);
+}
+
 void Mesh::scale(int exponent) {
     scale_coordinates(coordinates_, exponent);
     scale_coordinates(reference_coordinates_, exponent);
+    for (double& h : target_edge_lengths_) h = std::ldexp(h, exponent);
     const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
     for (double& v : target_volumes_) v = std::ldexp(v, d * exponent);
 }

@@ -202,7 +202,10 @@ TargetOptions TargetOptions::from(std::string_view list, TargetSource source) {
     return o;
 }
 
-bool TargetOptions::any() const { return !uses(TargetSource::Ideal) || uses(TargetSource::Input) || uses(TargetSource::Reference); }
+bool TargetOptions::any() const {
+    return size != TargetSource::Ideal || orientation != TargetSource::Ideal || aspect != TargetSource::Ideal ||
+           skew != TargetSource::Ideal;
+}
 
 bool TargetOptions::uses(TargetSource source) const {
     for (std::size_t i = 0; i < kFactorNames.size(); ++i)
@@ -264,6 +267,13 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
     if (options.uses(TargetSource::Reference) && !reference)
         throw OptionError("targets from a reference mesh (" + options.list(TargetSource::Reference) +
                           ") need the reference mesh (targets.reference, input.displacement, or Mesh::set_reference_coordinates)");
+    if (options.orientation == TargetSource::Field || options.aspect == TargetSource::Field ||
+        options.skew == TargetSource::Field)
+        throw OptionError("only the size comes from a size field (targets.size_field); got " + options.list(TargetSource::Field));
+    const auto lengths = mesh.target_edge_lengths();
+    if (options.size == TargetSource::Field && lengths.empty())
+        throw OptionError("target sizes from a size field need its edge lengths (targets.size_field, --size-field, or "
+                          "Mesh::set_target_edge_lengths)");
     if (reference) check_reference(mesh, *reference);
     if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
         throw MeshError("targets are for volume meshes and planar 2D meshes: the triangles do not lie in one plane");
@@ -291,7 +301,14 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             return f.valid ? f : id;
         };
         const Factors& sized = pick(options.size);
-        const double lambda = &sized != &id ? sized.lambda : std::pow(scale * determinant(ideal, d), 1.0 / d);
+        double lambda = &sized != &id ? sized.lambda : std::pow(scale * determinant(ideal, d), 1.0 / d);
+        if (options.size == TargetSource::Field) {
+            // The ideal corner with its edges at the mean of the vertices' lengths (its own edges
+            // are of unit length).
+            double sum = 0.0;
+            for (VertexId v : mesh.element(element)) sum += lengths[static_cast<std::size_t>(v)];
+            lambda = sum / static_cast<double>(mesh.corners()) * std::pow(determinant(ideal, d), 1.0 / d);
+        }
         // W / lambda = V Q D. The orientation V is chosen so that W's polar rotation is the
         // source corner's: a corner's orientation then does not depend on which of its edges is
         // listed first (QR's V does), and the corners of one sheared cell agree on it. With every

@@ -105,6 +105,7 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
         out.coordinates.reserve(3 * vertices.size());
         out.fixed.reserve(vertices.size());
         if (!whole.reference_coordinates().empty()) out.reference.reserve(3 * vertices.size());
+        if (!whole.target_edge_lengths().empty()) out.edge_lengths.reserve(vertices.size());
         out.canonical.reserve(vertices.size());
         out.owner.reserve(vertices.size());
         (with_cells ? out.cell_connectivity : out.connectivity).reserve(sizes[p].ids);
@@ -117,6 +118,7 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
             out.fixed.push_back(whole.fixed()[v]);
             if (!whole.reference_coordinates().empty())
                 for (int c = 0; c < 3; ++c) out.reference.push_back(whole.reference_coordinates()[3 * static_cast<std::size_t>(v) + c]);
+            if (!whole.target_edge_lengths().empty()) out.edge_lengths.push_back(whole.target_edge_lengths()[static_cast<std::size_t>(v)]);
             out.canonical.push_back(canonical[v]);
             out.owner.push_back(part[v]);
         }
@@ -252,6 +254,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
             send_vector(part.cell_connectivity, p, 8, comm);
             send_vector(part.cell_order, p, 9, comm);
             send_vector(part.reference, p, 10, comm);
+            send_vector(part.edge_lengths, p, 11, comm);
             part = {};
         }
         mine = std::move(split.parts[0]);
@@ -266,6 +269,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
         mine.cell_connectivity = receive_vector<std::int32_t>(0, 8, comm);
         mine.cell_order = receive_vector<std::int64_t>(0, 9, comm);
         mine.reference = receive_vector<double>(0, 10, comm);
+        mine.edge_lengths = receive_vector<double>(0, 11, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
     out.mesh.set_elements_flipped(header[3] != 0);

@@ -23,6 +23,7 @@ Mesh part_mesh(PartArrays& arrays, ElementKind kind) {
     mesh.set_fixed(std::move(arrays.fixed));
     mesh.set_global_ids(std::move(arrays.canonical));
     if (!arrays.reference.empty()) mesh.set_reference_coordinates(std::move(arrays.reference));
+    if (!arrays.edge_lengths.empty()) mesh.set_target_edge_lengths(std::move(arrays.edge_lengths));
     return mesh;
 }
 

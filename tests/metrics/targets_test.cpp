@@ -203,6 +203,56 @@ BOOST_AUTO_TEST_CASE(gradients_through_targets_match_finite_differences) {
     }
 }
 
+BOOST_AUTO_TEST_CASE(a_size_field_sizes_each_element_by_its_vertices_edge_lengths) {
+    const pv::TargetOptions field = [] {
+        pv::TargetOptions o;
+        o.size = pv::TargetSource::Field;
+        return o;
+    }();
+    // A regular tet of edge 0.5 whose vertices ask for edges of 0.5 rates 1; asking for 1 at every
+    // vertex is the doubled tet of the test above, and so is a mean of 1 from unequal lengths.
+    pv::Mesh tet = regular_tet(0.5);
+    tet.set_target_edge_lengths({0.5, 0.5, 0.5, 0.5});
+    pv::set_targets(tet, field);
+    check_all_near(rate("shape_size", tet), 1.0, 1e-12);
+    tet.set_target_edge_lengths({1.0, 1.0, 1.0, 1.0});
+    pv::set_targets(tet, field);
+    check_all_near(rate("shape_size", tet), 16.0 / 65.0, 1e-12);
+    tet.set_target_edge_lengths({0.5, 1.5, 1.0, 1.0});
+    pv::set_targets(tet, field);
+    check_all_near(rate("shape_size", tet), 16.0 / 65.0, 1e-12);
+    // A box of 2 x 1 x 1 asking for edges of 1 with its aspect kept: the unit cube stretched to
+    // the box's aspect has its volume, so it rates 1; asking for 2 misses by eight times the volume.
+    pv::Mesh cell = box(2.0, 1.0, 1.0);
+    pv::TargetOptions stretched = pv::TargetOptions::from("aspect");
+    stretched.size = pv::TargetSource::Field;
+    cell.set_target_edge_lengths(std::vector<double>(8, std::cbrt(2.0)));
+    pv::set_targets(cell, stretched);
+    check_all_near(rate("shape_size", cell), 1.0, 1e-12);
+    cell.set_target_edge_lengths(std::vector<double>(8, 2.0 * std::cbrt(2.0)));
+    pv::set_targets(cell, stretched);
+    check_all_near(rate("shape_size", cell), 16.0 / 65.0, 1e-12);
+    // Lengths scale with the mesh.
+    tet.scale(3);
+    BOOST_TEST(tet.target_edge_lengths()[1] == 12.0);
+}
+
+BOOST_AUTO_TEST_CASE(a_size_field_that_is_missing_or_not_a_length_is_refused) {
+    pv::Mesh tet = regular_tet();
+    pv::TargetOptions field;
+    field.size = pv::TargetSource::Field;
+    BOOST_CHECK_THROW(pv::set_targets(tet, field), pv::OptionError);  // no lengths given
+    BOOST_CHECK_THROW(tet.set_target_edge_lengths({1.0, 1.0, 1.0}), pv::MeshError);
+    BOOST_CHECK_EXCEPTION(tet.set_target_edge_lengths({1.0, 1.0, -2.0, 1.0}), pv::MeshError, [](const pv::MeshError& e) {
+        return std::string(e.what()).find("vertex 2") != std::string::npos;
+    });
+    BOOST_CHECK_THROW(tet.set_target_edge_lengths({1.0, std::nan(""), 1.0, 1.0}), pv::MeshError);
+    tet.set_target_edge_lengths({1.0, 1.0, 1.0, 1.0});
+    pv::TargetOptions skew_from_field;
+    skew_from_field.skew = pv::TargetSource::Field;
+    BOOST_CHECK_THROW(pv::set_targets(tet, skew_from_field), pv::OptionError);
+}
+
 BOOST_AUTO_TEST_CASE(scaling_the_mesh_scales_its_target_sizes_exactly) {
     pv::Mesh tets = random_tets(8, 9);
     pv::set_targets(tets, pv::TargetOptions::from("size"));

@@ -38,15 +38,11 @@ pv::Mesh stretched(Fill fill) {
     return pv::test::tangled(std::move(mesh), 3);
 }
 
-}  // namespace
-
-BOOST_AUTO_TEST_SUITE(targets_distributed)
-
-BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result, bdata::make(kCases), c) {
-    const pv::Mesh input = stretched(c.fill);
-    const pv::TargetOptions targets = pv::TargetOptions::from(c.keep);
+// `input` with `targets` set serially and on this rank's part: the parts report what the whole
+// mesh does, and the global solver ends on the serial mesh, bit for bit.
+void check_parts_give_the_serial_answer(const pv::Mesh& input, const pv::TargetOptions& targets, const char* shape_metric) {
     pv::GlobalSolverOptions options;
-    options.shape_metric = targets.metric("aspect_ratio");
+    options.shape_metric = targets.metric(shape_metric);
     options.termination.max_iterations = 15;
     options.untangle_termination.max_iterations = 150;
 
@@ -54,7 +50,6 @@ BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result,
     pv::set_targets(serial, targets);
     auto part = pv::test::scatter(input);
     pv::set_targets(pv::MeshPart(part), targets);
-    // Rated against their targets, the parts report what the whole mesh does, bit for bit.
     const pv::QualityAssessor assessor({options.shape_metric});
     const auto whole_report = assessor.assess(serial), part_report = assessor.assess(pv::MeshPart(part));
     const auto& a = whole_report.metrics.front().all;
@@ -72,6 +67,25 @@ BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result,
     BOOST_TEST(summary.after.inverted == serial_summary.after.inverted);
     if (rank() == 0) BOOST_TEST(pv::test::relative_difference(gathered, serial) == 0.0);
     pv::test::check_never_worse(summary);
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(targets_distributed)
+
+BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result, bdata::make(kCases), c) {
+    check_parts_give_the_serial_answer(stretched(c.fill), pv::TargetOptions::from(c.keep), "aspect_ratio");
+}
+
+// The target edge lengths travel with the parts like the coordinates.
+BOOST_AUTO_TEST_CASE(sizes_from_a_field_travel_with_the_parts) {
+    pv::Mesh input = stretched(Fill::Tetrahedra);
+    std::vector<double> lengths;
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v) lengths.push_back(0.1 + 0.2 * input.coordinates()[3 * v]);
+    input.set_target_edge_lengths(lengths);
+    pv::TargetOptions targets = pv::TargetOptions::from("aspect");
+    targets.size = pv::TargetSource::Field;
+    check_parts_give_the_serial_answer(input, targets, "mean_ratio");
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -62,10 +62,14 @@ struct TargetsSpec {
     std::vector<std::string> keep{"auto"};    // size, orientation, aspect, skew, all, auto, none
     std::string reference;                    // a mesh with the input's connectivity
     std::vector<std::string> from_reference;  // with a reference; empty: every factor not kept
+    std::string size_field;                   // a point field of the input: the edge length wanted at each vertex
     // The targets for a mesh with cells (`cells`) or without; `input_is_reference`: the input as
     // read is the reference (input.displacement).
     TargetOptions options(bool cells, bool input_is_reference = false) const;
     void validate() const;
+
+private:
+    TargetOptions factors(bool cells, bool input_is_reference) const;  // options() without size_field
 };
 
 // Partitioned (MPI) runs; see docs/config.md. parts = 1 is a serial run.

@@ -95,8 +95,8 @@ public:
     // reverses orientation, or whose volume is not a finite positive number.
     void set_targets(std::vector<CornerMap> maps, std::vector<double> volumes);
     void clear_targets() noexcept;
-    // Multiplies every coordinate by 2^exponent, and the target volumes and reference
-    // coordinates with them: exact, and harmless to orientation (unit_scale_exponent).
+    // Multiplies every coordinate by 2^exponent, and the target volumes, reference coordinates
+    // and target edge lengths with them: exact, and harmless to orientation (unit_scale_exponent).
     void scale(int exponent);
 
     // Morphing: where the vertices were before the boundary moved (the undeformed mesh), three
@@ -107,6 +107,14 @@ public:
     std::span<const double> reference_coordinates() const noexcept { return reference_coordinates_; }
     void set_reference_coordinates(std::vector<double> xyz);
     void clear_reference_coordinates() noexcept { reference_coordinates_.clear(); }
+
+    // Sizes from a field: the edge length wanted at each vertex (a size field's values), one per
+    // vertex; empty when none is given. Targets whose size comes from a field (TargetSource::Field)
+    // give an element the regular shape's size at the mean of its vertices' lengths. Throws
+    // MeshError for a wrong count or a length that is not a finite positive number.
+    std::span<const double> target_edge_lengths() const noexcept { return target_edge_lengths_; }
+    void set_target_edge_lengths(std::vector<double> lengths);
+    void clear_target_edge_lengths() noexcept { target_edge_lengths_.clear(); }
 
     // Vertex -> incident elements, compressed rows.
     std::span<const ElementId> elements_of(VertexId v) const noexcept {
@@ -203,6 +211,7 @@ private:
     std::vector<CornerMap> target_maps_;
     std::vector<double> target_volumes_;
     std::vector<double> reference_coordinates_;
+    std::vector<double> target_edge_lengths_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

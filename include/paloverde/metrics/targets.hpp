@@ -4,7 +4,8 @@
 // the target Jacobian W factors as W = lambda V Q D: size lambda (det W = lambda^d), orientation
 // V (a rotation), skew Q (the angles between the corner's edges, det Q = 1) and aspect D (the
 // edges' relative lengths, diagonal, det D = 1). Each factor comes from one source: the ideal
-// element's corner, the input mesh's own corner (kept), or a reference mesh's corner. Quality is
+// element's corner, the input mesh's own corner (kept), a reference mesh's corner, or (size) the
+// edge lengths a size field asks for at the element's vertices. Quality is
 // then measured on T = A W^-1 (A the corner's edge matrix): an element equal to its target rates
 // 1 in every shape metric, whatever its size or stretch; size metrics (shape_size) compare det T
 // with 1, orientation metrics (shape_size_orient) T with a multiple of the identity.
@@ -23,7 +24,9 @@
 
 namespace paloverde {
 
-enum class TargetSource { Ideal, Input, Reference };
+// Field: the size from the mesh's target edge lengths (Mesh::target_edge_lengths, a size field of
+// the file); for the size factor only.
+enum class TargetSource { Ideal, Input, Reference, Field };
 
 struct TargetOptions {
     TargetSource size = TargetSource::Ideal;
@@ -55,7 +58,8 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted 
 // vertex. `ideal_scale` is the mean of ideal_size_sum()'s terms over the whole mesh (the
 // overload without it computes it from `mesh`). With no factor other than ideal it clears the
 // targets. Throws MeshError naming the first difference of a reference that does not match,
-// OptionError when a factor asks for a reference and none is given, and MeshError for a triangle
+// OptionError when a factor asks for a reference and none is given, or for field edge lengths the
+// mesh does not carry, or for a factor other than size from a field, and MeshError for a triangle
 // mesh that is not planar.
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale);
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference = nullptr);
