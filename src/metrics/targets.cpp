@@ -69,6 +69,46 @@ Matrix polar_rotation(const Matrix& x, int d) {
     return u;
 }
 
+// f applied to the symmetric d x d matrix s: V diag(f(eigenvalues)) V^T, the eigenvectors by
+// cyclic Jacobi rotations (exact to rounding for d <= 3 in a few sweeps).
+template <class F>
+Matrix symmetric_function(Matrix s, int d, F f) {
+    Matrix vectors{};
+    for (int i = 0; i < d; ++i) vectors[i][i] = 1.0;
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        double off = 0.0, scale = 0.0;
+        for (int i = 0; i < d; ++i)
+            for (int j = 0; j < d; ++j) (i == j ? scale : off) += s[i][j] * s[i][j];
+        if (off <= 1e-30 * scale) break;
+        for (int p = 0; p < d; ++p)
+            for (int q = p + 1; q < d; ++q) {
+                if (s[p][q] == 0.0) continue;
+                const double theta = (s[q][q] - s[p][p]) / (2.0 * s[p][q]);
+                const double t = (theta >= 0.0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), sn = t * c;
+                for (int k = 0; k < d; ++k) {  // s <- J^T s J, columns then rows
+                    const double kp = s[k][p], kq = s[k][q];
+                    s[k][p] = c * kp - sn * kq, s[k][q] = sn * kp + c * kq;
+                }
+                for (int k = 0; k < d; ++k) {
+                    const double pk = s[p][k], qk = s[q][k];
+                    s[p][k] = c * pk - sn * qk, s[q][k] = sn * pk + c * qk;
+                }
+                for (int k = 0; k < d; ++k) {
+                    const double kp = vectors[k][p], kq = vectors[k][q];
+                    vectors[k][p] = c * kp - sn * kq, vectors[k][q] = sn * kp + c * kq;
+                }
+            }
+    }
+    Matrix out{};
+    for (int k = 0; k < d; ++k) {
+        const double value = f(s[k][k]);
+        for (int i = 0; i < d; ++i)
+            for (int j = 0; j < d; ++j) out[i][j] += vectors[i][k] * value * vectors[j][k];
+    }
+    return out;
+}
+
 // A corner's factors W = lambda V Q D (targets.hpp).
 struct Factors {
     double lambda = 1.0;
@@ -163,6 +203,33 @@ Matrix ideal_frame(const Mesh& mesh, ElementId e, const Matrix& regular, int d) 
     return product(regular, inverse(corner_map(maps[e]), d), d);
 }
 
+// Simplices take their aspect from their neighbourhood's metric (targets.hpp).
+bool is_simplex(const Mesh& mesh, ElementId e) {
+    const CellType type = mesh.cell_type(mesh.cell_of(e));
+    return type == CellType::Tetrahedron || type == CellType::Triangle;
+}
+
+// Element e's metric at xyz: the symmetric M = (S S^T)^-1 in which the element is the regular
+// simplex (S = A W_regular^-1 carries the regular simplex onto it), scaled to determinant 1 so that
+// it holds the stretch and not the size. False for a degenerate element.
+bool element_metric(const Mesh& mesh, std::span<const double> xyz, ElementId e, const metrics::P& a, const metrics::P& b,
+                    const Matrix& regular_inverse, Matrix& out) {
+    const int d = mesh.corners() - 1;
+    const Matrix edges = edge_matrix(mesh, xyz, e, a, b);
+    if (!factor(edges, d).valid) return false;
+    const Matrix s = product(edges, regular_inverse, d);
+    out = inverse(product(s, transpose(s, d), d), d);
+    const double unit = std::pow(determinant(out, d), 1.0 / d);
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) out[i][j] /= unit;
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j)
+            if (!std::isfinite(out[i][j])) return false;
+    return true;
+}
+
+constexpr int kMetricIndex[kMetricWidth][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+
 }  // namespace
 
 void check_reference(const Mesh& mesh, const Mesh& reference) {
@@ -244,6 +311,48 @@ double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const me
 }
 }  // namespace
 
+bool stretches_from_neighbourhood(const TargetOptions& options) {
+    return (options.aspect == TargetSource::Input || options.aspect == TargetSource::Reference) &&
+           options.skew == TargetSource::Ideal;
+}
+
+std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference) {
+    if (!stretches_from_neighbourhood(options)) return {};
+    if (options.aspect == TargetSource::Reference && !reference) return {};  // set_targets says what is missing
+    if (reference) check_reference(mesh, *reference);
+    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar()) return {};  // likewise
+    const Mesh& source = options.aspect == TargetSource::Reference ? *reference : mesh;
+    metrics::P a, b;
+    basis_of(source, a, b);
+    const int d = mesh.corners() - 1;
+    const Matrix regular_inverse = inverse(regular_frame(d), d);
+    const auto m = static_cast<std::size_t>(mesh.num_elements());
+    std::vector<std::array<double, kMetricWidth>> metric(m);
+    std::vector<std::uint8_t> usable(m);
+    for (std::size_t e = 0; e < m; ++e) {
+        Matrix element{};
+        if (!is_simplex(mesh, static_cast<ElementId>(e)) ||
+            !element_metric(source, source.coordinates(), static_cast<ElementId>(e), a, b, regular_inverse, element))
+            continue;
+        usable[e] = 1;
+        for (int k = 0; k < kMetricWidth; ++k) metric[e][k] = element[kMetricIndex[k][0]][kMetricIndex[k][1]];
+    }
+    // Exact sums: a part lists a vertex's elements in another order than the whole mesh does.
+    std::vector<double> out(static_cast<std::size_t>(mesh.num_vertices()) * kMetricWidth, 0.0);
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        std::array<ExactSum, kMetricWidth> sums{};
+        double count = 0.0;
+        for (ElementId e : mesh.elements_of(v)) {
+            if (!usable[static_cast<std::size_t>(e)]) continue;
+            count += 1.0;
+            for (int k = 0; k < kMetricWidth; ++k) sums[k].add(metric[static_cast<std::size_t>(e)][k]);
+        }
+        if (count == 0.0) continue;
+        for (int k = 0; k < kMetricWidth; ++k) out[static_cast<std::size_t>(v) * kMetricWidth + k] = sums[k].value() / count;
+    }
+    return out;
+}
+
 ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted) {
     metrics::P a, b;
     basis_of(mesh, a, b);
@@ -256,10 +365,12 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted)
 
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference) {
     const double elements = static_cast<double>(mesh.num_elements());
-    set_targets(mesh, options, reference, elements > 0 ? ideal_size_sum(mesh).value() / elements : 1.0);
+    set_targets(mesh, options, reference, elements > 0 ? ideal_size_sum(mesh).value() / elements : 1.0,
+                vertex_metrics(mesh, options, reference));
 }
 
-void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale) {
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
+                 std::span<const double> metrics) {
     if (!options.any()) {
         mesh.clear_targets();
         return;
@@ -315,7 +426,31 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
         // factor from one corner, V is QR's and W is that corner.
         const Factors& oriented = pick(options.orientation);
         const Matrix& source = oriented.positive ? oriented.frame : id.frame;
-        const Matrix skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
+        Matrix skew_aspect;
+        if (!metrics.empty() && is_simplex(mesh, element)) {
+            // The regular simplex stretched by the mean M of its vertices' metrics (to M^-1/2 W)
+            // and turned, within M, as the aspect's source corner is there: the polar rotation
+            // of M^1/2 S, which is the identity when M is the corner's own metric.
+            Matrix mean{};
+            for (VertexId vertex : mesh.element(element))
+                for (int k = 0; k < kMetricWidth; ++k) {
+                    const auto [i, j] = kMetricIndex[k];
+                    const double value = metrics[static_cast<std::size_t>(vertex) * kMetricWidth + k] / mesh.corners();
+                    mean[i][j] += value;
+                    if (i != j) mean[j][i] += value;
+                }
+            const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
+            const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
+            const Factors& stretched = pick(options.aspect);
+            const Matrix turn = polar_rotation(
+                product(inverse_root, product(stretched.positive ? stretched.frame : id.frame, inverse(regular, d), d), d), d);
+            skew_aspect = product(root, product(turn, regular, d), d);
+            const double unit = std::pow(determinant(skew_aspect, d), 1.0 / d);
+            for (int i = 0; i < d; ++i)
+                for (int j = 0; j < d; ++j) skew_aspect[i][j] /= unit;
+        } else {
+            skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
+        }
         const Matrix v = product(polar_rotation(source, d), transpose(polar_rotation(skew_aspect, d), d), d);
         const Matrix shape = product(v, skew_aspect, d);
         const Matrix map = product(inverse(shape, d), regular, d);

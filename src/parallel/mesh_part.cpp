@@ -46,7 +46,9 @@ void set_targets(MeshPart part, const TargetOptions& options, const Mesh* refere
     for (ElementId e = 0; e < mesh.num_elements(); ++e) counted[static_cast<std::size_t>(e)] = part.counts(e);
     const double sum = part.reducer().total(ideal_size_sum(mesh, counted));
     const double elements = part.reducer().total(static_cast<double>(std::count(counted.begin(), counted.end(), 1)));
-    set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0);
+    std::vector<double> metrics = vertex_metrics(mesh, options, reference);
+    if (!metrics.empty()) part.halo().update(metrics, kMetricWidth);
+    set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0, metrics);
 }
 
 }  // namespace paloverde

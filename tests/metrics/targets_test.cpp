@@ -10,6 +10,7 @@
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/metrics/targets.hpp"
+#include "support/cell_meshes.hpp"
 
 namespace pv = paloverde;
 
@@ -174,6 +175,54 @@ BOOST_AUTO_TEST_CASE(triangles_and_quadrilaterals_take_targets_in_their_plane) {
     pv::Mesh triangles(pv::ElementKind::Triangle, {0, 0, 0, 3, 0, 0, 0.5, 0.2, 0, 3, 1, 0}, {0, 1, 2, 1, 3, 2});
     pv::set_targets(triangles, pv::TargetOptions::from("all"));
     for (const char* metric : {"mean_ratio", "shape_size", "shape_size_orient"}) check_all_near(rate(metric, triangles), 1.0, 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(a_simplex_takes_the_stretch_of_its_neighbourhood) {
+    // One tetrahedron is its own neighbourhood: with its aspect kept, it is its own target.
+    pv::Mesh one = random_tets(1, 3);
+    BOOST_TEST(rate("mean_ratio", one)[0] < 0.9);
+    pv::set_targets(one, pv::TargetOptions::from("aspect"));
+    check_all_near(rate("mean_ratio", one), 1.0, 1e-10);
+
+    // Cubes cut into tetrahedra, each far from regular, then sheared and squashed tenfold along z
+    // by F: the vertices' metrics are the cut cubes' mapped by F (F^-T M F^-1, at determinant 1),
+    // so a layer's intended stretch is what the targets hold, whatever the cut.
+    const double f[3][3] = {{1.0, 0.0, 0.3}, {0.0, 1.0, -0.2}, {0.0, 0.0, 0.1}};
+    const double f_inverse[3][3] = {{1.0, 0.0, -3.0}, {0.0, 1.0, 2.0}, {0.0, 0.0, 10.0}};
+    pv::Mesh cubes = pv::test::cube_grid(4, pv::test::Fill::Tetrahedra);
+    pv::Mesh squashed = cubes;
+    for (std::size_t v = 0; v < squashed.coordinates().size(); v += 3)
+        for (int i = 0; i < 3; ++i) {
+            double sum = 0.0;
+            for (int k = 0; k < 3; ++k) sum += f[i][k] * cubes.coordinates()[v + k];
+            squashed.coordinates()[v + i] = sum;
+        }
+    const auto aspect = pv::TargetOptions::from("aspect");
+    const auto metric = pv::vertex_metrics(cubes, aspect, nullptr), squashed_metric = pv::vertex_metrics(squashed, aspect, nullptr);
+    BOOST_TEST(metric.size() == static_cast<std::size_t>(pv::kMetricWidth * cubes.num_vertices()));
+    const int index[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    const double scale = std::cbrt(0.1 * 0.1);  // det(F)^(2/3)
+    double largest = 0.0;
+    for (std::size_t v = 0; v < static_cast<std::size_t>(cubes.num_vertices()); ++v) {
+        double m[3][3];
+        for (int k = 0; k < 6; ++k) m[index[k][0]][index[k][1]] = m[index[k][1]][index[k][0]] = metric[6 * v + k];
+        for (int k = 0; k < 6; ++k) {
+            const auto [i, j] = index[k];
+            double mapped = 0.0;  // (F^-T M F^-1)[i][j]
+            for (int p = 0; p < 3; ++p)
+                for (int q = 0; q < 3; ++q) mapped += f_inverse[p][i] * m[p][q] * f_inverse[q][j];
+            largest = std::max(largest, std::abs(scale * mapped - squashed_metric[6 * v + k]) / (1.0 + std::abs(mapped)));
+        }
+    }
+    BOOST_TEST(largest < 1e-12, "largest difference " << largest);
+
+    const auto ideal = rate("mean_ratio", squashed);
+    pv::set_targets(squashed, aspect);
+    const auto kept = rate("mean_ratio", squashed);
+    BOOST_TEST(*std::min_element(kept.begin(), kept.end()) > *std::min_element(ideal.begin(), ideal.end()));
+    // Cells keep their own corners' aspect; keeping the skew too keeps each simplex's own.
+    BOOST_TEST(pv::vertex_metrics(box(1, 2, 3), aspect, nullptr) == std::vector<double>(6 * 8, 0.0));
+    BOOST_TEST(pv::vertex_metrics(cubes, pv::TargetOptions::from("aspect,skew"), nullptr).empty());
 }
 
 BOOST_AUTO_TEST_CASE(gradients_through_targets_match_finite_differences) {

@@ -18,6 +18,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "paloverde/core/exact_sum.hpp"
 #include "paloverde/mesh/mesh.hpp"
@@ -53,6 +54,23 @@ struct TargetOptions {
 // a distributed mesh to add over its parts before it divides by the number of elements.
 ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted = {});
 
+// A simplex (tetrahedron, triangle) is a single corner, and its aspect alone cannot tell the
+// stretch a mesh means (a boundary layer's) from the distortion to remove, nor from the stretch
+// its cut pattern gives it (a box cut into tetrahedra). So where the aspect is kept (from the input
+// or a reference) and the skew made ideal, a simplex's target is the regular simplex in its
+// neighbourhood's metric: each simplex's metric M (the symmetric matrix in which it is the
+// regular simplex, at determinant 1) is averaged over each vertex's simplices, then over the
+// element's vertices; the target is turned within that metric as the source corner is. The means
+// are arithmetic, so a linear map of the mesh maps its targets alike. Cells keep their corners'
+// own factors.
+bool stretches_from_neighbourhood(const TargetOptions& options);
+// Per vertex, kMetricWidth values (the mean metric, a symmetric matrix: xx, yy, zz, xy, xz, yz)
+// over the vertex's simplices at the aspect's source, summed exactly (the same whatever the order
+// of the vertex's elements). Empty unless stretches_from_neighbourhood(options). A part's values
+// at its ghost vertices miss elements it does not hold: replace them with their owners'.
+constexpr int kMetricWidth = 6;
+std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference);
+
 // Sets every element's target on `mesh` (Mesh::set_targets) from its coordinates now (Input) and
 // from `reference`'s (Reference): the same element kind, cells and connectivity, vertex for
 // vertex. `ideal_scale` is the mean of ideal_size_sum()'s terms over the whole mesh (the
@@ -61,7 +79,9 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted 
 // OptionError when a factor asks for a reference and none is given, or for field edge lengths the
 // mesh does not carry, or for a factor other than size from a field, and MeshError for a triangle
 // mesh that is not planar.
-void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale);
+// `metrics` are vertex_metrics(mesh, options, reference), complete at every vertex.
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
+                 std::span<const double> metrics);
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference = nullptr);
 // Throws MeshError unless `reference` has the mesh's element kind, counts and connectivity.
 void check_reference(const Mesh& mesh, const Mesh& reference);
