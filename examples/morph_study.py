@@ -3,7 +3,11 @@
 displacement field on their boundary, and `paloverde morph` on each; one CSV row per case.
 
     /usr/bin/python3 examples/morph_study.py [--paloverde build/bin/paloverde] [--csv docs/data/morph.csv]
-                                             [--threads 1] [--work DIR] [CASE ...]
+                                             [--threads 1] [--work DIR] [--args "..."] [CASE ...]
+
+--args adds flags to every `paloverde morph` (docs/morphing.md's shape-only rows:
+--args "--set targets.from_reference=[aspect,skew] --set queue[0].improve.finish=none
+--iterations 2000" --csv docs/data/morph_shape_only.csv hole-30 hole-60 hole-90).
 
 Cases: hole-30, hole-60, hole-90 (a block-shaped hole in a box of tetrahedra, turned about z),
 beam-45, beam-90 (a beam of tetrahedra bent in an arc, one end held), hexbeam-90 (the same beam of
@@ -88,6 +92,7 @@ def main():
     parser.add_argument("--csv", default=os.path.join(HERE, "..", "docs", "data", "morph.csv"))
     parser.add_argument("--threads", default="1")
     parser.add_argument("--work", default=None)
+    parser.add_argument("--args", default="", help="more flags for paloverde morph, split on spaces")
     args = parser.parse_args()
     work = args.work or tempfile.mkdtemp(prefix="morph_")
     os.makedirs(work, exist_ok=True)
@@ -96,7 +101,7 @@ def main():
         mesh, elements = case(name, work)
         summary = os.path.join(work, name + ".json")
         run = subprocess.run([args.paloverde, "morph", "-q", mesh, "-o", os.path.join(work, name + "_out.vtu"),
-                              "--displacement", "displacement", "--threads", args.threads, "--summary", summary],
+                              "--displacement", "displacement", "--threads", args.threads, "--summary", summary] + args.args.split(),
                              capture_output=True, text=True)
         s = json.load(open(summary))
         m = s["methods"][0]

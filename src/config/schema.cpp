@@ -157,19 +157,18 @@ void RunSpec::check_runnable() const {
     if (!input.displacement.empty() && !targets.reference.empty())
         throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
                           "input.displacement makes the input its own reference: leave targets.reference empty");
-    // A reference travels from the whole mesh to the parts; pieces read as they are have none.
+    // A reference and a size field travel from the whole mesh to the parts; pieces read as they
+    // are carry neither.
     const bool from_pieces = !input.pieces.empty() || std::filesystem::path(input.mesh).extension() == ".pvtu";
-    if (from_pieces && !input.displacement.empty())
-        throw ConfigError(origin_of(*this, "input.displacement"), "input.displacement",
-                          "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
-                          "(partition.parts splits it)");
-    if (from_pieces && !targets.size_field.empty())
-        throw ConfigError(origin_of(*this, "targets.size_field"), "targets.size_field",
-                          "a size field is read from a whole mesh: give it as input.mesh (partition.parts splits it)");
-    if (from_pieces && !targets.reference.empty())
-        throw ConfigError(origin_of(*this, "targets.reference"), "targets.reference",
-                          "a mesh read in pieces carries no reference for the parts: give the whole mesh as input.mesh "
-                          "(partition.parts splits it)");
+    auto refuse_with_pieces = [&](const std::string& value, const std::string& key, const std::string& what) {
+        if (from_pieces && !value.empty())
+            throw ConfigError(origin_of(*this, key), key,
+                              "a mesh read in pieces carries no " + what +
+                                  " for the parts: give the whole mesh as input.mesh (partition.parts splits it)");
+    };
+    refuse_with_pieces(input.displacement, "input.displacement", "reference");
+    refuse_with_pieces(targets.reference, "targets.reference", "reference");
+    refuse_with_pieces(targets.size_field, "targets.size_field", "size field");
 }
 
 namespace detail {

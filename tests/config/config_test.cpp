@@ -402,6 +402,25 @@ BOOST_AUTO_TEST_CASE(registry_names_build_the_objects) {
     }
 }
 
+BOOST_AUTO_TEST_CASE(a_mesh_in_pieces_refuses_what_only_a_whole_mesh_carries) {
+    struct Case {
+        std::string set, key, words;
+    };
+    for (const Case& c : {Case{"input.displacement=d", "input.displacement", "carries no reference"},
+                          Case{"targets.reference=ref.vtk", "targets.reference", "carries no reference"},
+                          Case{"targets.size_field=h", "targets.size_field", "carries no size field"}}) {
+        const cfg::RunSpec spec = cfg::parse_config("input: {pieces: in.pvtu}\n", "run.yaml", std::vector<cfg::Override>{{c.set}});
+        BOOST_CHECK_EXCEPTION(spec.check_runnable(), cfg::ConfigError, [&](const cfg::ConfigError& e) {
+            BOOST_TEST_CONTEXT(e.what()) {
+                BOOST_TEST(e.key() == c.key);
+                BOOST_TEST(has(e.what(), c.words));
+                BOOST_TEST(has(e.what(), "partition.parts"));
+            }
+            return true;
+        });
+    }
+}
+
 BOOST_AUTO_TEST_CASE(a_run_on_a_mesh_in_memory_is_the_run_on_its_file) {
     const cfg::RunSpec spec = cfg::parse_config("input: {mesh: " + quoted(tangled()) + "}\nthreads: 1\n", "run.yaml");
     const cfg::RunResult from_file = cfg::run(spec);
