@@ -69,7 +69,15 @@ def make_block(path, tets, columns=8, layers=16, first=1.45e-3, growth=1.35, shi
         cells = [("tetra", hexes[:, cut].reshape(-1, 4))]
     else:
         cells = [("hexahedron", hexes)]
-    meshio.write(path, meshio.Mesh(points, cells), file_format="vtk", binary=False)
+    # The point field `metric`: the spacing the block was made with, as a metric (xx, yy, zz, xy,
+    # yz, xz): edges of 1 / columns across, of the layers' height (the geometric mean of a vertex's
+    # two layers) up.
+    heights = np.diff(z)
+    up = np.sqrt(heights[np.maximum(k - 1, 0)] * heights[np.minimum(k, layers - 1)])
+    metric = np.zeros((len(points), 6))
+    metric[:, 0] = metric[:, 1] = columns ** 2
+    metric[:, 2] = 1.0 / up ** 2
+    meshio.write(path, meshio.Mesh(points, cells, point_data={"metric": metric}), file_format="vtk", binary=False)
 
 
 def volume_cells(mesh):
@@ -192,8 +200,10 @@ def main():
     add_size_field(w("size_graded_input.vtk"), w("size_graded.vtk"))
 
     cases = [
-        ("block_hex", "layers", [[], ["--keep", "none"], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
-        ("block_tet", "layers", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
+        ("block_hex", "layers", [[], ["--keep", "none"], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"],
+                                 ["--metric-field", "metric"]]),
+        ("block_tet", "layers", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"],
+                                 ["--metric-field", "metric"]]),
         ("boundary_layer", "wall", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
         ("size_graded", "volumes", [[], ["--keep", "size"], ["--size-field", "size"]]),
     ]

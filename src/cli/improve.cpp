@@ -25,7 +25,7 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
         std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle;
-        std::string checkpoint, checkpoint_every, resume, keep, reference, displacement, size_field;
+        std::string checkpoint, checkpoint_every, resume, keep, reference, displacement, size_field, metric_field;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
     };
@@ -88,6 +88,12 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
                     "targets.size_field: a point field of the input, one value per vertex, the edge length wanted there; "
                     "each element is sized by the mean of its vertices' values, its shape as --keep says")
         ->type_name("FIELD");
+    if (!morph)
+        cmd->add_option("--metric-field", o->metric_field,
+                        "targets.metric_field: a point field of the input, the metric wanted at each vertex (6 values: "
+                        "xx, yy, zz, xy, yz, xz, or the 9 of the matrix; edges e of unit length where e^T M e = 1); each "
+                        "element is made the ideal element in the mean of its vertices' metrics (size, aspect, orientation)")
+            ->type_name("FIELD");
     if (morph) {
         cmd->add_option("--displacement", o->displacement,
                         "input.displacement: the point field of IN (three components) that moves its fixed (boundary) "
@@ -177,6 +183,7 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         if (!o->keep.empty()) flag("targets.keep", "[" + o->keep + "]", "--keep");
         if (!o->reference.empty()) flag("targets.reference", o->reference, "--reference", true);
         if (!o->size_field.empty()) flag("targets.size_field", o->size_field, "--size-field", true);
+        if (!o->metric_field.empty()) flag("targets.metric_field", o->metric_field, "--metric-field", true);
         if (morph) {
             flag("input.displacement", o->displacement, "--displacement", true);
             // Everything but the orientation comes from the input as read (--keep may add it), the

@@ -117,6 +117,34 @@ void set_edge_lengths(MeshFile& file, const std::string& name, const std::string
     }
 }
 
+// targets.metric_field: the point field `name` gives the metric wanted at each vertex, as the six
+// values of a symmetric matrix (xx, yy, zz, xy, yz, xz) or the nine of the whole matrix.
+void set_metrics(MeshFile& file, const std::string& name, const std::string& path) {
+    const auto field = point_field(file, name, path, "to shape and size the elements by");
+    const std::string what = "'" + path + "': the metric field '" + name + "'";
+    std::vector<double> metrics;
+    if (field->components == Mesh::kMetricValues) {
+        metrics = field->values;
+    } else if (field->components == 9) {
+        metrics.reserve(field->values.size() / 9 * Mesh::kMetricValues);
+        for (std::size_t v = 0; v < field->values.size() / 9; ++v) {
+            const double* m = field->values.data() + 9 * v;  // row by row
+            for (const auto& [i, j] : {std::pair{0, 1}, std::pair{0, 2}, std::pair{1, 2}})
+                if (std::abs(m[3 * i + j] - m[3 * j + i]) > 1e-12 * (std::abs(m[3 * i + j]) + std::abs(m[3 * j + i])))
+                    throw MeshError(what + " is not symmetric at vertex " + std::to_string(v));
+            for (int k : {0, 4, 8, 1, 5, 2}) metrics.push_back(m[k]);
+        }
+    } else {
+        throw MeshError(what + " has " + std::to_string(field->components) +
+                        " components per point; a metric has 6 (xx, yy, zz, xy, yz, xz) or 9 (the whole matrix)");
+    }
+    try {
+        file.mesh.set_target_metrics(std::move(metrics));
+    } catch (const MeshError& e) {
+        throw MeshError(what + ": " + e.what());
+    }
+}
+
 Mesh displace_fixed_vertices(MeshFile& file, const std::string& name, const std::string& path) {
     const auto field = point_field(file, name, path, "to displace it by");
     Mesh& mesh = file.mesh;
@@ -173,6 +201,7 @@ MeshFile read_input(const RunSpec& spec) {
     // The flags written with the output are the ones used, not the file's.
     std::erase_if(file.point_fields, [](const Field& f) { return f.name == "fixed"; });
     if (!spec.targets.size_field.empty()) set_edge_lengths(file, spec.targets.size_field, in.mesh);
+    if (!spec.targets.metric_field.empty()) set_metrics(file, spec.targets.metric_field, in.mesh);
     if (in.displacement.empty()) {
         set_run_targets(spec, mesh, read, file.orientation.flipped, in.mesh);
     } else {

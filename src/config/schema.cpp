@@ -22,6 +22,16 @@ void InputSpec::validate() const {
 }
 
 TargetOptions TargetsSpec::options(bool cells, bool input_is_reference) const {
+    if (!metric_field.empty()) {
+        const bool keeps = std::any_of(keep.begin(), keep.end(), [](const std::string& w) { return w != "auto" && w != "none"; });
+        if (keeps || !from_reference.empty() || !reference.empty() || !size_field.empty() || input_is_reference)
+            throw OptionError("metric_field gives each element its size, aspect and orientation (the skew is ideal in the "
+                              "metric): leave keep (auto or none), from_reference, reference, size_field and "
+                              "input.displacement out");
+        TargetOptions o;
+        o.size = o.aspect = o.orientation = TargetSource::Metric;
+        return o;
+    }
     TargetOptions o = factors(cells, input_is_reference);
     if (size_field.empty()) return o;
     auto names_size = [](const std::vector<std::string>& words) {
@@ -169,6 +179,7 @@ void RunSpec::check_runnable() const {
     refuse_with_pieces(input.displacement, "input.displacement", "reference");
     refuse_with_pieces(targets.reference, "targets.reference", "reference");
     refuse_with_pieces(targets.size_field, "targets.size_field", "size field");
+    refuse_with_pieces(targets.metric_field, "targets.metric_field", "metric field");
 }
 
 namespace detail {
@@ -228,7 +239,13 @@ const Table<TargetsSpec>& targets_table() {
             .text("size_field", &TargetsSpec::size_field,
                   "A point field of the input mesh, one value per vertex: the edge length wanted there (a size "
                   "field). Each element's target size is the regular element's with edges of the mean of its "
-                  "vertices' lengths; shape factors as keep and from_reference say. Empty: none.");
+                  "vertices' lengths; shape factors as keep and from_reference say. Empty: none.")
+            .text("metric_field", &TargetsSpec::metric_field,
+                  "A point field of the input mesh: the metric wanted at each vertex, a symmetric positive definite "
+                  "matrix M in which the wanted edges have unit length (e^T M e = 1; edges of length h: I / h^2), as 6 "
+                  "values (xx, yy, zz, xy, yz, xz) or 9 (the full matrix). Each element's target is the ideal element "
+                  "in the mean of its vertices' metrics: size, aspect and orientation from the field, with keep "
+                  "auto or none and no reference. Empty: none.");
         return t;
     }();
     return t;

@@ -196,10 +196,30 @@ void Mesh::set_target_edge_lengths(std::vector<double> lengths) {
     target_edge_lengths_ = std::move(lengths);
 }
 
+void Mesh::set_target_metrics(std::vector<double> metrics) {
+    if (metrics.size() != static_cast<std::size_t>(num_vertices()) * kMetricValues)
+        throw MeshError("target metrics: " + std::to_string(metrics.size()) + " values given for " +
+                        std::to_string(num_vertices()) + " vertices (6 each: xx, yy, zz, xy, yz, xz)");
+    for (std::size_t v = 0; v < metrics.size() / kMetricValues; ++v) {
+        const double* m = metrics.data() + kMetricValues * v;
+        const bool finite = std::all_of(m, m + kMetricValues, [](double x) { return std::isfinite(x); });
+        // Sylvester's criterion on [[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]]. A planar mesh's
+        // metric is checked in its plane when targets are set.
+        const double minor2 = m[0] * m[1] - m[3] * m[3];
+        const double det = m[0] * (m[1] * m[2] - m[4] * m[4]) - m[3] * (m[3] * m[2] - m[4] * m[5]) +
+                           m[5] * (m[3] * m[4] - m[1] * m[5]);
+        if (!finite || (kind_ == ElementKind::Tetrahedron && !(m[0] > 0.0 && minor2 > 0.0 && det > 0.0)))
+            throw MeshError("target metrics: vertex " + std::to_string(v) + " has a matrix that is not " +
+                            (finite ? "positive definite" : "finite"));
+    }
+    target_metrics_ = std::move(metrics);
+}
+
 void Mesh::scale(int exponent) {
     scale_coordinates(coordinates_, exponent);
     scale_coordinates(reference_coordinates_, exponent);
     for (double& h : target_edge_lengths_) h = std::ldexp(h, exponent);
+    for (double& m : target_metrics_) m = std::ldexp(m, -2 * exponent);  // lengths scale, M by 1 / length^2
     const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
     for (double& v : target_volumes_) v = std::ldexp(v, d * exponent);
 }

@@ -228,7 +228,7 @@ bool element_metric(const Mesh& mesh, std::span<const double> xyz, ElementId e, 
     return true;
 }
 
-constexpr int kMetricIndex[kMetricWidth][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+constexpr int kMetricIndex[Mesh::kMetricValues][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {0, 2}};  // Mesh's order
 
 }  // namespace
 
@@ -288,6 +288,7 @@ std::string TargetOptions::list(TargetSource source) const {
 }
 
 std::string TargetOptions::metric(std::string_view shape_metric) const {
+    if (orientation == TargetSource::Metric) return "shape_size";
     if (orientation != TargetSource::Ideal) return "shape_size_orient";
     if (size != TargetSource::Ideal) return "shape_size";
     return std::string(shape_metric);
@@ -309,6 +310,60 @@ double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const me
     return std::abs(determinant(edge_matrix(mesh, mesh.coordinates(), e, a, b), d)) /
            determinant(ideal_frame(mesh, e, regular, d), d);
 }
+// The mean over element e's vertices of a symmetric matrix per vertex (Mesh::target_metrics' order).
+Matrix mean_at_corners(const Mesh& mesh, ElementId e, std::span<const double> per_vertex) {
+    Matrix mean{};
+    for (VertexId vertex : mesh.element(e))
+        for (int k = 0; k < Mesh::kMetricValues; ++k) {
+            const auto [i, j] = kMetricIndex[k];
+            const double value = per_vertex[static_cast<std::size_t>(vertex) * Mesh::kMetricValues + k] / mesh.corners();
+            mean[i][j] += value;
+            if (i != j) mean[j][i] += value;
+        }
+    return mean;
+}
+
+// Element e's target from the mean M of its vertices' target metrics (in the plane's basis a, b for
+// a 2D mesh): its ideal corner carried into M's space, W = M^-1/2 R W_ideal, R turning it within M
+// as the element is (the polar rotation of M^1/2 A W_ideal^-1; none for an inverted or degenerate
+// element). Returns the map and the volume that Mesh::set_targets takes.
+std::pair<CornerMap, double> metric_target(const Mesh& mesh, ElementId element, const Matrix& ideal, const Factors& in,
+                                           const metrics::P& a, const metrics::P& b, const Matrix& regular) {
+    const int d = mesh.corners() - 1;
+    const Matrix full = mean_at_corners(mesh, element, mesh.target_metrics());
+    Matrix mean = full;
+    if (d == 2) {  // u^T M w for u, w in the plane's basis
+        const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
+        for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) {
+                double sum = 0.0;
+                for (int p = 0; p < 3; ++p)
+                    for (int q = 0; q < 3; ++q) sum += u[i][p] * full[p][q] * u[j][q];
+                mean[i][j] = sum;
+            }
+    }
+    if (!(mean[0][0] > 0.0 && determinant(mean, d) > 0.0 && (d == 2 || mean[0][0] * mean[1][1] > mean[0][1] * mean[0][1])))
+        throw MeshError("element " + std::to_string(element) + ": the mean of its vertices' target metrics is not positive definite" +
+                        (d == 2 ? " in the mesh's plane" : ""));
+    const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
+    Matrix turn{};
+    for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
+    if (in.valid && in.positive) {
+        const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
+        turn = polar_rotation(product(inverse_root, product(in.frame, inverse(ideal, d), d), d), d);
+    }
+    const Matrix w = product(root, product(turn, ideal, d), d);
+    const double volume_ratio = determinant(w, d);  // lambda^d
+    const double lambda = std::pow(volume_ratio, 1.0 / d);
+    Matrix shape = w;
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) shape[i][j] /= lambda;
+    const Matrix map = product(inverse(shape, d), regular, d);
+    CornerMap out{};
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) out[i][j] = map[i][j];
+    return {out, volume_ratio * determinant(regular, d) / (d == 3 ? 6.0 : 2.0)};
+}
 }  // namespace
 
 bool stretches_from_neighbourhood(const TargetOptions& options) {
@@ -327,7 +382,7 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
     const int d = mesh.corners() - 1;
     const Matrix regular_inverse = inverse(regular_frame(d), d);
     const auto m = static_cast<std::size_t>(mesh.num_elements());
-    std::vector<std::array<double, kMetricWidth>> metric(m);
+    std::vector<std::array<double, Mesh::kMetricValues>> metric(m);
     std::vector<std::uint8_t> usable(m);
     for (std::size_t e = 0; e < m; ++e) {
         Matrix element{};
@@ -335,20 +390,20 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
             !element_metric(source, source.coordinates(), static_cast<ElementId>(e), a, b, regular_inverse, element))
             continue;
         usable[e] = 1;
-        for (int k = 0; k < kMetricWidth; ++k) metric[e][k] = element[kMetricIndex[k][0]][kMetricIndex[k][1]];
+        for (int k = 0; k < Mesh::kMetricValues; ++k) metric[e][k] = element[kMetricIndex[k][0]][kMetricIndex[k][1]];
     }
     // Exact sums: a part lists a vertex's elements in another order than the whole mesh does.
-    std::vector<double> out(static_cast<std::size_t>(mesh.num_vertices()) * kMetricWidth, 0.0);
+    std::vector<double> out(static_cast<std::size_t>(mesh.num_vertices()) * Mesh::kMetricValues, 0.0);
     for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
-        std::array<ExactSum, kMetricWidth> sums{};
+        std::array<ExactSum, Mesh::kMetricValues> sums{};
         double count = 0.0;
         for (ElementId e : mesh.elements_of(v)) {
             if (!usable[static_cast<std::size_t>(e)]) continue;
             count += 1.0;
-            for (int k = 0; k < kMetricWidth; ++k) sums[k].add(metric[static_cast<std::size_t>(e)][k]);
+            for (int k = 0; k < Mesh::kMetricValues; ++k) sums[k].add(metric[static_cast<std::size_t>(e)][k]);
         }
         if (count == 0.0) continue;
-        for (int k = 0; k < kMetricWidth; ++k) out[static_cast<std::size_t>(v) * kMetricWidth + k] = sums[k].value() / count;
+        for (int k = 0; k < Mesh::kMetricValues; ++k) out[static_cast<std::size_t>(v) * Mesh::kMetricValues + k] = sums[k].value() / count;
     }
     return out;
 }
@@ -385,6 +440,14 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
     if (options.size == TargetSource::Field && lengths.empty())
         throw OptionError("target sizes from a size field need its edge lengths (targets.size_field, --size-field, or "
                           "Mesh::set_target_edge_lengths)");
+    const bool from_metric = options.uses(TargetSource::Metric);
+    if (from_metric && !(options.size == TargetSource::Metric && options.aspect == TargetSource::Metric &&
+                         options.orientation == TargetSource::Metric && options.skew == TargetSource::Ideal))
+        throw OptionError("a metric field gives size, aspect and orientation together and the skew is ideal in it; got " +
+                          options.list(TargetSource::Metric) + " from it");
+    if (from_metric && mesh.target_metrics().empty())
+        throw OptionError("targets from a metric field need its metrics (targets.metric_field, --metric-field, or "
+                          "Mesh::set_target_metrics)");
     if (reference) check_reference(mesh, *reference);
     if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
         throw MeshError("targets are for volume meshes and planar 2D meshes: the triangles do not lie in one plane");
@@ -407,6 +470,12 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
         const Factors in = factor(edge_matrix(mesh, mesh.coordinates(), element, a, b), d);
         const Factors ref = reference ? factor(edge_matrix(*reference, reference->coordinates(), element, ra, rb), d)
                                       : Factors{};
+        if (from_metric) {
+            const auto [map, volume] = metric_target(mesh, element, ideal, in, a, b, regular);
+            maps[e] = map;
+            volumes[e] = volume;
+            continue;
+        }
         auto pick = [&](TargetSource source) -> const Factors& {
             const Factors& f = source == TargetSource::Input ? in : source == TargetSource::Reference ? ref : id;
             return f.valid ? f : id;
@@ -431,14 +500,7 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             // The regular simplex stretched by the mean M of its vertices' metrics (to M^-1/2 W)
             // and turned, within M, as the aspect's source corner is there: the polar rotation
             // of M^1/2 S, which is the identity when M is the corner's own metric.
-            Matrix mean{};
-            for (VertexId vertex : mesh.element(element))
-                for (int k = 0; k < kMetricWidth; ++k) {
-                    const auto [i, j] = kMetricIndex[k];
-                    const double value = metrics[static_cast<std::size_t>(vertex) * kMetricWidth + k] / mesh.corners();
-                    mean[i][j] += value;
-                    if (i != j) mean[j][i] += value;
-                }
+            const Matrix mean = mean_at_corners(mesh, element, metrics);
             const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
             const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
             const Factors& stretched = pick(options.aspect);

@@ -106,6 +106,7 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
         out.fixed.reserve(vertices.size());
         if (!whole.reference_coordinates().empty()) out.reference.reserve(3 * vertices.size());
         if (!whole.target_edge_lengths().empty()) out.edge_lengths.reserve(vertices.size());
+        if (!whole.target_metrics().empty()) out.metrics.reserve(Mesh::kMetricValues * vertices.size());
         out.canonical.reserve(vertices.size());
         out.owner.reserve(vertices.size());
         (with_cells ? out.cell_connectivity : out.connectivity).reserve(sizes[p].ids);
@@ -119,6 +120,9 @@ std::vector<PartArrays> split(const Mesh& whole, const CanonicalOrders& orders, 
             if (!whole.reference_coordinates().empty())
                 for (int c = 0; c < 3; ++c) out.reference.push_back(whole.reference_coordinates()[3 * static_cast<std::size_t>(v) + c]);
             if (!whole.target_edge_lengths().empty()) out.edge_lengths.push_back(whole.target_edge_lengths()[static_cast<std::size_t>(v)]);
+            if (!whole.target_metrics().empty())
+                for (int c = 0; c < Mesh::kMetricValues; ++c)
+                    out.metrics.push_back(whole.target_metrics()[Mesh::kMetricValues * static_cast<std::size_t>(v) + c]);
             out.canonical.push_back(canonical[v]);
             out.owner.push_back(part[v]);
         }
@@ -255,6 +259,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
             send_vector(part.cell_order, p, 9, comm);
             send_vector(part.reference, p, 10, comm);
             send_vector(part.edge_lengths, p, 11, comm);
+            send_vector(part.metrics, p, 12, comm);
             part = {};
         }
         mine = std::move(split.parts[0]);
@@ -270,6 +275,7 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
         mine.cell_order = receive_vector<std::int64_t>(0, 9, comm);
         mine.reference = receive_vector<double>(0, 10, comm);
         mine.edge_lengths = receive_vector<double>(0, 11, comm);
+        mine.metrics = receive_vector<double>(0, 12, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
     out.mesh.set_elements_flipped(header[3] != 0);

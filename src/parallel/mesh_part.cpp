@@ -47,7 +47,7 @@ void set_targets(MeshPart part, const TargetOptions& options, const Mesh* refere
     const double sum = part.reducer().total(ideal_size_sum(mesh, counted));
     const double elements = part.reducer().total(static_cast<double>(std::count(counted.begin(), counted.end(), 1)));
     std::vector<double> metrics = vertex_metrics(mesh, options, reference);
-    if (!metrics.empty()) part.halo().update(metrics, kMetricWidth);
+    if (!metrics.empty()) part.halo().update(metrics, Mesh::kMetricValues);
     set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0, metrics);
 }
 

@@ -24,6 +24,7 @@ Mesh part_mesh(PartArrays& arrays, ElementKind kind) {
     mesh.set_global_ids(std::move(arrays.canonical));
     if (!arrays.reference.empty()) mesh.set_reference_coordinates(std::move(arrays.reference));
     if (!arrays.edge_lengths.empty()) mesh.set_target_edge_lengths(std::move(arrays.edge_lengths));
+    if (!arrays.metrics.empty()) mesh.set_target_metrics(std::move(arrays.metrics));
     return mesh;
 }
 

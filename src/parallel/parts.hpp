@@ -24,6 +24,7 @@ struct PartArrays {
     std::vector<std::int64_t> cell_order;
     std::vector<double> reference;  // the reference coordinates (morphing), 3 per vertex; empty: none
     std::vector<double> edge_lengths;  // the target edge lengths (a size field), 1 per vertex; empty: none
+    std::vector<double> metrics;       // the target metrics (a metric field), 6 per vertex; empty: none
 };
 
 // The part's mesh from its arrays (moved out of them), with its fixed flags and global ids.

@@ -232,6 +232,27 @@ BOOST_AUTO_TEST_CASE(morph_moves_the_boundary_by_the_field_and_brings_the_interi
     BOOST_TEST(!std::filesystem::exists(dir / "x.vtk"));
 }
 
+// The median volume of a tetrahedral mesh's elements right of x = 0.5 over that of those left of it.
+double right_over_left(const pv::Mesh& m) {
+    std::vector<double> left, right;
+    for (pv::ElementId e = 0; e < m.num_elements(); ++e) {
+        const auto c = m.element(e);
+        double x[4][3];
+        for (int i = 0; i < 4; ++i)
+            for (int k = 0; k < 3; ++k) x[i][k] = m.coordinates()[3 * c[i] + k];
+        double a[3], b[3], d[3];
+        for (int k = 0; k < 3; ++k) a[k] = x[1][k] - x[0][k], b[k] = x[2][k] - x[0][k], d[k] = x[3][k] - x[0][k];
+        const double volume = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) + a[2] * (b[0] * d[1] - b[1] * d[0]);
+        const double centre = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
+        (centre < 0.5 ? left : right).push_back(std::abs(volume));
+    }
+    auto median = [](std::vector<double>& v) {
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    return median(right) / median(left);
+}
+
 // A size field (docs/targets.md): elements move toward the sizes it asks for; a field that is missing, not one value per point or not a length,
 // or a size given twice, is refused.
 BOOST_AUTO_TEST_CASE(a_size_field_sizes_the_elements) {
@@ -249,25 +270,6 @@ BOOST_AUTO_TEST_CASE(a_size_field_sizes_the_elements) {
     // Median element volume on the right over that on the left: 1 in the input (a uniform grid).
     // The solver raises the worst elements against their targets, which here are the ones asked
     // to shrink: those on the right, boundary-fixed on three sides, shrink; the left holds.
-    auto right_over_left = [](const pv::Mesh& m) {
-        std::vector<double> left, right;
-        for (pv::ElementId e = 0; e < m.num_elements(); ++e) {
-            const auto c = m.element(e);
-            double x[4][3];
-            for (int i = 0; i < 4; ++i)
-                for (int k = 0; k < 3; ++k) x[i][k] = m.coordinates()[3 * c[i] + k];
-            double a[3], b[3], d[3];
-            for (int k = 0; k < 3; ++k) a[k] = x[1][k] - x[0][k], b[k] = x[2][k] - x[0][k], d[k] = x[3][k] - x[0][k];
-            const double volume = a[0] * (b[1] * d[2] - b[2] * d[1]) - a[1] * (b[0] * d[2] - b[2] * d[0]) + a[2] * (b[0] * d[1] - b[1] * d[0]);
-            const double centre = 0.25 * (x[0][0] + x[1][0] + x[2][0] + x[3][0]);
-            (centre < 0.5 ? left : right).push_back(std::abs(volume));
-        }
-        auto median = [](std::vector<double>& v) {
-            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
-            return v[v.size() / 2];
-        };
-        return median(right) / median(left);
-    };
     BOOST_TEST(std::abs(right_over_left(mesh) - 1.0) < 1e-9);
     const auto out = pv::read_mesh(dir / "out.vtu");
     BOOST_TEST(right_over_left(out.mesh) < 0.9);
@@ -286,6 +288,43 @@ BOOST_AUTO_TEST_CASE(a_size_field_sizes_the_elements) {
     result = run_cli("improve -q " + quoted(dir / "zero.vtu") + " -o " + quoted(dir / "x.vtu") + " --size-field h");
     BOOST_TEST(result.exit_code == 1);
     BOOST_TEST(has(result.output, "vertex 5"), result.output);
+    BOOST_TEST(!std::filesystem::exists(dir / "x.vtu"));
+}
+
+BOOST_AUTO_TEST_CASE(a_metric_field_shapes_and_sizes_the_elements) {
+    const pv::test::ScratchDir dir("cli_metric_field");
+    pv::Mesh mesh = pv::test::cube_grid(6, pv::test::Fill::Tetrahedra);
+    // Edges 1.4 times the grid's on the left half, 0.7 times on the right (M = I / h^2), as six
+    // values and as the whole matrix; and fields that are not metrics.
+    pv::Field six{"m", 6, {}}, nine{"m9", 9, {}}, three{"m3", 3, {}}, skewed{"ms", 9, {}}, negative{"mn", 6, {}};
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const double h = (mesh.coordinates()[3 * v] < 0.5 ? 1.4 : 0.7) / 6.0, m = 1.0 / (h * h);
+        six.values.insert(six.values.end(), {m, m, m, 0.0, 0.0, 0.0});
+        nine.values.insert(nine.values.end(), {m, 0.0, 0.0, 0.0, m, 0.0, 0.0, 0.0, m});
+        three.values.insert(three.values.end(), {m, m, m});
+        skewed.values.insert(skewed.values.end(), {m, 0.1 * m, 0.0, 0.0, m, 0.0, 0.0, 0.0, m});
+        negative.values.insert(negative.values.end(), {m, m, v == 7 ? -m : m, 0.0, 0.0, 0.0});
+    }
+    pv::write_mesh(dir / "in.vtu", mesh, pv::WriteOptions{}, std::vector<pv::Field>{six, nine, three, skewed, negative});
+    const std::string run = "improve -q " + quoted(dir / "in.vtu") + " --threads 1 -o ";
+    auto result = run_cli(run + quoted(dir / "six.vtu") + " --metric-field m");
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    result = run_cli(run + quoted(dir / "nine.vtu") + " --metric-field m9");
+    BOOST_TEST_REQUIRE(result.exit_code == 0, result.output);
+    const auto out = pv::read_mesh(dir / "six.vtu");
+    BOOST_TEST(right_over_left(out.mesh) < 0.9);  // as with the size field of the same lengths
+    BOOST_TEST(out.point_field("m"));              // kept with the output
+    const auto from_nine = pv::read_mesh(dir / "nine.vtu");
+    BOOST_TEST(std::ranges::equal(out.mesh.coordinates(), from_nine.mesh.coordinates()));
+    for (const auto& [field, words, code] : {std::tuple{"m3", "3 components", 1}, std::tuple{"ms", "not symmetric at vertex 0", 1},
+                                             std::tuple{"mn", "vertex 7", 1}, std::tuple{"none", "no point field 'none'", 1}}) {
+        result = run_cli(run + quoted(dir / "x.vtu") + " --metric-field " + field);
+        BOOST_TEST(result.exit_code == code, field);
+        BOOST_TEST(has(result.output, words), result.output);
+    }
+    result = run_cli(run + quoted(dir / "x.vtu") + " --metric-field m --keep size");
+    BOOST_TEST(result.exit_code == 2);
+    BOOST_TEST(has(result.output, "metric_field"), result.output);
     BOOST_TEST(!std::filesystem::exists(dir / "x.vtu"));
 }
 

@@ -199,8 +199,8 @@ BOOST_AUTO_TEST_CASE(a_simplex_takes_the_stretch_of_its_neighbourhood) {
         }
     const auto aspect = pv::TargetOptions::from("aspect");
     const auto metric = pv::vertex_metrics(cubes, aspect, nullptr), squashed_metric = pv::vertex_metrics(squashed, aspect, nullptr);
-    BOOST_TEST(metric.size() == static_cast<std::size_t>(pv::kMetricWidth * cubes.num_vertices()));
-    const int index[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    BOOST_TEST(metric.size() == static_cast<std::size_t>(pv::Mesh::kMetricValues * cubes.num_vertices()));
+    const int index[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {1, 2}, {0, 2}};
     const double scale = std::cbrt(0.1 * 0.1);  // det(F)^(2/3)
     double largest = 0.0;
     for (std::size_t v = 0; v < static_cast<std::size_t>(cubes.num_vertices()); ++v) {
@@ -300,6 +300,88 @@ BOOST_AUTO_TEST_CASE(a_size_field_that_is_missing_or_not_a_length_is_refused) {
     pv::TargetOptions skew_from_field;
     skew_from_field.skew = pv::TargetSource::Field;
     BOOST_CHECK_THROW(pv::set_targets(tet, skew_from_field), pv::OptionError);
+}
+
+// A metric field (docs/targets.md): every element becomes the ideal element in the mean of its
+// vertices' metrics, sized, stretched and turned by it.
+pv::TargetOptions from_metric() {
+    pv::TargetOptions o;
+    o.size = o.aspect = o.orientation = pv::TargetSource::Metric;
+    return o;
+}
+std::vector<double> uniform_metric(const pv::Mesh& mesh, std::array<double, 6> m) {
+    std::vector<double> out;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) out.insert(out.end(), m.begin(), m.end());
+    return out;
+}
+
+BOOST_AUTO_TEST_CASE(an_element_ideal_in_its_metric_rates_one) {
+    BOOST_TEST(from_metric().metric("mean_ratio") == "shape_size");
+    // The regular tetrahedron of edge 1 mapped by F: ideal in M = (F F^T)^-1, whatever its turn.
+    const double f[3][3] = {{2.0, 0.3, 0.0}, {0.0, 0.5, 0.1}, {0.2, 0.0, 0.7}};
+    pv::Mesh tet = regular_tet(1.0, 0.4);
+    for (std::size_t v = 0; v < 12; v += 3) {
+        const double x[3] = {tet.coordinates()[v], tet.coordinates()[v + 1], tet.coordinates()[v + 2]};
+        for (int i = 0; i < 3; ++i) tet.coordinates()[v + i] = f[i][0] * x[0] + f[i][1] * x[1] + f[i][2] * x[2];
+    }
+    double ff[3][3] = {}, m[3][3];
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            for (int k = 0; k < 3; ++k) ff[i][j] += f[i][k] * f[j][k];
+    const double det = ff[0][0] * (ff[1][1] * ff[2][2] - ff[1][2] * ff[2][1]) - ff[0][1] * (ff[1][0] * ff[2][2] - ff[1][2] * ff[2][0]) +
+                       ff[0][2] * (ff[1][0] * ff[2][1] - ff[1][1] * ff[2][0]);
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const int r0 = (j + 1) % 3, r1 = (j + 2) % 3, c0 = (i + 1) % 3, c1 = (i + 2) % 3;
+            m[i][j] = (ff[r0][c0] * ff[r1][c1] - ff[r0][c1] * ff[r1][c0]) / det;
+        }
+    BOOST_TEST(rate("mean_ratio", tet)[0] < 0.5);
+    tet.set_target_metrics(uniform_metric(tet, {m[0][0], m[1][1], m[2][2], m[0][1], m[1][2], m[0][2]}));
+    pv::set_targets(tet, from_metric());
+    for (const char* metric : {"mean_ratio", "shape_size"}) check_all_near(rate(metric, tet), 1.0, 1e-10);
+    // Asking for edges half as long misses the size (not the shape); the metric scales with the mesh.
+    tet.set_target_metrics(uniform_metric(tet, {4 * m[0][0], 4 * m[1][1], 4 * m[2][2], 4 * m[0][1], 4 * m[1][2], 4 * m[0][2]}));
+    pv::set_targets(tet, from_metric());
+    check_all_near(rate("mean_ratio", tet), 1.0, 1e-10);
+    BOOST_TEST(rate("shape_size", tet)[0] < 0.9);
+    tet.scale(-1);
+    BOOST_TEST(tet.target_metrics()[0] == 16 * m[0][0]);
+
+    // A 2 x 1 x 3 box: ideal (a cube's corners) in diag(1/4, 1, 1/9), every corner.
+    pv::Mesh cell = box(2, 1, 3);
+    cell.set_target_metrics(uniform_metric(cell, {0.25, 1.0, 1.0 / 9.0, 0.0, 0.0, 0.0}));
+    pv::set_targets(cell, from_metric());
+    for (const char* metric : {"mean_ratio", "shape_size"}) check_all_near(rate(metric, cell), 1.0, 1e-10);
+
+    // Triangles in a tilted plane: the metric is read in the plane (here edges of 2 everywhere).
+    const double c = std::cos(0.6), s = std::sin(0.6);
+    std::vector<double> xyz;
+    for (const auto& p : pv::ideal_cell(pv::CellType::Triangle)) xyz.insert(xyz.end(), {2 * p[0], 2 * c * p[1], 2 * s * p[1]});
+    pv::Mesh triangle(pv::ElementKind::Triangle, xyz, {0, 1, 2});
+    triangle.set_target_metrics(uniform_metric(triangle, {0.25, 0.25, 0.25, 0.0, 0.0, 0.0}));
+    pv::set_targets(triangle, from_metric());
+    for (const char* metric : {"mean_ratio", "shape_size"}) check_all_near(rate(metric, triangle), 1.0, 1e-10);
+}
+
+BOOST_AUTO_TEST_CASE(a_metric_that_is_missing_or_not_a_metric_is_refused) {
+    pv::Mesh tet = regular_tet();
+    BOOST_CHECK_THROW(pv::set_targets(tet, from_metric()), pv::OptionError);  // no metrics given
+    BOOST_CHECK_THROW(tet.set_target_metrics(std::vector<double>(23, 1.0)), pv::MeshError);
+    std::vector<double> metric = uniform_metric(tet, {1, 1, 1, 0, 0, 0});
+    metric[6 * 2 + 3] = 2.0;  // xy > sqrt(xx yy): not positive definite
+    BOOST_CHECK_EXCEPTION(tet.set_target_metrics(metric), pv::MeshError,
+                          [](const pv::MeshError& e) { return std::string(e.what()).find("vertex 2") != std::string::npos; });
+    metric[6 * 2 + 3] = std::nan("");
+    BOOST_CHECK_THROW(tet.set_target_metrics(metric), pv::MeshError);
+    tet.set_target_metrics(uniform_metric(tet, {1, 1, 1, 0, 0, 0}));
+    pv::TargetOptions partly = from_metric();
+    partly.aspect = pv::TargetSource::Input;  // size, aspect and orientation come together
+    BOOST_CHECK_THROW(pv::set_targets(tet, partly), pv::OptionError);
+    // In a plane the metric must be positive definite there.
+    pv::Mesh triangle(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2});
+    triangle.set_target_metrics(uniform_metric(triangle, {1, 0, 1, 0, 0, 0}));  // nothing along y
+    BOOST_CHECK_EXCEPTION(pv::set_targets(triangle, from_metric()), pv::MeshError,
+                          [](const pv::MeshError& e) { return std::string(e.what()).find("element 0") != std::string::npos; });
 }
 
 BOOST_AUTO_TEST_CASE(scaling_the_mesh_scales_its_target_sizes_exactly) {

@@ -88,4 +88,18 @@ BOOST_AUTO_TEST_CASE(sizes_from_a_field_travel_with_the_parts) {
     check_parts_give_the_serial_answer(input, targets, "mean_ratio");
 }
 
+// The target metrics too, on cells.
+BOOST_AUTO_TEST_CASE(metrics_from_a_field_travel_with_the_parts) {
+    pv::Mesh input = stretched(Fill::Wedges);
+    std::vector<double> metrics;
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v) {
+        const double x = input.coordinates()[3 * v], h = 0.1 + 0.2 * x;
+        metrics.insert(metrics.end(), {1 / (h * h), 1 / (h * h), 100 / (h * h), 0.3 / (h * h), 0.0, 0.0});
+    }
+    input.set_target_metrics(metrics);
+    pv::TargetOptions targets;
+    targets.size = targets.aspect = targets.orientation = pv::TargetSource::Metric;
+    check_parts_give_the_serial_answer(input, targets, "mean_ratio");
+}
+
 BOOST_AUTO_TEST_SUITE_END()

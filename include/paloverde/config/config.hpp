@@ -63,13 +63,14 @@ struct TargetsSpec {
     std::string reference;                    // a mesh with the input's connectivity
     std::vector<std::string> from_reference;  // with a reference; empty: every factor not kept
     std::string size_field;                   // a point field of the input: the edge length wanted at each vertex
+    std::string metric_field;                 // a point field of the input: the metric wanted at each vertex
     // The targets for a mesh with cells (`cells`) or without; `input_is_reference`: the input as
     // read is the reference (input.displacement).
     TargetOptions options(bool cells, bool input_is_reference = false) const;
     void validate() const;
 
 private:
-    TargetOptions factors(bool cells, bool input_is_reference) const;  // options() without size_field
+    TargetOptions factors(bool cells, bool input_is_reference) const;  // options() without the fields
 };
 
 // Partitioned (MPI) runs; see docs/config.md. parts = 1 is a serial run.

@@ -116,6 +116,17 @@ public:
     void set_target_edge_lengths(std::vector<double> lengths);
     void clear_target_edge_lengths() noexcept { target_edge_lengths_.clear(); }
 
+    // Anisotropic sizes from a field: the metric wanted at each vertex, the symmetric positive
+    // definite M in which a wanted edge e has unit length (e^T M e = 1; edges of length h in every
+    // direction: M = I / h^2), six values per vertex in VTK's order: xx, yy, zz, xy, yz, xz.
+    // Targets from it (TargetSource::Metric) make each element the ideal one in the mean of its
+    // vertices' metrics. Empty when none is given; scaled with the mesh. Throws MeshError for a
+    // wrong count or a vertex whose matrix is not finite, or (volume meshes) not positive definite.
+    static constexpr int kMetricValues = 6;
+    std::span<const double> target_metrics() const noexcept { return target_metrics_; }
+    void set_target_metrics(std::vector<double> metrics);
+    void clear_target_metrics() noexcept { target_metrics_.clear(); }
+
     // Vertex -> incident elements, compressed rows.
     std::span<const ElementId> elements_of(VertexId v) const noexcept {
         return std::span<const ElementId>(vertex_elements_)
@@ -212,6 +223,7 @@ private:
     std::vector<double> target_volumes_;
     std::vector<double> reference_coordinates_;
     std::vector<double> target_edge_lengths_;
+    std::vector<double> target_metrics_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

@@ -26,8 +26,10 @@
 namespace paloverde {
 
 // Field: the size from the mesh's target edge lengths (Mesh::target_edge_lengths, a size field of
-// the file); for the size factor only.
-enum class TargetSource { Ideal, Input, Reference, Field };
+// the file); for the size factor only. Metric: size, aspect and orientation together from the
+// mesh's target metrics (Mesh::target_metrics, a metric field of the file): each element is the
+// ideal element in the mean of its vertices' metrics, turned within it as the element is.
+enum class TargetSource { Ideal, Input, Reference, Field, Metric };
 
 struct TargetOptions {
     TargetSource size = TargetSource::Ideal;
@@ -45,7 +47,8 @@ struct TargetOptions {
     // The factors from `source`, as from() reads them ("size,aspect"; "" for none).
     std::string list(TargetSource source) const;
     // The metric that rates what these targets ask for: shape_size_orient where orientation is
-    // not ideal, shape_size where size is not, else `shape_metric`.
+    // not ideal (shape_size where it comes with the size from a metric field, which turns each
+    // target as its element is), shape_size where size is not ideal, else `shape_metric`.
     std::string metric(std::string_view shape_metric) const;
 };
 
@@ -61,14 +64,13 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted 
 // neighbourhood's metric: each simplex's metric M (the symmetric matrix in which it is the
 // regular simplex, at determinant 1) is averaged over each vertex's simplices, then over the
 // element's vertices; the target is turned within that metric as the source corner is. The means
-// are arithmetic, so a linear map of the mesh maps its targets alike. Cells keep their corners'
+// are arithmetic, so a linear map of the mesh maps its metrics alike. Cells keep their corners'
 // own factors.
 bool stretches_from_neighbourhood(const TargetOptions& options);
-// Per vertex, kMetricWidth values (the mean metric, a symmetric matrix: xx, yy, zz, xy, xz, yz)
+// Per vertex, Mesh::kMetricValues values (the mean metric, in Mesh::target_metrics' order)
 // over the vertex's simplices at the aspect's source, summed exactly (the same whatever the order
 // of the vertex's elements). Empty unless stretches_from_neighbourhood(options). A part's values
 // at its ghost vertices miss elements it does not hold: replace them with their owners'.
-constexpr int kMetricWidth = 6;
 std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference);
 
 // Sets every element's target on `mesh` (Mesh::set_targets) from its coordinates now (Input) and
@@ -76,9 +78,10 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
 // vertex. `ideal_scale` is the mean of ideal_size_sum()'s terms over the whole mesh (the
 // overload without it computes it from `mesh`). With no factor other than ideal it clears the
 // targets. Throws MeshError naming the first difference of a reference that does not match,
-// OptionError when a factor asks for a reference and none is given, or for field edge lengths the
-// mesh does not carry, or for a factor other than size from a field, and MeshError for a triangle
-// mesh that is not planar.
+// OptionError when a factor asks for a reference and none is given, or for field edge lengths or
+// metrics the mesh does not carry, or for a factor other than size from a field, or for metric
+// factors other than size, aspect and orientation together, and MeshError for a triangle mesh that
+// is not planar or an element whose mean metric is not positive definite (in its plane).
 // `metrics` are vertex_metrics(mesh, options, reference), complete at every vertex.
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
                  std::span<const double> metrics);
