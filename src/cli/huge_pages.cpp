@@ -2,11 +2,11 @@
 //
 // A run on a large mesh fills several hundred megabytes of freshly allocated arrays (the mesh,
 // its copies in working order, per-element qualities for every metric assessed). On 4 KiB pages
-// each first touch is a page fault, and in a virtual machine a fault costs microseconds: on
-// fandisk-2M with --iterations 0 they were 97 thousand faults and about a sixth of the run.
+// each first touch is a page fault, and in a virtual machine a fault costs microseconds: on a
+// 2M-tet mesh with --iterations 0 they were 97 thousand faults and about a sixth of the run.
 // Mapped on huge pages (2 MiB), where the kernel grants them on request
 // (/sys/kernel/mm/transparent_hugepage/enabled: madvise, Debian's default), the large arrays take
-// a few hundred, and that run 16 thousand in all (docs/benchmarks.md, "Seventh round"). glibc
+// a few hundred, and that run 16 thousand in all (docs/benchmarks.md). glibc
 // can do much the same (GLIBC_TUNABLES=glibc.malloc.hugetlb=1), but only when set
 // before the process starts; this does it from inside, for the program alone (the library's users
 // keep their own allocator).
@@ -20,11 +20,10 @@
 // reporting, as in Firecracker) large arrays come from malloc instead. The balloon reports free
 // blocks of a huge page or more (2 MiB on one such guest, 8 MiB on another) and the host takes
 // them back, so a mapping unmapped when freed is memory the host must back afresh at the next
-// phase's arrays; on the Firecracker guest of docs/benchmarks.md "Tenth round" that cost 2.8 ms a
-// megabyte as huge pages, 0.4 as small pages. The program's heap keeps what is freed
-// (keep_freed_memory), so the next arrays reuse it without a fault: on a PVM guest fandisk-2M
-// with --iterations 0 took 186 thousand faults and 4.5 s as mappings, 24 thousand and 2.8 s from
-// the heap, peak memory about the same ("Eleventh round").
+// phase's arrays: 2.8 ms a megabyte as huge pages, 0.4 as small pages, measured on such a guest
+// (docs/benchmarks.md). The program's heap keeps what is freed (keep_freed_memory), so the next
+// arrays reuse it without a fault: a 0-iteration run on a 2M-tet mesh took 186 thousand faults
+// and 4.5 s as mappings, 24 thousand and 2.8 s from the heap, peak memory about the same.
 #include <dirent.h>
 #include <fcntl.h>
 #include <sys/mman.h>

@@ -456,9 +456,10 @@ RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks) {
     // Its own targets (set from C++) are kept; the spec's replace them for the run only.
     const std::vector<CornerMap> maps(mesh.target_maps().begin(), mesh.target_maps().end());
     const std::vector<double> volumes(mesh.target_volumes().begin(), mesh.target_volumes().end());
+    const std::vector<CornerMap> roots(mesh.target_metric_roots().begin(), mesh.target_metric_roots().end());
     const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
     const auto put_back = [&] {
-        maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes);
+        maps.empty() ? mesh.clear_targets() : mesh.set_targets(maps, volumes, roots);
         reference.empty() ? mesh.clear_reference_coordinates() : mesh.set_reference_coordinates(reference);
     };
     detail::set_run_targets(spec, mesh, ReadOptions{}, mesh.elements_flipped(), "the mesh");

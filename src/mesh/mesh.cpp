@@ -141,38 +141,55 @@ void Mesh::carry_element_data_from(const Mesh& source, std::span<const VertexId>
             target_maps_[i] = source.target_maps_[static_cast<std::size_t>(old_element[i])];
             target_volumes_[i] = source.target_volumes_[static_cast<std::size_t>(old_element[i])];
         }
+        if (!source.target_metric_roots_.empty()) {
+            target_metric_roots_.resize(old_element.size());
+            for (std::size_t i = 0; i < old_element.size(); ++i)
+                target_metric_roots_[i] = source.target_metric_roots_[static_cast<std::size_t>(old_element[i])];
+        }
     }
 }
 
-void Mesh::set_targets(std::vector<CornerMap> maps, std::vector<double> volumes) {
+namespace {
+double determinant3(const CornerMap& a) {
+    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
+           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+}
+bool finite(const CornerMap& a) {
+    for (const auto& row : a)
+        for (double x : row)
+            if (!std::isfinite(x)) return false;
+    return true;
+}
+}  // namespace
+
+void Mesh::set_targets(std::vector<CornerMap> maps, std::vector<double> volumes, std::vector<CornerMap> metric_roots) {
     const auto m = static_cast<std::size_t>(num_elements());
-    if (maps.size() != m || volumes.size() != m)
-        throw MeshError("targets: " + std::to_string(maps.size()) + " maps and " + std::to_string(volumes.size()) +
-                        " volumes given for " + std::to_string(m) + " elements");
+    if (maps.size() != m || volumes.size() != m || (!metric_roots.empty() && metric_roots.size() != m))
+        throw MeshError("targets: " + std::to_string(maps.size()) + " maps, " + std::to_string(volumes.size()) +
+                        " volumes and " + std::to_string(metric_roots.size()) + " metric roots given for " +
+                        std::to_string(m) + " elements");
     const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
     for (std::size_t e = 0; e < m; ++e) {
         const CornerMap& a = maps[e];
-        bool finite = true;
-        for (const auto& row : a)
-            for (double x : row) finite = finite && std::isfinite(x);
-        const double det = d == 2 ? a[0][0] * a[1][1] - a[0][1] * a[1][0]
-                                  : a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) -
-                                        a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-                                        a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-        if (!finite || !(det > 0.0))
+        const double det = d == 2 ? a[0][0] * a[1][1] - a[0][1] * a[1][0] : determinant3(a);
+        if (!finite(a) || !(det > 0.0))
             throw MeshError("target of element " + std::to_string(e) + ": its map is " +
-                            (finite ? "not orientation-preserving" : "not finite"));
+                            (finite(a) ? "not orientation-preserving" : "not finite"));
+        if (!metric_roots.empty() && !(finite(metric_roots[e]) && determinant3(metric_roots[e]) > 0.0))
+            throw MeshError("target of element " + std::to_string(e) + ": its metric root is not finite and orientation-preserving");
         if (!(volumes[e] > 0.0) || !std::isfinite(volumes[e]))
             throw MeshError("target of element " + std::to_string(e) + ": its volume " + std::to_string(volumes[e]) +
                             " is not a finite positive number");
     }
     target_maps_ = std::move(maps);
     target_volumes_ = std::move(volumes);
+    target_metric_roots_ = std::move(metric_roots);
 }
 
 void Mesh::clear_targets() noexcept {
     target_maps_.clear();
     target_volumes_.clear();
+    target_metric_roots_.clear();
 }
 
 void Mesh::set_reference_coordinates(std::vector<double> xyz) {

@@ -75,22 +75,54 @@ void unmap_gradient(const CornerMap& m, double* g) {
     for (int d = 0; d < 3; ++d) g[d] = total[d];
 }
 
-// Where an element's corners are carried from before a kernel rates them: its target's map where
-// the mesh has targets, else its cell's corner map; none for the elements of a simplex mesh.
+// Where an element's corners are carried before a kernel rates them: by its map (its target's
+// where the mesh has targets, else its cell's corner map; none for a simplex mesh's elements),
+// then into its target's metric space (Mesh::target_metric_roots) where it has one.
+struct ElementMap {
+    const CornerMap* map = nullptr;
+    const CornerMap* root = nullptr;
+    explicit operator bool() const { return map || root; }
+};
+
+// Every corner carried by the metric root n (z = n y; the kernels are translation invariant).
+template <int K>
+void map_corner(const ElementMap& m, double* x) {
+    if (m.map) map_corner<K>(*m.map, x);
+    if (!m.root) return;
+    const CornerMap& n = *m.root;
+    for (int i = 0; i < K; ++i) {
+        const double y[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+        for (int r = 0; r < 3; ++r) x[3 * i + r] = n[r][0] * y[0] + n[r][1] * y[1] + n[r][2] * y[2];
+    }
+}
+template <int K>
+void unmap_gradient(const ElementMap& m, double* g) {
+    if (m.root) {
+        const CornerMap& n = *m.root;
+        for (int i = 0; i < K; ++i) {
+            const double gz[3] = {g[3 * i], g[3 * i + 1], g[3 * i + 2]};
+            for (int c = 0; c < 3; ++c) g[3 * i + c] = n[0][c] * gz[0] + n[1][c] * gz[1] + n[2][c] * gz[2];
+        }
+    }
+    if (m.map) unmap_gradient<K>(*m.map, g);
+}
+
 class ElementMaps {
 public:
     explicit ElementMaps(const Mesh& mesh)
         : ids_(mesh.corner_maps().empty() ? nullptr : mesh.corner_maps().data()),
-          targets_(mesh.has_targets() ? mesh.target_maps().data() : nullptr) {}
+          targets_(mesh.has_targets() ? mesh.target_maps().data() : nullptr),
+          roots_(mesh.target_metric_roots().empty() ? nullptr : mesh.target_metric_roots().data()) {}
     explicit operator bool() const { return ids_ || targets_; }
-    const CornerMap* of(ElementId e) const {
-        if (targets_) return targets_ + e;
-        return ids_ && ids_[e] ? &corner_map(ids_[e]) : nullptr;
+    ElementMap of(ElementId e) const {
+        if (targets_) return {targets_ + e, roots_ ? roots_ + e : nullptr};
+        return {ids_ && ids_[e] ? &corner_map(ids_[e]) : nullptr, nullptr};
     }
 
 private:
     const std::uint8_t* ids_;
     const CornerMap* targets_;
+    const CornerMap* roots_;
 };
 
 // Gathers element e's K corners into x, mapped when the element has a map.
@@ -98,7 +130,7 @@ template <int K>
 void gather(const VertexId* c, const double* coords, const ElementMaps& maps, ElementId e, double* x) {
     for (int i = 0; i < K; ++i)
         for (int d = 0; d < 3; ++d) x[3 * i + d] = coords[3 * static_cast<std::size_t>(c[i]) + d];
-    if (const CornerMap* m = maps.of(e)) map_corner<K>(*m, x);
+    if (const ElementMap m = maps.of(e)) map_corner<K>(m, x);
 }
 
 // The element-by-element passes, for kernels and for a program's own metrics alike: each
@@ -134,7 +166,7 @@ void accumulate_each(const Mesh& mesh, std::span<const double> xyz, ElementId fi
         const VertexId* c = conn + static_cast<std::size_t>(e) * K;
         gather<K>(c, coords, maps, e, x);
         rate(std::integral_constant<int, K>{}, e, x, g);
-        if (const CornerMap* m = maps.of(e)) unmap_gradient<K>(*m, g);
+        if (const ElementMap m = maps.of(e)) unmap_gradient<K>(m, g);
         for (int i = 0; i < K; ++i) add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, g + 3 * i);
     }
 }
@@ -162,11 +194,11 @@ void accumulate_gradient_each(const Mesh& mesh, std::span<const double> xyz, Ele
 
 // Maps the corners of lane j of a gathered block when its element has a map, as gather<4>() maps
 // them: the same bits.
-inline void map_lane(const CornerMap* m, int j, TetBlock& x) {
+inline void map_lane(const ElementMap& m, int j, TetBlock& x) {
     if (!m) return;
     double corner[12];
     for (int i = 0; i < 12; ++i) corner[i] = x.at[i][j];
-    map_corner<4>(*m, corner);
+    map_corner<4>(m, corner);
     for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
 }
 
@@ -175,9 +207,8 @@ inline void map_lane(const CornerMap* m, int j, TetBlock& x) {
 // last, partial block hold a degenerate element at the origin, which rates 0 without trouble. A
 // cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits). While a block
 // is rated, the next one's corners come in: asked for unless the mesh is in locality order, where
-// the 128 prefetch instructions per block cost more than they save (fandisk-2M renumbered, on an
-// AMD EPYC: objective pass 29 -> 24 ns per tet without them; its elements and vertices shuffled
-// and not renumbered, the iterations took 1-12% longer without them).
+// the 128 prefetch instructions per block cost more than they save (a pass is about a sixth
+// faster without them there; on a shuffled mesh, 1-12% slower).
 template <class Rate>
 void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last, Rate&& rate) {
     const VertexId* conn = mesh.connectivity().data();
@@ -284,7 +315,7 @@ public:
             gather<K>(c, xyz.data(), maps, e, x);
             const double q = kernel<K>(x, gradient, scale_of(mesh, e, local));
             if (gradient)
-                if (const CornerMap* m = maps.of(e)) unmap_gradient<K>(*m, gradient);
+                if (const ElementMap m = maps.of(e)) unmap_gradient<K>(m, gradient);
             return q;
         };
         return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
@@ -432,7 +463,7 @@ private:
                 const VertexId* c = conn + 4 * static_cast<std::size_t>(e);
                 double gradient[12];
                 for (int i = 0; i < 12; ++i) gradient[i] = g.at[i][j];
-                if (const CornerMap* m = maps.of(e)) unmap_gradient<4>(*m, gradient);
+                if (const ElementMap m = maps.of(e)) unmap_gradient<4>(m, gradient);
                 for (int i = 0; i < 4; ++i)
                     add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, gradient + 3 * i);
             }
@@ -496,7 +527,7 @@ double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xy
         metrics::gather<K>(c, xyz.data(), maps, e, x);
         if (!gradient) return value(mesh.kind(), x);
         const double q = value_and_gradient(mesh.kind(), x, gradient);
-        if (const CornerMap* m = maps.of(e)) metrics::unmap_gradient<K>(*m, gradient);
+        if (const metrics::ElementMap m = maps.of(e)) metrics::unmap_gradient<K>(m, gradient);
         return q;
     };
     return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "core/exact_sums.hpp"
@@ -323,12 +324,57 @@ Matrix mean_at_corners(const Mesh& mesh, ElementId e, std::span<const double> pe
     return mean;
 }
 
+// A simplex rated in the space of the symmetric positive definite metric `metric` (d x d, in the
+// plane's basis a, b for a 2D mesh): its target is the regular simplex there, turned as the
+// `source` corner is turned there (the polar rotation of M^1/2 A W_regular^-1; none when the
+// source corner is inverted or degenerate). Returns the target's shape (det 1) and the metric's
+// root M^1/2 at determinant 1 as a map of space (3 x 3; in 2D, the identity off the plane).
+struct MetricSpace {
+    Matrix shape;
+    CornerMap root;
+};
+MetricSpace metric_space(const Matrix& metric, const Factors& source, const Matrix& regular, int d, const metrics::P& a,
+                         const metrics::P& b) {
+    Matrix root = symmetric_function(metric, d, [](double x) { return std::sqrt(x); });
+    const double unit = std::pow(determinant(root, d), 1.0 / d);
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) root[i][j] /= unit;
+    Matrix turn{};
+    for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
+    if (source.valid && source.positive)
+        turn = polar_rotation(product(root, product(source.frame, inverse(regular, d), d), d), d);
+    MetricSpace out;
+    out.shape = product(turn, regular, d);
+    const double shape_unit = std::pow(determinant(out.shape, d), 1.0 / d);
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) out.shape[i][j] /= shape_unit;
+    if (d == 3) {
+        out.root = root;
+    } else {  // B N B^T + n n^T, B = [a b], n = a x b
+        const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
+        const double n[3] = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) {
+                double sum = n[r] * n[c];
+                for (int i = 0; i < 2; ++i)
+                    for (int j = 0; j < 2; ++j) sum += u[i][r] * root[i][j] * u[j][c];
+                out.root[r][c] = sum;
+            }
+    }
+    return out;
+}
+
 // Element e's target from the mean M of its vertices' target metrics (in the plane's basis a, b for
 // a 2D mesh): its ideal corner carried into M's space, W = M^-1/2 R W_ideal, R turning it within M
 // as the element is (the polar rotation of M^1/2 A W_ideal^-1; none for an inverted or degenerate
 // element). Returns the map and the volume that Mesh::set_targets takes.
-std::pair<CornerMap, double> metric_target(const Mesh& mesh, ElementId element, const Matrix& ideal, const Factors& in,
-                                           const metrics::P& a, const metrics::P& b, const Matrix& regular) {
+struct MetricTarget {
+    CornerMap map;
+    double volume;
+    std::optional<CornerMap> root;  // a simplex is rated in the metric's space
+};
+MetricTarget metric_target(const Mesh& mesh, ElementId element, const Matrix& ideal, const Factors& in,
+                           const metrics::P& a, const metrics::P& b, const Matrix& regular) {
     const int d = mesh.corners() - 1;
     const Matrix full = mean_at_corners(mesh, element, mesh.target_metrics());
     Matrix mean = full;
@@ -345,24 +391,34 @@ std::pair<CornerMap, double> metric_target(const Mesh& mesh, ElementId element, 
     if (!(mean[0][0] > 0.0 && determinant(mean, d) > 0.0 && (d == 2 || mean[0][0] * mean[1][1] > mean[0][1] * mean[0][1])))
         throw MeshError("element " + std::to_string(element) + ": the mean of its vertices' target metrics is not positive definite" +
                         (d == 2 ? " in the mesh's plane" : ""));
-    const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
-    Matrix turn{};
-    for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
-    if (in.valid && in.positive) {
-        const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
-        turn = polar_rotation(product(inverse_root, product(in.frame, inverse(ideal, d), d), d), d);
+    // Its size: the ideal corner with unit edges in M, det W = det(M)^-1/2 det W_ideal.
+    const double volume_ratio = determinant(ideal, d) / std::sqrt(determinant(mean, d));  // lambda^d
+    MetricTarget out;
+    out.volume = volume_ratio * determinant(regular, d) / (d == 3 ? 6.0 : 2.0);
+    Matrix shape;
+    if (is_simplex(mesh, element)) {
+        const MetricSpace space = metric_space(mean, in, regular, d, a, b);
+        shape = space.shape;
+        out.root = space.root;
+    } else {
+        // A cell's corner: its ideal corner carried into M, W = M^-1/2 R W_ideal.
+        const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
+        Matrix turn{};
+        for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
+        if (in.valid && in.positive) {
+            const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
+            turn = polar_rotation(product(inverse_root, product(in.frame, inverse(ideal, d), d), d), d);
+        }
+        shape = product(root, product(turn, ideal, d), d);
+        const double lambda = std::pow(determinant(shape, d), 1.0 / d);
+        for (int i = 0; i < d; ++i)
+            for (int j = 0; j < d; ++j) shape[i][j] /= lambda;
     }
-    const Matrix w = product(root, product(turn, ideal, d), d);
-    const double volume_ratio = determinant(w, d);  // lambda^d
-    const double lambda = std::pow(volume_ratio, 1.0 / d);
-    Matrix shape = w;
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) shape[i][j] /= lambda;
     const Matrix map = product(inverse(shape, d), regular, d);
-    CornerMap out{};
+    out.map = CornerMap{};
     for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) out[i][j] = map[i][j];
-    return {out, volume_ratio * determinant(regular, d) / (d == 3 ? 6.0 : 2.0)};
+        for (int j = 0; j < d; ++j) out.map[i][j] = map[i][j];
+    return out;
 }
 }  // namespace
 
@@ -463,6 +519,12 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
 
     std::vector<CornerMap> maps(m);
     std::vector<double> volumes(m);
+    // Metric roots, where some element is rated in a metric's space; the identity for the others.
+    std::vector<CornerMap> roots;
+    const auto set_root = [&](std::size_t e, const CornerMap& root) {
+        if (roots.empty()) roots.assign(m, CornerMap{{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}});
+        roots[e] = root;
+    };
     for (std::size_t e = 0; e < m; ++e) {
         const auto element = static_cast<ElementId>(e);
         const Matrix ideal = ideal_frame(mesh, element, regular, d);
@@ -471,9 +533,10 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
         const Factors ref = reference ? factor(edge_matrix(*reference, reference->coordinates(), element, ra, rb), d)
                                       : Factors{};
         if (from_metric) {
-            const auto [map, volume] = metric_target(mesh, element, ideal, in, a, b, regular);
-            maps[e] = map;
-            volumes[e] = volume;
+            const MetricTarget target = metric_target(mesh, element, ideal, in, a, b, regular);
+            maps[e] = target.map;
+            volumes[e] = target.volume;
+            if (target.root) set_root(e, *target.root);
             continue;
         }
         auto pick = [&](TargetSource source) -> const Factors& {
@@ -495,32 +558,30 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
         // factor from one corner, V is QR's and W is that corner.
         const Factors& oriented = pick(options.orientation);
         const Matrix& source = oriented.positive ? oriented.frame : id.frame;
-        Matrix skew_aspect;
+        Matrix shape;
         if (!metrics.empty() && is_simplex(mesh, element)) {
-            // The regular simplex stretched by the mean M of its vertices' metrics (to M^-1/2 W)
-            // and turned, within M, as the aspect's source corner is there: the polar rotation
-            // of M^1/2 S, which is the identity when M is the corner's own metric.
-            const Matrix mean = mean_at_corners(mesh, element, metrics);
-            const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
-            const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
-            const Factors& stretched = pick(options.aspect);
-            const Matrix turn = polar_rotation(
-                product(inverse_root, product(stretched.positive ? stretched.frame : id.frame, inverse(regular, d), d), d), d);
-            skew_aspect = product(root, product(turn, regular, d), d);
-            const double unit = std::pow(determinant(skew_aspect, d), 1.0 / d);
-            for (int i = 0; i < d; ++i)
-                for (int j = 0; j < d; ++j) skew_aspect[i][j] /= unit;
+            // Rated in the mean M of its vertices' metrics, against the regular simplex turned
+            // there as the aspect's source corner is (shape metrics ignore the turn, orientation
+            // metrics compare with it; an ideal orientation leaves it out).
+            const MetricSpace space = metric_space(mean_at_corners(mesh, element, metrics), pick(options.aspect), regular, d, a, b);
+            shape = space.shape;
+            if (options.orientation == TargetSource::Ideal) {
+                const double unit = std::pow(determinant(regular, d), 1.0 / d);
+                for (int i = 0; i < d; ++i)
+                    for (int j = 0; j < d; ++j) shape[i][j] = regular[i][j] / unit;
+            }
+            set_root(e, space.root);
         } else {
-            skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
+            const Matrix skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
+            const Matrix v = product(polar_rotation(source, d), transpose(polar_rotation(skew_aspect, d), d), d);
+            shape = product(v, skew_aspect, d);
         }
-        const Matrix v = product(polar_rotation(source, d), transpose(polar_rotation(skew_aspect, d), d), d);
-        const Matrix shape = product(v, skew_aspect, d);
         const Matrix map = product(inverse(shape, d), regular, d);
         for (int i = 0; i < 3; ++i)
             for (int j = 0; j < 3; ++j) maps[e][i][j] = i < d && j < d ? map[i][j] : 0.0;
         volumes[e] = std::pow(lambda, d) * regular_volume;
     }
-    mesh.set_targets(std::move(maps), std::move(volumes));
+    mesh.set_targets(std::move(maps), std::move(volumes), std::move(roots));
 }
 
 }  // namespace paloverde

@@ -359,7 +359,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
                 since_best_ = better ? 0 : since_best_ + 1;
                 record(now_, best_, epsilon_, e_, step * move / length, e_before - e_);
                 // The round after the first valid iterate ends once the best has not risen for a
-                // few steps: on fandisk-2M-interior it rose in 11 steps, then not in the next 19.
+                // few steps: the rises come early, and the steps after them rarely add any.
                 round_over = first_valid || e_before - e_ <= 1e-6 * std::abs(e_) || inner_ == kStepsPerEpsilon ||
                              (valid_found_ && since_best_ >= kSettlePatience);
             } else {

@@ -50,10 +50,11 @@ class KeptTargets {
 public:
     explicit KeptTargets(Mesh& mesh)
         : mesh_(mesh), maps_(mesh.target_maps().begin(), mesh.target_maps().end()),
-          volumes_(mesh.target_volumes().begin(), mesh.target_volumes().end()) {}
+          volumes_(mesh.target_volumes().begin(), mesh.target_volumes().end()),
+          roots_(mesh.target_metric_roots().begin(), mesh.target_metric_roots().end()) {}
     ~KeptTargets() {
         if (maps_.empty()) mesh_.clear_targets();
-        else mesh_.set_targets(std::move(maps_), std::move(volumes_));
+        else mesh_.set_targets(std::move(maps_), std::move(volumes_), std::move(roots_));
     }
     KeptTargets(const KeptTargets&) = delete;
     KeptTargets& operator=(const KeptTargets&) = delete;
@@ -62,6 +63,7 @@ private:
     Mesh& mesh_;
     std::vector<CornerMap> maps_;
     std::vector<double> volumes_;
+    std::vector<CornerMap> roots_;
 };
 }  // namespace
 

@@ -21,8 +21,8 @@ double NewtonDirection::element_sum(std::span<const double> values) {
 // ap_ = (A + Lambda) p_, p_ complete at ghosts, by a forward difference of the gradient pass
 // along p_ (t held fixed: sum w_i Hess q_i - sum c_i g_i g_i^T), plus t's move, u (u.p) / C, with
 // u.p = sum c_i g_i.p from the same difference of the qualities. The largest vertex move is 1e-6
-// reference lengths (1e-7 and 1e-5 gave the same worst quality on cube-clip-5 and tire), shrunk
-// should an element leave the barrier's domain.
+// reference lengths (1e-7 and 1e-5 give the same worst quality: the difference is not sensitive
+// to it), shrunk should an element leave the barrier's domain.
 void NewtonDirection::product(const QualityMetric& metric, const ObjectiveFunction& objective, std::span<const double> x,
                               std::span<const double> q, std::span<const double> c, double c_total,
                               std::span<const double> gradient) {

@@ -91,9 +91,14 @@ public:
     bool has_targets() const noexcept { return !target_maps_.empty(); }
     std::span<const CornerMap> target_maps() const noexcept { return target_maps_; }
     std::span<const double> target_volumes() const noexcept { return target_volumes_; }
-    // Throws MeshError for a wrong count, or naming the first element whose map is not finite or
-    // reverses orientation, or whose volume is not a finite positive number.
-    void set_targets(std::vector<CornerMap> maps, std::vector<double> volumes);
+    // Per element, or empty: the space its target is measured in, as the map N (N[row][column], a
+    // map of space of determinant 1) that carries its corners there after its map: the square
+    // root of a metric, in which a simplex whose stretch is meant (targets.hpp) is rated against
+    // the regular simplex. Without them every element is rated in space as it is.
+    std::span<const CornerMap> target_metric_roots() const noexcept { return target_metric_roots_; }
+    // Throws MeshError for a wrong count, or naming the first element whose map (or metric root)
+    // is not finite or reverses orientation, or whose volume is not a finite positive number.
+    void set_targets(std::vector<CornerMap> maps, std::vector<double> volumes, std::vector<CornerMap> metric_roots = {});
     void clear_targets() noexcept;
     // Multiplies every coordinate by 2^exponent, and the target volumes, reference coordinates
     // and target edge lengths with them: exact, and harmless to orientation (unit_scale_exponent).
@@ -221,6 +226,7 @@ private:
     std::vector<std::uint8_t> corner_map_;
     std::vector<CornerMap> target_maps_;
     std::vector<double> target_volumes_;
+    std::vector<CornerMap> target_metric_roots_;
     std::vector<double> reference_coordinates_;
     std::vector<double> target_edge_lengths_;
     std::vector<double> target_metrics_;

@@ -28,7 +28,8 @@ namespace paloverde {
 // Field: the size from the mesh's target edge lengths (Mesh::target_edge_lengths, a size field of
 // the file); for the size factor only. Metric: size, aspect and orientation together from the
 // mesh's target metrics (Mesh::target_metrics, a metric field of the file): each element is the
-// ideal element in the mean of its vertices' metrics, turned within it as the element is.
+// ideal element in the mean of its vertices' metrics (a simplex rated in that metric, a cell's
+// corner against its ideal corner carried into it), turned within it as the element is.
 enum class TargetSource { Ideal, Input, Reference, Field, Metric };
 
 struct TargetOptions {
@@ -60,12 +61,13 @@ ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted 
 // A simplex (tetrahedron, triangle) is a single corner, and its aspect alone cannot tell the
 // stretch a mesh means (a boundary layer's) from the distortion to remove, nor from the stretch
 // its cut pattern gives it (a box cut into tetrahedra). So where the aspect is kept (from the input
-// or a reference) and the skew made ideal, a simplex's target is the regular simplex in its
-// neighbourhood's metric: each simplex's metric M (the symmetric matrix in which it is the
+// or a reference) and the skew made ideal, a simplex is rated in its neighbourhood's metric
+// against the regular simplex: each simplex's metric M (the symmetric matrix in which it is the
 // regular simplex, at determinant 1) is averaged over each vertex's simplices, then over the
-// element's vertices; the target is turned within that metric as the source corner is. The means
-// are arithmetic, so a linear map of the mesh maps its metrics alike. Cells keep their corners'
-// own factors.
+// element's vertices, and the element's corners are carried by M^1/2 (Mesh::target_metric_roots)
+// before they are rated; with orientation kept, the regular simplex is turned in M as the source
+// corner is. The means are arithmetic, so a linear map of the mesh maps its metrics alike. Cells
+// keep their corners' own factors.
 bool stretches_from_neighbourhood(const TargetOptions& options);
 // Per vertex, Mesh::kMetricValues values (the mean metric, in Mesh::target_metrics' order)
 // over the vertex's simplices at the aspect's source, summed exactly (the same whatever the order

@@ -43,7 +43,7 @@ struct LocalSolverOptions {
     // In the shape sweeps only vertices whose worst element lies in the lowest band of qualities
     // move: below worst + improve_below * (ideal - worst), worst over the whole mesh. Max-min
     // moves trade a patch's good elements for its worst one, so moving every vertex lowers the
-    // mean quality (by ~10% on tire) for no gain in the worst; 1 or more moves them all.
+    // mean quality (by about a tenth) for no gain in the worst; 1 or more moves them all.
     double improve_below = 0.1;
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the
     // boundary fixed, shape sweeps in which they move on the input's boundary, along feature
