@@ -365,9 +365,10 @@ MetricSpace metric_space(const Matrix& metric, const Factors& source, const Matr
 }
 
 // Element e's target from the mean M of its vertices' target metrics (in the plane's basis a, b for
-// a 2D mesh): its ideal corner carried into M's space, W = M^-1/2 R W_ideal, R turning it within M
-// as the element is (the polar rotation of M^1/2 A W_ideal^-1; none for an inverted or degenerate
-// element). Returns the map and the volume that Mesh::set_targets takes.
+// a 2D mesh), sized so that its edges have unit length in M: a simplex rated in M (metric_space);
+// a cell's corner against its ideal corner carried into M, W = M^-1/2 R W_ideal, R turning it
+// within M as the element is (the polar rotation of M^1/2 A W_ideal^-1; none for an inverted or
+// degenerate element). Returns what Mesh::set_targets takes for it.
 struct MetricTarget {
     CornerMap map;
     double volume;
