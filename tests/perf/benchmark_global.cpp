@@ -1,5 +1,7 @@
 // Benchmark of the global solver's passes (run by hand, not a test):
-//   paloverde_benchmark MESH [--threads N] [--iterations N]
+//   paloverde_benchmark MESH [--threads N] [--iterations N] [--keep FACTORS]
+// (--keep: targets that keep these factors of the input, docs/targets.md, rated with the metric
+// they ask for; the passes then carry every element through its target.)
 // Reports, per element, a streaming pass that only reads the connectivity and coordinate
 // arrays, the objective pass (qualities and the log-barrier sum) and the gradient pass, with the
 // parts of the latter (gather, rate, gradients, scatter); then the time of N shape iterations.
@@ -18,6 +20,7 @@
 #include "paloverde/core/memory.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "paloverde/objectives/objective_function.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "solvers/workspace.hpp"
@@ -53,14 +56,16 @@ const char* block_path_name(pv::metrics::BlockPath path) {
 int main(int argc, char** argv) {
     paloverde::keep_freed_memory();  // as the command line does
     if (argc < 2) {
-        std::cerr << "usage: paloverde_benchmark MESH [--threads N] [--iterations N]\n";
+        std::cerr << "usage: paloverde_benchmark MESH [--threads N] [--iterations N] [--keep FACTORS]\n";
         return 2;
     }
     int threads = 1, iterations = 40;
+    std::string keep;
     for (int i = 2; i + 1 < argc; i += 2) {
         const std::string flag = argv[i];
         if (flag == "--threads") threads = std::atoi(argv[i + 1]);
         else if (flag == "--iterations") iterations = std::atoi(argv[i + 1]);
+        else if (flag == "--keep") keep = argv[i + 1];
     }
     omp_set_num_threads(threads);
     try {
@@ -68,6 +73,9 @@ int main(int argc, char** argv) {
         auto file = pv::read_mesh(argv[1]);
         const double read = seconds_since(t);
         auto& mesh = file.mesh;
+        const pv::TargetOptions targets = pv::TargetOptions::from(keep);
+        pv::set_targets(mesh, targets);
+        const std::string metric_name = targets.metric("aspect_ratio");
         t = Clock::now();
         pv::detail::Workspace work(mesh, true);
         const double setup = seconds_since(t);
@@ -80,7 +88,9 @@ int main(int argc, char** argv) {
         const auto m = static_cast<std::size_t>(work.movable_elements());
         const double per_million = 1e6 / static_cast<double>(m);
         std::cout << argv[1] << ": " << mesh.num_vertices() << " vertices, " << mesh.num_elements() << " elements ("
-                  << m << " movable), " << threads << " thread(s)\n"
+                  << m << " movable), " << threads << " thread(s), rated with " << metric_name
+                  << (mesh.has_targets() ? " against targets" : "")
+                  << (mesh.target_metric_roots().empty() ? "" : " (simplices in their neighbourhood's metric)") << "\n"
                   << "read " << read << " s, renumber + setup " << setup << " s (vertex graph " << graph
                   << " s, locality order " << locality << " s, a mesh copy " << mesh_copy << " s)\n"
                   << "tetrahedron block kernels: "
@@ -92,7 +102,7 @@ int main(int argc, char** argv) {
         const auto& wm = work.mesh();
         std::vector<double> x(wm.coordinates().begin(), wm.coordinates().end());
         std::vector<double> q(m), w(m), g(x.size());
-        auto metric = pv::make_metric("aspect_ratio");
+        auto metric = pv::make_metric(metric_name);
         metric->set_scale(work.scale());
         pv::LogBarrier barrier;
         const pv::Reducer serial;
@@ -168,6 +178,7 @@ int main(int argc, char** argv) {
                   << ",  objective pass / streaming read = " << objective / stream << "\n";
 
         pv::GlobalSolverOptions options;
+        options.shape_metric = metric_name;
         options.threads = threads;
         options.termination.max_iterations = iterations;
         options.termination.min_progress = 0.0;  // run every iteration
