@@ -9,6 +9,7 @@
 
 #include "paloverde/core/error.hpp"
 #include "core/prefetch.hpp"
+#include "mesh/small_matrix.hpp"
 
 namespace paloverde {
 
@@ -150,10 +151,6 @@ void Mesh::carry_element_data_from(const Mesh& source, std::span<const VertexId>
 }
 
 namespace {
-double determinant3(const CornerMap& a) {
-    return a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1]) - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0]) +
-           a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
-}
 bool finite(const CornerMap& a) {
     for (const auto& row : a)
         for (double x : row)
@@ -171,11 +168,11 @@ void Mesh::set_targets(std::vector<CornerMap> maps, std::vector<double> volumes,
     const int d = kind_ == ElementKind::Tetrahedron ? 3 : 2;
     for (std::size_t e = 0; e < m; ++e) {
         const CornerMap& a = maps[e];
-        const double det = d == 2 ? a[0][0] * a[1][1] - a[0][1] * a[1][0] : determinant3(a);
+        const double det = detail::determinant(a, d);
         if (!finite(a) || !(det > 0.0))
             throw MeshError("target of element " + std::to_string(e) + ": its map is " +
                             (finite(a) ? "not orientation-preserving" : "not finite"));
-        if (!metric_roots.empty() && !(finite(metric_roots[e]) && determinant3(metric_roots[e]) > 0.0))
+        if (!metric_roots.empty() && !(finite(metric_roots[e]) && detail::determinant(metric_roots[e], 3) > 0.0))
             throw MeshError("target of element " + std::to_string(e) + ": its metric root is not finite and orientation-preserving");
         if (!(volumes[e] > 0.0) || !std::isfinite(volumes[e]))
             throw MeshError("target of element " + std::to_string(e) + ": its volume " + std::to_string(volumes[e]) +

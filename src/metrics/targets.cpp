@@ -110,6 +110,14 @@ Matrix symmetric_function(Matrix s, int d, F f) {
     return out;
 }
 
+// m scaled to determinant 1.
+Matrix at_unit_determinant(Matrix m, int d) {
+    const double unit = std::pow(determinant(m, d), 1.0 / d);
+    for (int i = 0; i < d; ++i)
+        for (int j = 0; j < d; ++j) m[i][j] /= unit;
+    return m;
+}
+
 // A corner's factors W = lambda V Q D (targets.hpp).
 struct Factors {
     double lambda = 1.0;
@@ -170,6 +178,17 @@ Factors factor(const Matrix& x, int d) {
     return f;
 }
 
+// How a corner is turned within a metric whose root is `root` (any positive multiple of M^1/2),
+// from the ideal corner `ideal`: the polar rotation of root A ideal^-1; none for an inverted or
+// degenerate corner.
+Matrix turn_in_metric(const Matrix& root, const Factors& corner, const Matrix& ideal, int d) {
+    Matrix turn{};
+    for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
+    if (corner.valid && corner.positive)
+        turn = polar_rotation(product(root, product(corner.frame, inverse(ideal, d), d), d), d);
+    return turn;
+}
+
 // Element e's corner edges at xyz, as the columns of a d x d matrix: in 3D as they are, in 2D in
 // the plane's basis (a, b).
 Matrix edge_matrix(const Mesh& mesh, std::span<const double> xyz, ElementId e, const metrics::P& a,
@@ -219,10 +238,7 @@ bool element_metric(const Mesh& mesh, std::span<const double> xyz, ElementId e, 
     const Matrix edges = edge_matrix(mesh, xyz, e, a, b);
     if (!factor(edges, d).valid) return false;
     const Matrix s = product(edges, regular_inverse, d);
-    out = inverse(product(s, transpose(s, d), d), d);
-    const double unit = std::pow(determinant(out, d), 1.0 / d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) out[i][j] /= unit;
+    out = at_unit_determinant(inverse(product(s, transpose(s, d), d), d), d);
     for (int i = 0; i < d; ++i)
         for (int j = 0; j < d; ++j)
             if (!std::isfinite(out[i][j])) return false;
@@ -335,19 +351,9 @@ struct MetricSpace {
 };
 MetricSpace metric_space(const Matrix& metric, const Factors& source, const Matrix& regular, int d, const metrics::P& a,
                          const metrics::P& b) {
-    Matrix root = symmetric_function(metric, d, [](double x) { return std::sqrt(x); });
-    const double unit = std::pow(determinant(root, d), 1.0 / d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) root[i][j] /= unit;
-    Matrix turn{};
-    for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
-    if (source.valid && source.positive)
-        turn = polar_rotation(product(root, product(source.frame, inverse(regular, d), d), d), d);
+    const Matrix root = at_unit_determinant(symmetric_function(metric, d, [](double x) { return std::sqrt(x); }), d);
     MetricSpace out;
-    out.shape = product(turn, regular, d);
-    const double shape_unit = std::pow(determinant(out.shape, d), 1.0 / d);
-    for (int i = 0; i < d; ++i)
-        for (int j = 0; j < d; ++j) out.shape[i][j] /= shape_unit;
+    out.shape = at_unit_determinant(product(turn_in_metric(root, source, regular, d), regular, d), d);
     if (d == 3) {
         out.root = root;
     } else {  // B N B^T + n n^T, B = [a b], n = a x b
@@ -404,16 +410,8 @@ MetricTarget metric_target(const Mesh& mesh, ElementId element, const Matrix& id
     } else {
         // A cell's corner: its ideal corner carried into M, W = M^-1/2 R W_ideal.
         const Matrix root = symmetric_function(mean, d, [](double x) { return 1.0 / std::sqrt(x); });
-        Matrix turn{};
-        for (int i = 0; i < d; ++i) turn[i][i] = 1.0;
-        if (in.valid && in.positive) {
-            const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
-            turn = polar_rotation(product(inverse_root, product(in.frame, inverse(ideal, d), d), d), d);
-        }
-        shape = product(root, product(turn, ideal, d), d);
-        const double lambda = std::pow(determinant(shape, d), 1.0 / d);
-        for (int i = 0; i < d; ++i)
-            for (int j = 0; j < d; ++j) shape[i][j] /= lambda;
+        const Matrix inverse_root = symmetric_function(mean, d, [](double x) { return std::sqrt(x); });
+        shape = at_unit_determinant(product(root, product(turn_in_metric(inverse_root, in, ideal, d), ideal, d), d), d);
     }
     const Matrix map = product(inverse(shape, d), regular, d);
     out.map = CornerMap{};
@@ -566,11 +564,7 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             // metrics compare with it; an ideal orientation leaves it out).
             const MetricSpace space = metric_space(mean_at_corners(mesh, element, metrics), pick(options.aspect), regular, d, a, b);
             shape = space.shape;
-            if (options.orientation == TargetSource::Ideal) {
-                const double unit = std::pow(determinant(regular, d), 1.0 / d);
-                for (int i = 0; i < d; ++i)
-                    for (int j = 0; j < d; ++j) shape[i][j] = regular[i][j] / unit;
-            }
+            if (options.orientation == TargetSource::Ideal) shape = at_unit_determinant(regular, d);
             set_root(e, space.root);
         } else {
             const Matrix skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);

@@ -412,7 +412,17 @@ BOOST_AUTO_TEST_CASE(bad_factors_and_bad_targets_are_refused_clearly) {
     identity[0][0] = identity[1][1] = identity[2][2] = 1.0;
     BOOST_CHECK_THROW(tet.set_targets({identity}, {0.0}), pv::MeshError);
     BOOST_CHECK_THROW(tet.set_targets({identity, identity}, {1.0, 1.0}), pv::MeshError);
+    // Metric roots: one per element, finite and orientation-preserving.
+    BOOST_CHECK_THROW(tet.set_targets({identity}, {1.0}, {identity, identity}), pv::MeshError);
+    BOOST_CHECK_EXCEPTION(tet.set_targets({identity}, {1.0}, {mirror}), pv::MeshError,
+                          [](const pv::MeshError& e) { return std::string(e.what()).find("element 0") != std::string::npos; });
+    pv::CornerMap not_finite = identity;
+    not_finite[1][2] = std::nan("");
+    BOOST_CHECK_THROW(tet.set_targets({identity}, {1.0}, {not_finite}), pv::MeshError);
+    tet.set_targets({identity}, {1.0}, {identity});
+    BOOST_TEST(tet.target_metric_roots().size() == 1u);
     tet.set_targets({identity}, {1.0});
+    BOOST_TEST(tet.target_metric_roots().empty());
     BOOST_CHECK_THROW(tet.flip_elements(), pv::MeshError);
 }
 
