@@ -203,7 +203,7 @@ def main():
         ("block_hex", "layers", [[], ["--keep", "none"], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"],
                                  ["--metric-field", "metric"]]),
         ("block_tet", "layers", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"],
-                                 ["--keep", "size,aspect", "--set", "queue[0].improve.polish=always"],
+                                 ["--keep", "size,aspect", "--set", "queue[0].improve.polish=off"],
                                  ["--metric-field", "metric"]]),
         ("boundary_layer", "wall", [[], ["--keep", "size,aspect"], ["--keep", "size,aspect,orientation"]]),
         ("size_graded", "volumes", [[], ["--keep", "size"], ["--size-field", "size"]]),

@@ -102,7 +102,10 @@ private:
     }
 
     // The mean's polish, from the best iterate of them all, within what is left of the budget:
-    // polish always, or auto where the mean quality fell below the input's.
+    // polish always, or auto where the mean quality fell below the input's, or where elements are
+    // rated in a target's metric. There a sideways tilt of a thin element counts as a small
+    // fraction of its width, so the elements the max-min leaves alone can be far from right in
+    // space; raising the mean (with the worst held) straightens them.
     std::optional<StageKind> polish_or_none() {
         const bool budget_left = result_.reason != TerminationReason::IterationLimit &&
                                  result_.reason != TerminationReason::TimeLimit && shape_iterations() < budget();
@@ -110,11 +113,16 @@ private:
             result_.reason != TerminationReason::Interrupted && result_.reason != TerminationReason::NumericalFailure;
         if (options_.polish == GlobalSolverOptions::Polish::Off || !budget_left || !sound_end) return std::nullopt;
         mean_before_ = mean_at(xyz_);
-        if (options_.polish == GlobalSolverOptions::Polish::Auto) {
+        if (options_.polish == GlobalSolverOptions::Polish::Auto && !rated_in_metric()) {
             mean_goal_ = mean_at(work_.mesh().coordinates());
             if (!(*mean_before_ < mean_goal_)) mean_before_.reset();  // the mean did not fall
         }
         return mean_before_ ? std::optional(StageKind::Polish) : std::nullopt;
+    }
+
+    // Whether any rank's elements carry a target's metric (so that every rank decides alike).
+    bool rated_in_metric() const {
+        return work_.reducer().max(work_.mesh().target_metric_roots().empty() ? 0.0 : 1.0) > 0.0;
     }
 
     double mean_at(std::span<const double> coordinates) {

@@ -85,8 +85,9 @@ struct GlobalSolverOptions {
     // the worst quality and raises the sum of the other elements' qualities, each kept above
     // that line (MeanAboveFloor): the worst element and every element near it keep their
     // qualities bit for bit. auto: where the mean fell below the input's, until it is above it
-    // again (the first step or two: the polish costs little); always: until the mean stops
-    // rising; off. It counts against the same budget.
+    // again (the first step or two: the polish costs little), and as always where elements are
+    // rated in a target's metric (there the max-min leaves thin elements tilted); always: until
+    // the mean stops rising; off. It counts against the same budget.
     enum class Polish { Off, Auto, Always };
     Polish polish = Polish::Auto;
     // Shape phase (log_barrier, not the finish): a vertex the line search damped so that no element
