@@ -198,7 +198,7 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     std::vector<std::int8_t> orientation(m, 1);
     std::vector<double> q(m);
     MetricScale scale;
-    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar() || mesh.has_surface_normals();
     scale.plane_normal = plane_normal;
     const auto unit_volume = make_metric("scaled_volume");
     unit_volume->set_scale(scale);

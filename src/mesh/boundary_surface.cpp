@@ -12,7 +12,10 @@
 #include <limits>
 #include <memory>
 #include <numbers>
+#include <span>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "paloverde/core/error.hpp"
 
@@ -45,12 +48,21 @@ double angle_between(const Vec3& a, const Vec3& b) {
 struct Facet {
     std::array<GlobalId, 3> corner;
     std::array<GlobalId, 3> key;  // the corners sorted
+    std::size_t source = 0;       // its place in BoundaryFacets::facets
 };
 
 // The outward faces of a positively oriented tetrahedron (0, 1, 2, 3), and the outward edges of a
 // positively oriented triangle: the mesh's own corner order decides, not its tangled geometry.
 constexpr int kTetFaces[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
 constexpr int kTriEdges[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+
+// The diagonal of the points' bounding box; 0 for none.
+double diagonal_of(std::span<const double> xyz) {
+    if (xyz.empty()) return 0.0;
+    Vec3 low = {xyz[0], xyz[1], xyz[2]}, high = low;
+    for (std::size_t i = 0; i < xyz.size(); ++i) low[i % 3] = std::min(low[i % 3], xyz[i]), high[i % 3] = std::max(high[i % 3], xyz[i]);
+    return norm(minus(high, low));
+}
 
 // Facets sorted by key.
 void sort_by_key(std::vector<Facet>& facets) {
@@ -90,6 +102,43 @@ private:
     std::vector<std::size_t> parent_;
 };
 
+// The crease chains of at most three edges with a loose end, none on an open edge, made smooth
+// again (see the caller). `creases`: per vertex, its crease edges.
+template <class Edge>
+void drop_short_loose_creases(std::vector<Edge>& edges, const std::vector<int>& creases,
+                              const std::vector<std::uint8_t>& on_open) {
+    constexpr std::size_t kShort = 3;
+    auto is_crease = [](const Edge& e) { return e.feature && e.count == 2; };
+    Groups chains(edges.size());
+    std::vector<std::int64_t> first_at(creases.size(), -1);  // per vertex, a crease edge through it
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+        if (!is_crease(edges[i])) continue;
+        for (auto v : edges[i].ends) {
+            auto& first = first_at[static_cast<std::size_t>(v)];
+            if (first < 0) first = static_cast<std::int64_t>(i);
+            else chains.join(static_cast<std::size_t>(first), i);
+        }
+    }
+    std::vector<std::int32_t> chain_of;
+    const std::size_t count = chains.number(chain_of);
+    std::vector<std::size_t> length(count, 0);
+    std::vector<std::uint8_t> loose(count, 0), open(count, 0);
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+        if (!is_crease(edges[i])) continue;
+        const auto c = static_cast<std::size_t>(chain_of[i]);
+        ++length[c];
+        for (auto v : edges[i].ends) {
+            loose[c] |= creases[static_cast<std::size_t>(v)] == 1;
+            open[c] |= on_open[static_cast<std::size_t>(v)];
+        }
+    }
+    for (std::size_t i = 0; i < edges.size(); ++i) {
+        if (!is_crease(edges[i])) continue;
+        const auto c = static_cast<std::size_t>(chain_of[i]);
+        if (length[c] <= kShort && loose[c] && !open[c]) edges[i].feature = false;
+    }
+}
+
 // An AABB tree over its own primitives (the tree refers to them, so they live beside it).
 template <class Primitives, class Tree>
 struct Piece {
@@ -102,7 +151,67 @@ struct Piece {
     }
 };
 using Patch = Piece<Triangles, TriangleTree>;
+
+// Per facet, +1 or -1: the turn that makes it agree with its neighbours across every edge of
+// exactly two facets (they then run along it in opposite directions), by a breadth-first walk
+// from the lowest facet of each connected piece. On a surface that cannot be oriented (a Moebius
+// strip) the walk's first choice stands. `uses`: each facet's edges, sorted by edge.
+template <class EdgeUse>
+std::vector<double> consistent_turns(std::size_t count, const std::vector<EdgeUse>& uses) {
+    std::vector<std::vector<std::pair<std::size_t, bool>>> next(count);  // (neighbour, same direction)
+    for (std::size_t i = 0; i + 1 < uses.size(); ++i) {
+        if (uses[i].key != uses[i + 1].key || (i + 2 < uses.size() && uses[i + 2].key == uses[i].key) ||
+            (i > 0 && uses[i - 1].key == uses[i].key))
+            continue;
+        const bool same = uses[i].forward == uses[i + 1].forward;
+        next[uses[i].facet].push_back({uses[i + 1].facet, same});
+        next[uses[i + 1].facet].push_back({uses[i].facet, same});
+    }
+    std::vector<double> turn(count, 0.0);
+    std::vector<std::size_t> queue;
+    for (std::size_t start = 0; start < count; ++start) {
+        if (turn[start] != 0.0) continue;
+        turn[start] = 1.0;
+        queue.assign(1, start);
+        for (std::size_t at = 0; at < queue.size(); ++at)
+            for (const auto& [g, same] : next[queue[at]])
+                if (turn[g] == 0.0) {
+                    turn[g] = same ? -turn[queue[at]] : turn[queue[at]];
+                    queue.push_back(g);
+                }
+    }
+    return turn;
+}
 using Curve = Piece<Segments, SegmentTree>;
+
+// A surface mesh's triangles' normals to rate them about (BoundarySurface::element_normals), from
+// the input's places, roles and surface vertices' normals (`direction`), by facet source.
+std::vector<Vec3> smoothed_normals(std::span<const Facet> facets, std::span<const double> turn,
+                                   std::span<const Vec3> original_, std::span<const BoundaryRole> roles_,
+                                   std::span<const Vec3> direction_) {
+    // The mean of the corners' normals, each the area-weighted normal of its patch at that
+    // corner (a crease or corner vertex gives the triangle's own), in the triangle's own turn.
+    std::vector<Vec3> out(facets.size());
+    for (std::size_t f = 0; f < facets.size(); ++f) {
+        const auto& c = facets[f].corner;
+        const Vec3 own = unit(cross(minus(original_[static_cast<std::size_t>(c[1])], original_[static_cast<std::size_t>(c[0])]),
+                                    minus(original_[static_cast<std::size_t>(c[2])], original_[static_cast<std::size_t>(c[0])])));
+        if (own == Vec3{0.0, 0.0, 0.0})
+            throw MeshError("triangle " + std::to_string(facets[f].source) +
+                            " has no area, so the surface has no normal there: remove or repair it first");
+        Vec3 sum = {0.0, 0.0, 0.0};
+        for (GlobalId v : c) {
+            const auto i = static_cast<std::size_t>(v);
+            const Vec3 n = roles_[i] == BoundaryRole::Surface ? Vec3{turn[f] * direction_[i][0], turn[f] * direction_[i][1],
+                                                                     turn[f] * direction_[i][2]}
+                                                              : own;
+            for (int k = 0; k < 3; ++k) sum[k] += n[k];
+        }
+        const Vec3 mean = unit(sum);
+        out[facets[f].source] = dot(mean, own) > 0.0 ? mean : own;
+    }
+    return out;
+}
 
 }  // namespace
 
@@ -128,8 +237,23 @@ BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
     const bool tets = out.kind == ElementKind::Tetrahedron;
     if (mesh.has_cells())
         throw MeshError("boundary vertices slide on meshes of triangles and tetrahedra only, for now");
-    if (!tets && !mesh.is_planar())
-        throw MeshError("the triangles do not lie in one plane: a surface mesh has no boundary to slide on");
+    if (!tets && !mesh.is_planar()) {
+        // A surface mesh is its own surface: every triangle a facet, every vertex on it.
+        out.surface = true;
+        const auto xyz = mesh.coordinates();
+        for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+            const auto c = mesh.element(e);
+            out.facets.push_back({c[0], c[1], c[2]});
+        }
+        for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+            if (mesh.elements_of(v).empty()) continue;
+            out.ids.push_back(static_cast<GlobalId>(v));
+            out.xyz.insert(out.xyz.end(), xyz.begin() + 3 * static_cast<std::ptrdiff_t>(v),
+                           xyz.begin() + 3 * static_cast<std::ptrdiff_t>(v) + 3);
+        }
+        out.diagonal = diagonal_of(xyz);
+        return out;
+    }
     std::vector<Facet> all;
     all.reserve(static_cast<std::size_t>(mesh.num_elements()) * (tets ? 4 : 3));
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
@@ -162,11 +286,7 @@ BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
         out.xyz.insert(out.xyz.end(), xyz.begin() + static_cast<std::ptrdiff_t>(3 * v),
                        xyz.begin() + static_cast<std::ptrdiff_t>(3 * v + 3));
     }
-    if (!xyz.empty()) {
-        Vec3 low = {xyz[0], xyz[1], xyz[2]}, high = low;
-        for (std::size_t i = 0; i < xyz.size(); ++i) low[i % 3] = std::min(low[i % 3], xyz[i]), high[i % 3] = std::max(high[i % 3], xyz[i]);
-        out.diagonal = norm(minus(high, low));
-    }
+    out.diagonal = diagonal_of(xyz);
     return out;
 }
 
@@ -183,9 +303,11 @@ BoundarySurface::BoundarySurface(const Mesh& mesh, const SurfaceOptions& options
 
 BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,
                                  const SurfaceOptions& options)
-    : kind_(boundary.kind), diagonal_(boundary.diagonal), trees_(std::make_unique<Trees>()) {
+    : kind_(boundary.kind), surface_(boundary.surface), diagonal_(boundary.diagonal), trees_(std::make_unique<Trees>()) {
     options.validate();
-    const bool tets = kind_ == ElementKind::Tetrahedron;
+    // The facets are triangles (a tet mesh's boundary faces, or a surface mesh's own triangles),
+    // else a planar triangle mesh's boundary edges.
+    const bool tets = kind_ == ElementKind::Tetrahedron || surface_;
     // Boundary vertices numbered by their coordinates (ties by id), so that neither the numbering
     // nor the corner order of the elements changes which facet comes first, which corner a
     // normal is taken from, or in which order sums are made.
@@ -225,6 +347,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
                 throw MeshError("boundary vertex " + std::to_string(id) + " of a boundary face has no coordinates");
         }
         if (tets) std::rotate(c.begin(), std::min_element(c.begin(), c.end()), c.end());
+        facets[f].source = f;
         facets[f].key = c;
         std::sort(facets[f].key.begin(), facets[f].key.end());
     }
@@ -235,43 +358,71 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     struct EdgeUse {
         std::array<GlobalId, 2> key;
         std::size_t facet;
+        bool forward;  // the facet runs along the edge from key[0] to key[1]
     };
     std::vector<EdgeUse> uses;
     for (std::size_t f = 0; f < facets.size(); ++f) {
         const auto& c = facets[f].corner;
-        if (tets) {
-            for (int i = 0; i < 3; ++i) uses.push_back({{std::min(c[i], c[(i + 1) % 3]), std::max(c[i], c[(i + 1) % 3])}, f});
-        } else {
-            uses.push_back({{std::min(c[0], c[1]), std::max(c[0], c[1])}, f});
+        for (int i = 0; i < (tets ? 3 : 1); ++i) {
+            const GlobalId a = c[i], b = c[(i + 1) % (tets ? 3 : 2)];
+            uses.push_back({{std::min(a, b), std::max(a, b)}, f, a < b});
         }
     }
-    std::sort(uses.begin(), uses.end(), [](const EdgeUse& a, const EdgeUse& b) { return a.key < b.key; });
+    std::sort(uses.begin(), uses.end(), [](const EdgeUse& a, const EdgeUse& b) {
+        return a.key != b.key ? a.key < b.key : a.facet < b.facet;
+    });
+    // A surface mesh's triangles need not turn the same way (a file's CAD faces each keep their
+    // own): each is turned to agree with the first of its connected piece across the edges of
+    // two, so that the normals compared at an edge and summed at a vertex face one side.
+    const std::vector<double> turn = surface_ ? consistent_turns(facets.size(), uses) : std::vector<double>(facets.size(), 1.0);
     auto normal = [&](std::size_t f) {
         const auto& c = facets[f].corner;
-        return cross(minus(original_[c[1]], original_[c[0]]), minus(original_[c[2]], original_[c[0]]));
+        const Vec3 n = cross(minus(original_[c[1]], original_[c[0]]), minus(original_[c[2]], original_[c[0]]));
+        return Vec3{turn[f] * n[0], turn[f] * n[1], turn[f] * n[2]};
     };
     // Feature edges, each vertex's feature edges by the vertex at their other end, and the faces
     // joined into patches across the smooth edges.
-    std::vector<std::array<GlobalId, 2>> features;
-    std::vector<std::vector<GlobalId>> along(n);
-    Groups faces(facets.size());
+    struct Edge {
+        std::array<GlobalId, 2> ends;
+        std::size_t first, count;  // its facets: uses[first, first + count)
+        bool feature;
+    };
+    std::vector<Edge> edges_of_facets;
+    std::vector<int> creases(n, 0);  // per vertex, its edges that are features by their angle alone
+    std::vector<std::uint8_t> on_open(n, 0);  // per vertex: on an open (or a planar mesh's boundary) edge
     for (std::size_t i = 0; i < uses.size();) {
         std::size_t j = i + 1;
         while (j < uses.size() && uses[j].key == uses[i].key) ++j;
         const auto [a, b] = uses[i].key;
         if (tets && j - i > 2)
-            throw MeshError("the boundary is not a manifold surface: " + std::to_string(j - i) +
-                            " boundary faces meet at the edge of vertices " + std::to_string(id_of(a)) + " and " +
+            throw MeshError((surface_ ? "the surface is not a manifold: " : "the boundary is not a manifold surface: ") +
+                            std::to_string(j - i) + (surface_ ? " triangles" : " boundary faces") +
+                            " meet at the edge of vertices " + std::to_string(id_of(a)) + " and " +
                             std::to_string(id_of(b)) + ", so no surface to slide on is defined there");
-        const bool feature = !tets || j - i != 2 || angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
-        if (feature) {
+        const bool open = !tets || j - i != 2;
+        const bool crease = !open && angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
+        if (crease) ++creases[static_cast<std::size_t>(a)], ++creases[static_cast<std::size_t>(b)];
+        if (open) on_open[static_cast<std::size_t>(a)] = on_open[static_cast<std::size_t>(b)] = 1;
+        edges_of_facets.push_back({{a, b}, i, j - i, open || crease});
+        i = j;
+    }
+    // On a surface mesh, a short crease chain with a loose end (a vertex on no other crease) is
+    // read as the turned normal of a sliver, whose nearly collinear corners on a curved surface
+    // can face anywhere: the creases of a part run on, from corner to corner or round a loop.
+    // Kept, it would hold the sliver's corners, and the sliver could never be mended.
+    if (surface_) drop_short_loose_creases(edges_of_facets, creases, on_open);
+    std::vector<std::array<GlobalId, 2>> features;
+    std::vector<std::vector<GlobalId>> along(n);
+    Groups faces(facets.size());
+    for (const Edge& e : edges_of_facets) {
+        const auto [a, b] = e.ends;
+        if (e.feature) {
             along[static_cast<std::size_t>(a)].push_back(b);
             along[static_cast<std::size_t>(b)].push_back(a);
             features.push_back({a, b});
         } else {
-            faces.join(uses[i].facet, uses[i + 1].facet);
+            faces.join(uses[e.first].facet, uses[e.first + 1].facet);
         }
-        i = j;
     }
     feature_count_ = features.size();
     for (std::size_t v = 0; v < n; ++v) {
@@ -294,6 +445,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     piece_.assign(n, -1);
     // Patches: a surface vertex's faces all lie in one (none of its edges is a feature edge);
     // its normal is their area-weighted normal.
+    std::vector<std::pair<std::int32_t, std::int32_t>> touching;  // (boundary vertex, primitive of its piece)
     std::vector<std::int32_t> patch_of;
     trees_->patches.resize(tets ? faces.number(patch_of) : 0);
     for (auto& patch : trees_->patches) patch = std::make_unique<Patch>();
@@ -309,7 +461,11 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
             }
         const Kernel::Triangle_3 t(point(c[0]), point(c[1]), point(c[2]));
         if (t.is_degenerate()) continue;
-        trees_->patches[static_cast<std::size_t>(patch_of[f])]->primitives.push_back(t);
+        auto& triangles = trees_->patches[static_cast<std::size_t>(patch_of[f])]->primitives;
+        for (GlobalId v : c)
+            if (roles_[static_cast<std::size_t>(v)] == BoundaryRole::Surface)
+                touching.push_back({static_cast<std::int32_t>(v), static_cast<std::int32_t>(triangles.size())});
+        triangles.push_back(t);
         trees_->all_faces.primitives.push_back(t);
     }
     // Curves: feature edges joined at curve vertices (corners end them); a curve vertex's tangent
@@ -330,8 +486,12 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         const auto [a, b] = features[e];
         const Kernel::Segment_3 s(point(a), point(b));
         if (s.is_degenerate()) continue;
-        trees_->curves[static_cast<std::size_t>(curve_of[e])]->primitives.push_back(s);
-        if (!tets) trees_->all_edges.primitives.push_back(s);
+        auto& segments = trees_->curves[static_cast<std::size_t>(curve_of[e])]->primitives;
+        for (GlobalId v : {a, b})
+            if (roles_[static_cast<std::size_t>(v)] == BoundaryRole::Curve)
+                touching.push_back({static_cast<std::int32_t>(v), static_cast<std::int32_t>(segments.size())});
+        segments.push_back(s);
+        if (kind_ == ElementKind::Triangle && !surface_) trees_->all_edges.primitives.push_back(s);
     }
     for (std::size_t v = 0; v < n; ++v) {
         if (roles_[v] == BoundaryRole::Surface) direction_[v] = unit(direction_[v]);
@@ -341,6 +501,13 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         const Vec3 out = unit(minus(original_[static_cast<std::size_t>(along[v][1])], original_[v]));
         direction_[v] = unit({in[0] + out[0], in[1] + out[1], in[2] + out[2]});
     }
+    std::stable_sort(touching.begin(), touching.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    star_start_.assign(n + 1, 0);
+    for (const auto& [v, primitive] : touching) ++star_start_[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < n; ++v) star_start_[v + 1] += star_start_[v];
+    star_.clear();
+    for (const auto& [v, primitive] : touching) star_.push_back(primitive);
+    if (surface_) element_normals_ = smoothed_normals(facets, turn, original_, roles_, direction_);
     for (auto& patch : trees_->patches) patch->build();
     for (auto& curve : trees_->curves) curve->build();
     trees_->all_faces.build();
@@ -349,7 +516,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
 
 int BoundarySurface::freedom(VertexId v) const {
     switch (role(v)) {
-        case BoundaryRole::Interior: return kind_ == ElementKind::Tetrahedron ? 3 : 2;
+        case BoundaryRole::Interior: return kind_ == ElementKind::Tetrahedron ? 3 : 2;  // (none on a surface mesh)
         case BoundaryRole::Surface: return 2;
         case BoundaryRole::Curve: return 1;
         case BoundaryRole::Corner: return 0;
@@ -362,9 +529,22 @@ Vec3 BoundarySurface::project(VertexId v, const Vec3& p) const {
     const Kernel::Point_3 q(p[0], p[1], p[2]);
     auto nearest = [&](const auto& piece) {
         if (piece.primitives.empty()) return original_[i];
-        // The vertex's own place in the input is a point of its patch or curve near q: with it
-        // as a first guess, the search prunes most of the tree at once.
-        const auto r = piece.tree.closest_point(q, Kernel::Point_3(original_[i][0], original_[i][1], original_[i][2]));
+        // The first guess: the nearest point of the primitives that touched the vertex in the
+        // input (its place in the input if none is nearer). A vertex rarely strays beyond them,
+        // so the search through the tree, which still finds any nearer point, prunes nearly all
+        // of it. The guess depends on v and p only: owners and ghosts project alike.
+        Kernel::Point_3 guess(original_[i][0], original_[i][1], original_[i][2]);
+        double nearest_squared = CGAL::squared_distance(q, guess);
+        const auto projected = Kernel().construct_projected_point_3_object();
+        for (auto k = star_start_[i]; k < star_start_[i + 1]; ++k) {
+            const auto candidate = projected(piece.primitives[static_cast<std::size_t>(star_[static_cast<std::size_t>(k)])], q);
+            const double squared = CGAL::squared_distance(q, candidate);
+            if (squared < nearest_squared) {
+                nearest_squared = squared;
+                guess = candidate;
+            }
+        }
+        const auto r = piece.tree.closest_point(q, guess);
         return Vec3{r.x(), r.y(), r.z()};
     };
     switch (role(v)) {

@@ -135,6 +135,12 @@ void Mesh::carry_element_data_from(const Mesh& source, std::span<const VertexId>
             corner_map_[i] = source.corner_map_[static_cast<std::size_t>(old_element[i])];
         }
     }
+    surface_normals_.clear();
+    if (source.has_surface_normals()) {
+        surface_normals_.resize(old_element.size());
+        for (std::size_t i = 0; i < old_element.size(); ++i)
+            surface_normals_[i] = source.surface_normals_[static_cast<std::size_t>(old_element[i])];
+    }
     if (source.has_targets()) {
         target_maps_.resize(old_element.size());
         target_volumes_.resize(old_element.size());
@@ -187,6 +193,20 @@ void Mesh::clear_targets() noexcept {
     target_maps_.clear();
     target_volumes_.clear();
     target_metric_roots_.clear();
+}
+
+void Mesh::set_surface_normals(std::vector<Vec3> normals) {
+    if (kind_ != ElementKind::Triangle) throw MeshError("surface normals are for triangle meshes");
+    if (normals.size() != static_cast<std::size_t>(num_elements()))
+        throw MeshError("surface normals: " + std::to_string(normals.size()) + " given for " +
+                        std::to_string(num_elements()) + " triangles");
+    for (std::size_t e = 0; e < normals.size(); ++e) {
+        const Vec3& n = normals[e];
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!std::isfinite(length) || std::abs(length - 1.0) > 1e-9)
+            throw MeshError("surface normals: triangle " + std::to_string(e) + "'s normal is not a unit vector");
+    }
+    surface_normals_ = std::move(normals);
 }
 
 void Mesh::set_reference_coordinates(std::vector<double> xyz) {
@@ -354,6 +374,9 @@ void Mesh::flip_elements() {
     // Every cross product of find_plane() changes sign, exactly, and so does their sum.
     if (planar_)
         for (double& c : plane_normal_) c = -c;
+    // Likewise each triangle's surface normal, so that every triangle keeps its orientation.
+    for (Vec3& n : surface_normals_)
+        for (double& c : n) c = -c;
 }
 
 void Mesh::set_fixed(std::vector<std::uint8_t> fixed) {

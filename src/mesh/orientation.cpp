@@ -81,6 +81,13 @@ int element_orientation(const Mesh& mesh, std::span<const double> xyz, ElementId
         }
         return static_cast<int>(CGAL::orientation(point3(xyz, c[0]), point3(xyz, c[1]), point3(xyz, c[2]), point3(xyz, c[3])));
     }
+    if (mesh.has_surface_normals()) {
+        // The sign of n . (b - a) x (c - a), exactly for the rounded point a + n.
+        const Vec3& n = mesh.surface_normals()[static_cast<std::size_t>(element)];
+        const Kernel::Point_3 a = point3(xyz, c[0]);
+        const Kernel::Point_3 above(a.x() + n[0], a.y() + n[1], a.z() + n[2]);
+        return static_cast<int>(CGAL::orientation(a, point3(xyz, c[1]), point3(xyz, c[2]), above));
+    }
     if (mesh.is_planar()) return planar_triangle_orientation(mesh, xyz, c);
     return CGAL::collinear(point3(xyz, c[0]), point3(xyz, c[1]), point3(xyz, c[2])) ? 0 : 1;
 }

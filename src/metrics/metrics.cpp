@@ -305,7 +305,8 @@ public:
     // the one-element calls value() and value_and_gradient() cannot see.
     double element_value(const Mesh& mesh, std::span<const double> xyz, ElementId e,
                          double* gradient = nullptr) const override {
-        if (!(kTargetSize && mesh.has_targets())) return QualityMetric::element_value(mesh, xyz, e, gradient);
+        if (!(kTargetSize && mesh.has_targets()) && !mesh.has_surface_normals())
+            return QualityMetric::element_value(mesh, xyz, e, gradient);
         if (gradient) require_gradient();
         MetricScale local = scale_;
         const ElementMaps maps(mesh);
@@ -403,10 +404,16 @@ private:
         return scale_.element_reference_volume.empty() ? scale_.reference_volume
                                                        : scale_.element_reference_volume[static_cast<std::size_t>(e)];
     }
-    // The scale of element e: the mesh's, with e's own reference volume.
+    // The scale of element e: the mesh's, with e's own reference volume, and on a surface mesh
+    // with e's own normal as its plane's.
     const MetricScale& scale_of(const Mesh& mesh, ElementId e, MetricScale& local) const {
-        if (scale_.element_reference_volume.empty() && !(kTargetSize && mesh.has_targets())) return scale_;
+        const bool surface = mesh.has_surface_normals();
+        if (scale_.element_reference_volume.empty() && !(kTargetSize && mesh.has_targets()) && !surface) return scale_;
         local.reference_volume = reference_volume_of(mesh, e);
+        if (surface) {
+            local.oriented_triangles = true;
+            local.plane_normal = mesh.surface_normals()[static_cast<std::size_t>(e)];
+        }
         return local;
     }
 
@@ -497,7 +504,7 @@ MetricScale MetricScale::of(const Mesh& mesh) { return of(mesh, mesh.coordinates
 
 MetricScale MetricScale::of(const Mesh& mesh, std::span<const double> coordinates) {
     MetricScale scale;
-    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar();
+    scale.oriented_triangles = mesh.kind() == ElementKind::Tetrahedron || mesh.is_planar() || mesh.has_surface_normals();
     scale.plane_normal = mesh.plane_normal();
     const ElementId m = mesh.num_elements();
     if (m == 0) return scale;

@@ -90,10 +90,7 @@ public:
             for (const auto& c : kTetCorners) worst = std::min(worst, corner_jacobian(x, c));
             return std::numbers::sqrt2 * worst;
         }
-        const P n = normal(x);
-        double worst = INFINITY;
-        for (const auto& c : kTriCorners) worst = std::min(worst, corner_jacobian(x, c, n));
-        return 2.0 / std::numbers::sqrt3 * worst;
+        return triangle(x, normal(x));
     }
     double value_and_gradient(ElementKind, const double*, double*) const override {
         throw OptionError("metric 'scaled_jacobian' is for assessment only and has no gradient");
@@ -110,12 +107,24 @@ public:
             for (int i = 0; i < k; ++i)
                 for (int d = 0; d < 3; ++d) x[3 * i + d] = xyz[3 * static_cast<std::size_t>(corners[i]) + d];
             const std::uint8_t map = maps.empty() ? 0 : maps[e];
+            if (k == 4) {
+                quality[e - first] = map == 0 ? value(mesh.kind(), x) : corner_jacobian(x, kTetCorners[0]) / ideal[map];
+                continue;
+            }
+            // A surface mesh's triangle turns about its own input normal.
+            P n;
+            if (mesh.has_surface_normals()) {
+                const Vec3& s = mesh.surface_normals()[static_cast<std::size_t>(e)];
+                n = {s[0], s[1], s[2]};
+            } else {
+                n = normal(x);
+            }
             if (map == 0) {
-                quality[e - first] = value(mesh.kind(), x);
+                quality[e - first] = triangle(x, n);
                 continue;
             }
             // A cell's corner: its own frame only (the cell's minimum is taken over its corners).
-            const double raw = k == 4 ? corner_jacobian(x, kTetCorners[0]) : corner_jacobian(x, kTriCorners[0], normal(x));
+            const double raw = corner_jacobian(x, kTriCorners[0], n);
             quality[e - first] = raw / ideal[map];
         }
     }
@@ -124,6 +133,11 @@ public:
     }
 
 private:
+    double triangle(const double* x, const P& n) const {
+        double worst = INFINITY;
+        for (const auto& c : kTriCorners) worst = std::min(worst, corner_jacobian(x, c, n));
+        return 2.0 / std::numbers::sqrt3 * worst;
+    }
     // The normal that orients a 2D element: the plane's for an oriented mesh, else its own.
     P normal(const double* x) const {
         if (scale_.oriented_triangles) return {scale_.plane_normal[0], scale_.plane_normal[1], scale_.plane_normal[2]};

@@ -166,6 +166,8 @@ private:
 
     // line_search.cpp
     bool line_search(double objective, double max_direction);
+    // A sliding vertex's damping factor at step s: its move held to one reference length.
+    double slide_damping(VertexId v, double s, double length) const;
     // Rates the trial step s; false where some element blocks it however much its vertices are damped.
     bool damp_blocking(double s, std::vector<VertexId>& damped, std::vector<VertexId>& once_damped);
     // A trial element blocks the step when it leaves the objective's domain (above floor) or

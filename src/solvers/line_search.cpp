@@ -26,8 +26,8 @@ bool Phase::line_search(double objective, double max_direction) {
 #pragma omp parallel for schedule(static) if (static_cast<std::size_t>(work_.movable_elements()) > kParallelThreshold)
         for (std::ptrdiff_t i = 0; i < count; ++i) {
             const VertexId v = free[static_cast<std::size_t>(i)];
-            damping_[v] = 1.0;
-            for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + s * direction_[3 * v + c];
+            damping_[v] = sliding_ ? slide_damping(v, s, length) : 1.0;
+            for (int c = 0; c < 3; ++c) trial_x_[3 * v + c] = x_[3 * v + c] + damping_[v] * s * direction_[3 * v + c];
         }
         // Sliding vertices are rated where they would go: on the boundary.
         if (sliding_) sliding_->project(work_.mesh(), trial_x_);
@@ -51,6 +51,16 @@ bool Phase::line_search(double objective, double max_direction) {
         }
     }
     return false;
+}
+
+// A sliding vertex moves at most one reference length per step: its tangent plane says little
+// about the surface farther away, and the projection of a far point is slow and lands anywhere.
+// As a damping factor, the Armijo slope and damp() take it into account like any other.
+double Phase::slide_damping(VertexId v, double s, double length) const {
+    if (!work_.mesh().slides(v)) return 1.0;
+    const double* d = &direction_[3 * static_cast<std::size_t>(v)];
+    const double move = s * std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    return move > length ? length / move : 1.0;
 }
 
 // Rather than shrinking the whole step for an element that blocks it, the step of its vertices is

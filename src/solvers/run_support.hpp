@@ -81,16 +81,19 @@ public:
 
     // The checks every solver makes before moving anything: a finished Summary when there is
     // nothing to move (no elements, no free vertex, no element with one); a MeshError for a
-    // triangle mesh that is not planar (a surface, which vertex moves would leave).
+    // triangle mesh that is not planar and is not being smoothed as a surface (its vertices
+    // sliding on it, with their triangles' normals: the global solver), which free vertex moves
+    // would leave.
     std::optional<Summary> nothing_to_move() {
         if (summary.before.elements == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
         if (summary.before.free_vertices == 0)
             return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
-        const double planar = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() ? 0.0 : 1.0;
-        if (part_.reducer().min(planar) == 0.0)
-            throw MeshError(std::string(mesh_.has_cells() ? "the 2D cells" : "the triangles") +
-                            " do not lie in one plane: Paloverde smooths planar 2D meshes and volume meshes, not "
-                            "surfaces");
+        const bool off_plane = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() && !mesh_.has_surface_normals();
+        if (part_.reducer().min(off_plane ? 0.0 : 1.0) == 0.0)
+            throw MeshError(mesh_.has_cells() ? "the 2D cells do not lie in one plane: surfaces of quadrilaterals are not "
+                                                "smoothed yet (surfaces of triangles are, by the global solver)"
+                                              : "the triangles do not lie in one plane: surfaces are smoothed by the "
+                                                "global solver (solver: global), on one process");
         if (summary.before.frozen_elements == summary.before.elements)
             return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
         return std::nullopt;

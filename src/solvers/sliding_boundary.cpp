@@ -11,9 +11,22 @@ namespace paloverde::detail {
 
 namespace {
 
-// The whole mesh's volume (area for planar triangles), at the input's scale.
+// A surface mesh's area, in element order (surface meshes run serially).
+double area_of(const Mesh& mesh) {
+    double area = 0.0;
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto c = mesh.element(e);
+        const Vec3 a = mesh.point(c[0]), b = mesh.point(c[1]), d = mesh.point(c[2]);
+        const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        area += 0.5 * std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]);
+    }
+    return area;
+}
+
+// The whole mesh's volume (area for triangles), at the input's scale.
 double volume_of(const MeshPart& part) {
     const Mesh& mesh = part.mesh();
+    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar()) return area_of(mesh);
     const auto xyz = mesh.coordinates();
     double largest = 0.0;
     for (double c : xyz) largest = std::max(largest, std::abs(c));
@@ -65,9 +78,13 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
     return std::nullopt;
 }
 
-SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options)
+SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options, bool open_edges_slide)
     : part_(part), mesh_(part.mesh()), surface_(surface_of(part, options)), fixed_(mesh_.fixed().begin(), mesh_.fixed().end()),
       input_(mesh_.coordinates().begin(), mesh_.coordinates().end()), volume_before_(volume_of(part)) {
+    if (surface_.is_surface_mesh()) {
+        slide_on_surface(open_edges_slide);
+        return;
+    }
     const auto n = static_cast<std::size_t>(mesh_.num_vertices());
     std::vector<std::uint8_t> on_boundary(n);
     for (std::size_t v = 0; v < n; ++v) on_boundary[v] = surface_.role(static_cast<VertexId>(v)) != BoundaryRole::Interior;
@@ -85,7 +102,32 @@ SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options)
     }
 }
 
-SlidingBoundary::~SlidingBoundary() { mesh_.set_fixed(fixed_); }
+// A surface mesh: every vertex lies on the surface. Those not fixed slide on their patch or
+// curve; the vertices of the surface's open edges, which the default fixed flags hold (they are
+// the mesh's boundary), slide along them too where `open_edges_slide`; corners stay. Each
+// triangle is rated and oriented about its normal in the input.
+void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
+    const auto n = static_cast<std::size_t>(mesh_.num_vertices());
+    const std::vector<std::uint8_t> open_edges = boundary_vertices(mesh_);
+    const bool boundary_fixed = open_edges == fixed_;
+    slides_.assign(n, 0);
+    released_.assign(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+        const BoundaryRole role = surface_.role(static_cast<VertexId>(v));
+        if (role != BoundaryRole::Surface && role != BoundaryRole::Curve) continue;
+        if (fixed_[v] && !(open_edges_slide && boundary_fixed && open_edges[v])) continue;
+        slides_[v] = 1;
+        released_[v] = role == BoundaryRole::Surface ? 2 : 1;
+    }
+    const auto normals = surface_.element_normals();
+    mesh_.set_surface_normals({normals.begin(), normals.end()});
+    normals_set_ = true;
+}
+
+SlidingBoundary::~SlidingBoundary() {
+    mesh_.set_fixed(fixed_);
+    if (normals_set_) mesh_.clear_surface_normals();
+}
 
 void SlidingBoundary::release() { mesh_.set_degrees_of_freedom(released_); }
 

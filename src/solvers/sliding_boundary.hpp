@@ -47,9 +47,10 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 class SlidingBoundary {
 public:
     // From the input mesh or a rank's part of it, at its own scale (before any run moves or
-    // rescales it). Collective.
-    SlidingBoundary(MeshPart part, const SurfaceOptions& options);
-    ~SlidingBoundary();  // gives the mesh its fixed flags back
+    // rescales it). Collective. A surface mesh (serial) slides on itself: see
+    // slide_on_surface(); `open_edges_slide` says whether its open edges' vertices slide too.
+    SlidingBoundary(MeshPart part, const SurfaceOptions& options, bool open_edges_slide = false);
+    ~SlidingBoundary();  // gives the mesh its fixed flags back (and clears a surface's normals)
     // Gives the vertices that slide their degrees of freedom (2 or 1), until destruction.
     void release();
     SlidingBoundary(const SlidingBoundary&) = delete;
@@ -70,6 +71,8 @@ public:
     Summary join(Summary fixed, std::optional<Summary> slid) const;
 
 private:
+    void slide_on_surface(bool open_edges_slide);
+
     MeshPart part_;
     Mesh& mesh_;
     BoundarySurface surface_;
@@ -79,6 +82,7 @@ private:
     std::vector<double> input_;         // the input's coordinates
     double volume_before_ = 0.0;
     int exponent_ = 0;
+    bool normals_set_ = false;  // the mesh's surface normals are this run's (Mesh::surface_normals)
 };
 
 // A solver's boundary: slide run on `part`: `run(termination, nullptr)` with the boundary fixed on

@@ -195,7 +195,7 @@ void Workspace::finish(std::span<const GlobalId> element_order, std::span<const 
 
     // The metric scale: the mean absolute element volume over the whole mesh, summed exactly
     // (the reference volume is this sum's, so MetricScale::of's rounded one need not be made).
-    scale_.oriented_triangles = mesh_.kind() == ElementKind::Tetrahedron || mesh_.is_planar();
+    scale_.oriented_triangles = mesh_.kind() == ElementKind::Tetrahedron || mesh_.is_planar() || mesh_.has_surface_normals();
     scale_.plane_normal = mesh_.plane_normal();
     {
         const std::vector<double> volume = absolute_volumes();
@@ -303,7 +303,7 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
                   std::move(connectivity));
     f.mesh.set_degrees_of_freedom(std::move(freedom));
     f.mesh.set_locality_ordered(mesh_.locality_ordered());  // the whole's elements, in their order
-    if (mesh_.has_cells() || mesh_.has_targets()) {  // the corners keep their maps and targets
+    if (mesh_.has_cells() || mesh_.has_targets() || mesh_.has_surface_normals()) {  // maps, targets, normals
         std::vector<VertexId> same(static_cast<std::size_t>(n));
         std::iota(same.begin(), same.end(), VertexId{0});
         f.mesh.carry_element_data_from(mesh_, same, f.elements);

@@ -401,8 +401,9 @@ BOOST_AUTO_TEST_CASE(improve_and_run_name_the_input_in_their_errors_and_failures
                                                       "0 0 -1\nCELLS 2 10\n4 0 1 2 3\n4 0 4 6 5\nCELL_TYPES 2\n10\n10\n");
     pv::test::write_file(dir / "triangles.vtk", head + "POINTS 4 double\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
                                                        "CELLS 2 8\n3 0 1 2\n3 0 2 3\nCELL_TYPES 2\n5\n5\n");
-    pv::test::write_file(dir / "surface.vtk", head + "POINTS 4 double\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
-                                                     "CELLS 4 16\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\nCELL_TYPES 4\n5\n5\n5\n5\n");
+    // Four triangles on one edge: a non-manifold surface.
+    pv::test::write_file(dir / "surface.vtk", head + "POINTS 6 double\n0 0 0\n1 0 0\n0.5 1 0\n0.5 -1 0\n0.5 0 1\n0.5 0.5 0.6\n"
+                                                     "CELLS 4 16\n3 0 1 2\n3 1 0 3\n3 0 1 4\n3 0 5 1\nCELL_TYPES 4\n5\n5\n5\n5\n");
     for (const char* name : {"one_tet.vtk", "two_tets.vtk", "triangles.vtk"}) {
         const std::string input = (dir / name).string();
         const auto improve = run_cli("improve -q " + quoted(dir / name) + " -o " + quoted(dir / "out.vtk") + " --summary " +

@@ -808,12 +808,4 @@ BOOST_AUTO_TEST_CASE(impossible_options_are_rejected_by_name) {
     }, "log_barrier");
 }
 
-BOOST_AUTO_TEST_CASE(surface_triangle_meshes_are_refused) {
-    // A tetrahedron's surface: triangles not in one plane.
-    pv::Mesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
-                  {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
-    mesh.set_fixed({0, 1, 1, 1});
-    BOOST_CHECK_THROW(pv::GlobalSolver().improve(mesh), pv::MeshError);
-}
-
 BOOST_AUTO_TEST_SUITE_END()

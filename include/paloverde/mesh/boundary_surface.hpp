@@ -1,6 +1,7 @@
 #pragma once
-// The boundary of a mesh as a surface its boundary vertices may slide on (issue 17): the input's
-// boundary triangulation (a tet mesh's boundary faces; a planar triangle mesh's boundary edges),
+// The boundary of a mesh as a surface its boundary vertices may slide on: the input's boundary
+// triangulation (a tet mesh's boundary faces; a planar triangle mesh's boundary edges; a surface
+// mesh's triangles),
 // kept as it was for the whole run, with its feature curves and corners.
 //
 // - A feature edge is a boundary edge where the two boundary faces meet at more than the feature
@@ -16,7 +17,11 @@
 //   to a crease cannot cut across it onto the other side, nor jump to a nearby piece of the
 //   boundary it is not part of. A corner goes back to its own place.
 // - A tet mesh's boundary edge on more than two boundary faces (a non-manifold boundary) leaves
-//   the surface undefined there, and is refused.
+//   the surface undefined there, and is refused; so is a surface mesh's edge of more than two
+//   triangles.
+// - A surface mesh (triangles in 3D, not in one plane) is its own surface: every triangle is a
+//   facet, every vertex lies on a patch, a curve (a crease, or an open edge of the surface) or is
+//   a corner.
 // - The surface is the same whatever the numbering of its vertices and the order of its facets'
 //   corners: it orders them by their coordinates. So a part of a distributed mesh, built from the
 //   whole mesh's boundary in global ids, projects and slides exactly as the serial mesh does.
@@ -44,11 +49,13 @@ struct BoundaryFacets {
     std::vector<GlobalId> ids;  // the boundary's vertices, ascending
     std::vector<double> xyz;    // their coordinates, 3 per id
     // Each facet's corners by id, in the order that makes it face outward: a tet mesh's boundary
-    // triangles, a planar triangle mesh's boundary edges (the third corner -1).
+    // triangles, a planar triangle mesh's boundary edges (the third corner -1); a surface mesh's
+    // own triangles (turned as in the file, which need not agree).
     std::vector<std::array<GlobalId, 3>> facets;
+    bool surface = false;   // the facets are a surface mesh's triangles: every vertex is on them
     double diagonal = 0.0;  // of the whole mesh's bounding box
-    // A mesh's own boundary, its vertices named by their index. Throws MeshError for a surface
-    // (non-planar triangle) mesh.
+    // A mesh's own boundary, its vertices named by their index: for a surface (non-planar
+    // triangle) mesh, the surface itself. Throws MeshError for a mesh with cells.
     static BoundaryFacets of(const Mesh& mesh);
 };
 
@@ -56,8 +63,9 @@ enum class BoundaryRole : std::uint8_t { Interior, Surface, Curve, Corner };
 
 class BoundarySurface {
 public:
-    // From the mesh's current coordinates (the input's boundary, before any vertex moves).
-    // Tetrahedra, or planar triangles; throws MeshError for a surface (non-planar triangle) mesh.
+    // From the mesh's current coordinates (the input's boundary, before any vertex moves):
+    // tetrahedra, planar triangles, or a surface mesh of triangles (the surface itself, its open
+    // edges curves like its creases). Throws MeshError for cells or a non-manifold edge.
     explicit BoundarySurface(const Mesh& mesh, const SurfaceOptions& options = {});
     // From a boundary triangulation; `vertex_ids` names each vertex of the caller's mesh in the
     // boundary's numbering (a vertex not among boundary.ids is interior). Throws MeshError.
@@ -83,6 +91,13 @@ public:
     // Distance from p to the input's boundary triangulation (its boundary edges for triangles).
     double distance(const Vec3& p) const;
 
+    bool is_surface_mesh() const { return surface_; }  // built from a surface mesh's own triangles
+    // A surface mesh's: per triangle (in the order of BoundaryFacets::facets, the mesh's element
+    // order), the unit normal its quality and orientation are taken about (Mesh::surface_normals):
+    // the mean of its corners' normals of the input surface, so that a sliver, whose own normal
+    // can face anywhere on a curved surface, is rated in the surface's tangent plane as it is
+    // mended. Its own normal where that mean is not on its side. Empty for other meshes.
+    std::span<const Vec3> element_normals() const { return element_normals_; }
     std::size_t boundary_faces() const { return face_count_; }  // triangles (edges for triangle meshes)
     std::size_t feature_edges() const { return feature_count_; }
     std::size_t count(BoundaryRole role) const;  // of the caller's vertices
@@ -91,6 +106,7 @@ public:
 private:
     struct Trees;  // CGAL's AABB trees, kept out of this header
     ElementKind kind_;
+    bool surface_ = false;  // built from a surface mesh's own triangles
     // Per vertex of the caller's mesh: its boundary vertex, or -1 inside. Boundary vertices are
     // numbered by their coordinates (lexicographically), and the arrays below are per boundary vertex.
     std::vector<std::int32_t> index_;
@@ -100,6 +116,10 @@ private:
     // tangent of their curve; zero otherwise.
     std::vector<Vec3> direction_;
     std::vector<std::int32_t> piece_;  // surface vertices: their patch; curve vertices: their curve
+    // Per boundary vertex (rows star_start_[i] .. star_start_[i + 1]): the primitives of its patch or
+    // curve that touched it in the input, where project() looks first.
+    std::vector<std::int32_t> star_start_, star_;
+    std::vector<Vec3> element_normals_;  // surface meshes: see element_normals()
     std::size_t face_count_ = 0, feature_count_ = 0;
     double diagonal_ = 0.0;
     std::unique_ptr<Trees> trees_;

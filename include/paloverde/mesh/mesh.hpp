@@ -177,6 +177,18 @@ public:
     bool is_planar() const noexcept { return planar_; }
     const Vec3& plane_normal() const noexcept { return plane_normal_; }
 
+    // Surface meshes (triangles in 3D that do not lie in one plane): per triangle, the unit normal
+    // of the surface there, about which its signed area, its orientation and its metrics are
+    // taken (a triangle whose normal turns past 90 degrees from it is inverted). Empty otherwise:
+    // a planar mesh is oriented by its plane, and a surface triangle alone by its own normal
+    // (never inverted). A solver sets them from its input surface for a run
+    // (BoundarySurface::element_normals) and clears them after. Throws MeshError for a wrong
+    // count, or naming the first normal that is not a unit vector.
+    bool has_surface_normals() const noexcept { return !surface_normals_.empty(); }
+    std::span<const Vec3> surface_normals() const noexcept { return surface_normals_; }
+    void set_surface_normals(std::vector<Vec3> normals);
+    void clear_surface_normals() noexcept { surface_normals_.clear(); }
+
     // Swaps the last two corners of every element, which reverses each one's orientation (a mesh
     // with cells mirrors each cell, CellInfo::mirror, and takes its corners anew in place). A planar
     // triangle mesh's normal turns with its triangles (as if found anew), so their orientation
@@ -230,6 +242,7 @@ private:
     std::vector<double> reference_coordinates_;
     std::vector<double> target_edge_lengths_;
     std::vector<double> target_metrics_;
+    std::vector<Vec3> surface_normals_;
 };
 
 // Power-of-two rescaling, exact both ways and harmless to orientation: the exponent e for which

@@ -86,7 +86,8 @@ struct GlobalSolverOptions {
     // that line (MeanAboveFloor): the worst element and every element near it keep their
     // qualities bit for bit. auto: where the mean fell below the input's, until it is above it
     // again (the first step or two: the polish costs little), and as always where elements are
-    // rated in a target's metric (there the max-min leaves thin elements tilted); always: until
+    // rated in a target's metric (there the max-min leaves thin elements tilted) or on a surface
+    // mesh (its worst triangle, between creases, often cannot rise at all); always: until
     // the mean stops rising; off. It counts against the same budget.
     enum class Polish { Off, Auto, Always };
     Polish polish = Polish::Auto;

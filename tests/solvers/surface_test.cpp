@@ -1,0 +1,274 @@
+// Surface meshes in 3D (triangles that do not lie in one plane), smoothed by the global solver with
+// every vertex sliding on the input surface: the vertices end on the input's triangles, creases
+// and corners stay, nothing turns over, the worst triangle rises, and what is not done yet is
+// refused.
+#include <boost/test/unit_test.hpp>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "support/test_support.hpp"
+
+namespace pv = paloverde;
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+namespace {
+
+using pv::Vec3;
+Vec3 point(const pv::Mesh& mesh, pv::VertexId v) { return mesh.point(v); }
+
+
+
+Vec3 normal_of(const pv::Mesh& mesh, pv::ElementId e) {
+    const auto c = mesh.element(e);
+    const Vec3 a = point(mesh, c[0]), b = point(mesh, c[1]), d = point(mesh, c[2]);
+    const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    return {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+}
+
+// The worst triangle's mean ratio, 4 sqrt(3) area / the sum of its squared edges (1: equilateral).
+double worst_mean_ratio(const pv::Mesh& mesh) {
+    double worst = 1.0;
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto c = mesh.element(e);
+        double squares = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            const Vec3 a = point(mesh, c[k]), b = point(mesh, c[(k + 1) % 3]);
+            squares += (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+        }
+        const Vec3 n = normal_of(mesh, e);
+        worst = std::min(worst, 2.0 * std::sqrt(3.0) * std::hypot(n[0], n[1], n[2]) / squares);
+    }
+    return worst;
+}
+
+// Triangles whose normal in `out` does not point the way it did in `in`.
+int turned_over(const pv::Mesh& in, const pv::Mesh& out) {
+    int count = 0;
+    for (pv::ElementId e = 0; e < in.num_elements(); ++e) {
+        const Vec3 a = normal_of(in, e), b = normal_of(out, e);
+        count += a[0] * b[0] + a[1] * b[1] + a[2] * b[2] <= 0.0;
+    }
+    return count;
+}
+
+double diagonal(const pv::Mesh& mesh) {
+    Vec3 low = point(mesh, 0), high = low;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        for (int k = 0; k < 3; ++k) {
+            low[k] = std::min(low[k], point(mesh, v)[k]);
+            high[k] = std::max(high[k], point(mesh, v)[k]);
+        }
+    return std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]);
+}
+
+// The largest distance of a vertex of `out` to the triangles of `in`, over in's diagonal.
+double largest_distance(const pv::Mesh& in, const pv::Mesh& out) {
+    std::vector<Kernel::Triangle_3> triangles;
+    auto at = [](const Vec3& p) { return Kernel::Point_3(p[0], p[1], p[2]); };
+    for (pv::ElementId e = 0; e < in.num_elements(); ++e) {
+        const auto c = in.element(e);
+        triangles.emplace_back(at(point(in, c[0])), at(point(in, c[1])), at(point(in, c[2])));
+    }
+    double largest = 0.0;
+    for (pv::VertexId v = 0; v < out.num_vertices(); ++v) {
+        double nearest = INFINITY;
+        for (const auto& t : triangles) nearest = std::min(nearest, CGAL::squared_distance(at(point(out, v)), t));
+        largest = std::max(largest, std::sqrt(nearest));
+    }
+    return largest / diagonal(in);
+}
+
+// A number in [-1, 1] from the generator, the same on every standard library.
+double jitter(std::mt19937& random) { return 2.0 * (random() / 4294967295.0) - 1.0; }
+
+// A torus of nu x nv quads cut into triangles, facing outward; with `amount` > 0 each vertex is
+// moved in the torus's parameters by up to that fraction of a cell, and so stays on the torus.
+pv::Mesh torus(int nu, int nv, double amount) {
+    constexpr double R = 1.0, r = 0.4, pi = std::numbers::pi;
+    std::mt19937 random(7);
+    std::vector<double> xyz;
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            const double u = 2 * pi * (i + amount * jitter(random)) / nu, v = 2 * pi * (j + amount * jitter(random)) / nv;
+            xyz.insert(xyz.end(), {(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+        }
+    std::vector<pv::VertexId> triangles;
+    auto id = [&](int i, int j) { return static_cast<pv::VertexId>((i % nu) * nv + j % nv); };
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+        }
+    return pv::Mesh(pv::ElementKind::Triangle, std::move(xyz), std::move(triangles));
+}
+
+// The surface of the unit cube, k x k squares a face cut into triangles facing outward. With
+// `amount` > 0 the vertices inside a face move in its plane, those on an edge along it, by up to
+// that fraction of a square; the corners stay.
+pv::Mesh cube_surface(int k, double amount) {
+    std::map<std::array<int, 3>, pv::VertexId> ids;
+    std::vector<double> xyz;
+    std::mt19937 random(3);
+    auto id = [&](std::array<int, 3> g) {
+        const auto [it, added] = ids.try_emplace(g, static_cast<pv::VertexId>(ids.size()));
+        if (added)
+            for (int c = 0; c < 3; ++c) {
+                const bool on_side = g[c] == 0 || g[c] == k;
+                xyz.push_back((g[c] + (on_side ? 0.0 : amount * jitter(random))) / k);
+            }
+        return it->second;
+    };
+    std::vector<pv::VertexId> triangles;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side : {0, k}) {
+            const int a = (axis + 1) % 3, b = (axis + 2) % 3;
+            for (int s = 0; s < k; ++s)
+                for (int t = 0; t < k; ++t) {
+                    auto at = [&](int ds, int dt) {
+                        std::array<int, 3> g{};
+                        g[axis] = side;
+                        g[a] = s + ds;
+                        g[b] = t + dt;
+                        return id(g);
+                    };
+                    // (a, b, axis) is right-handed: counterclockwise in (a, b) faces +axis.
+                    std::array<pv::VertexId, 4> q{at(0, 0), at(1, 0), at(1, 1), at(0, 1)};
+                    if (side == 0) std::swap(q[1], q[3]);
+                    triangles.insert(triangles.end(), {q[0], q[1], q[2], q[0], q[2], q[3]});
+                }
+        }
+    return pv::Mesh(pv::ElementKind::Triangle, std::move(xyz), std::move(triangles));
+}
+
+pv::GlobalSolverOptions one_thread() {
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    return options;
+}
+
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(surface)
+
+// A torus made poorer along itself: every vertex ends on the poorer torus's triangles, none turns
+// over, and the worst triangle rises at least half way back to the unperturbed mesh's. Its
+// slivers fold their neighbours by more than the feature angle: the short creases they make must
+// not hold them (BoundarySurface drops short creases with a loose end on surface meshes).
+BOOST_AUTO_TEST_CASE(a_torus_is_mended_on_its_own_surface) {
+    const pv::Mesh regular = torus(32, 16, 0.0), input = torus(32, 16, 0.3);
+    pv::Mesh mesh = input;
+    const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(turned_over(input, mesh) == 0);
+    BOOST_TEST(largest_distance(input, mesh) < 1e-9);
+    const double before = worst_mean_ratio(input), after = worst_mean_ratio(mesh);
+    BOOST_TEST(before < 0.6 * worst_mean_ratio(regular));  // the input is poorer
+    BOOST_TEST(after >= before + 0.5 * (worst_mean_ratio(regular) - before));
+    BOOST_REQUIRE(summary.boundary.has_value());
+    BOOST_TEST(summary.boundary->moved > 0);
+    BOOST_TEST(summary.boundary->largest_distance < 1e-9);
+    BOOST_TEST(!mesh.has_surface_normals());  // the run's own, cleared when it ends
+}
+
+// The cube's creases and corners stay: a face vertex keeps its face's plane, an edge vertex its
+// edge's two coordinates, a corner its place, exactly; the worst triangle rises.
+BOOST_AUTO_TEST_CASE(a_cube_surface_keeps_its_creases_and_corners) {
+    constexpr int k = 6;
+    const pv::Mesh input = cube_surface(k, 0.4);
+    pv::Mesh mesh = input;
+    const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(turned_over(input, mesh) == 0);
+    BOOST_TEST(worst_mean_ratio(mesh) > worst_mean_ratio(input) + 0.1);
+    int moved_on_edges = 0;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const Vec3 p = point(input, v), q = point(mesh, v);
+        int sides = 0;
+        for (int c = 0; c < 3; ++c)
+            if (p[c] == 0.0 || p[c] == 1.0) {
+                ++sides;
+                BOOST_TEST(q[c] == p[c], "vertex " << v << " left its face");
+            }
+        if (sides == 2 && q != p) ++moved_on_edges;
+    }
+    BOOST_TEST(moved_on_edges > 0);  // the edge vertices slid along the creases
+}
+
+// An open surface (a saddle): its outline is held by the default fixed flags; the rest slides.
+BOOST_AUTO_TEST_CASE(an_open_surface_keeps_its_outline) {
+    constexpr int k = 12;
+    std::mt19937 random(5);
+    std::vector<double> xyz;
+    for (int i = 0; i <= k; ++i)
+        for (int j = 0; j <= k; ++j) {
+            const bool outline = i == 0 || j == 0 || i == k || j == k;
+            const double x = (i + (outline ? 0.0 : 0.4 * jitter(random))) / k - 0.5;
+            const double y = (j + (outline ? 0.0 : 0.4 * jitter(random))) / k - 0.5;
+            xyz.insert(xyz.end(), {x, y, x * x - y * y});
+        }
+    std::vector<pv::VertexId> triangles;
+    for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+            const pv::VertexId a = i * (k + 1) + j, b = a + k + 1;
+            triangles.insert(triangles.end(), {a, b, b + 1, a, b + 1, a + 1});
+        }
+    const pv::Mesh input(pv::ElementKind::Triangle, std::move(xyz), std::move(triangles));
+    pv::Mesh mesh = input;
+    const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST(summary.success());
+    BOOST_TEST(turned_over(input, mesh) == 0);
+    BOOST_TEST(largest_distance(input, mesh) < 1e-9);
+    BOOST_TEST(worst_mean_ratio(mesh) > worst_mean_ratio(input));
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
+        if (input.fixed()[static_cast<std::size_t>(v)]) BOOST_TEST(point(mesh, v) == point(input, v));
+}
+
+// Three triangles on one edge: no surface to slide on. The command line names the file.
+BOOST_AUTO_TEST_CASE(a_non_manifold_surface_is_refused) {
+    pv::Mesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, -1, 0, 0.5, 0, 1, 0.5, 0.5, 0.6},
+                  {0, 1, 2, 1, 0, 3, 0, 1, 4, 0, 5, 1});
+    BOOST_CHECK_EXCEPTION(pv::GlobalSolver(one_thread()).improve(mesh), pv::MeshError, [](const pv::MeshError& e) {
+        return std::string(e.what()).find("not a manifold") != std::string::npos;
+    });
+    const pv::test::ScratchDir dir("surface_non_manifold");
+    pv::write_mesh(dir / "fins.vtk", mesh);
+    const auto result = pv::test::run_cli("improve " + (dir / "fins.vtk").string() + " -o " + (dir / "out.vtk").string());
+    BOOST_TEST(result.exit_code != 0);
+    BOOST_TEST(result.output.find("fins.vtk") != std::string::npos, result.output);
+    BOOST_TEST(result.output.find("non-manifold") != std::string::npos, result.output);
+}
+
+// A tetrahedron's surface is all corners: the global solver moves nothing; the local smoother,
+// which does not slide on surfaces yet, refuses it.
+BOOST_AUTO_TEST_CASE(what_is_not_done_yet_is_refused) {
+    const pv::Mesh input(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+    pv::Mesh mesh = input;
+    pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST(std::vector<double>(mesh.coordinates().begin(), mesh.coordinates().end()) ==
+                   std::vector<double>(input.coordinates().begin(), input.coordinates().end()),
+               boost::test_tools::per_element());
+    BOOST_CHECK_THROW(pv::LocalSolver().improve(mesh), pv::MeshError);
+    // Newton directions and targets know nothing of the surface.
+    pv::Mesh torus_mesh = torus(8, 6, 0.2);
+    pv::GlobalSolverOptions newton = one_thread();
+    newton.direction = pv::GlobalSolverOptions::Direction::Newton;
+    BOOST_CHECK_THROW(pv::GlobalSolver(newton).improve(torus_mesh), pv::OptionError);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
