@@ -15,9 +15,10 @@ tangent plane, up to --shift times its shortest edge, and is snapped back onto t
 the exact torus or sphere, else onto the unperturbed triangles (the tool's `project`). A step that
 turns a triangle over (its normal against the unperturbed one) is halved until it does not.
 
-Rows per case: the unperturbed mesh, the poorer one (the input of the rest), `paloverde improve`,
-CGAL's angle_and_area_smoothing and its tangential_relaxation (all three with the same feature angle,
-CGAL's with the feature curves and boundary held, and the vertices projected onto the input; paloverde_surface_tool). Columns:
+Rows per case: the unperturbed mesh, the poorer one (the input of the rest), `paloverde improve`
+with the global solver and with the local smoother, CGAL's angle_and_area_smoothing and its
+tangential_relaxation (all with the same feature angle; CGAL's with the feature curves and
+boundary held, and the vertices projected onto the input: paloverde_surface_tool). Columns:
 the worst and the mean triangle mean ratio (4 sqrt(3) area / sum of squared edges, negative for a
 triangle turned over against the poorer input), the worst smallest angle (degrees), the triangles
 turned over, the largest distance of a vertex to its input surface (the poorer mesh's triangles for
@@ -219,11 +220,12 @@ def load_case(name, source, work, paloverde):
     return (mesh.points[used, :3].astype(float), renumber[triangles]), None
 
 
-def smooth_paloverde(paloverde, poor_vtk, work, name, feature_angle):
-    out, summary = os.path.join(work, name + "_paloverde.vtk"), os.path.join(work, name + "_paloverde.json")
+def smooth_paloverde(paloverde, poor_vtk, work, name, feature_angle, method):
+    out = os.path.join(work, f"{name}_paloverde_{method}.vtk")
+    summary = os.path.join(work, f"{name}_paloverde_{method}.json")
     start = time.perf_counter()
-    result = run([paloverde, "improve", poor_vtk, "-o", out, "--threads", "1", "--feature-angle", feature_angle,
-                  "--summary", summary, "-q"])
+    result = run([paloverde, "improve", poor_vtk, "-o", out, "--method", method, "--threads", "1",
+                  "--feature-angle", feature_angle, "--summary", summary, "-q"])
     seconds = time.perf_counter() - start
     if result.returncode != 0:
         raise RuntimeError(f"exit {result.returncode}: {(result.stderr or result.stdout).strip()}")
@@ -300,8 +302,10 @@ def main():
               f"or the boundary", flush=True)
 
         poor_normals = normals(poor, triangles)
-        methods = [("unperturbed", lambda: (points, None, "")), ("poorer", lambda: (poor, None, "")),
-                   ("paloverde", lambda: smooth_paloverde(args.paloverde, poor_vtk, work, name, args.feature_angle))]
+        methods = [("unperturbed", lambda: (points, None, "")), ("poorer", lambda: (poor, None, ""))]
+        for method in ("global", "local"):
+            methods.append((f"paloverde_{method}", lambda method=method: smooth_paloverde(
+                args.paloverde, poor_vtk, work, name, args.feature_angle, method)))
         for method in ("angle_area", "tangential"):
             methods.append((f"cgal_{method}", lambda method=method: smooth_cgal(
                 args.tool, poor_off, work, name, method, args.cgal_iterations, args.feature_angle)))

@@ -8,6 +8,7 @@
 #include "paloverde/config/run.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 
 namespace paloverde::cli {
 
@@ -32,7 +33,15 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         ReadOptions read;
         read.fix_boundary = !options->free_all;
         read.orientation = orientation_mode(options->orientation);
-        const MeshFile file = read_mesh(options->mesh, read);
+        MeshFile file = read_mesh(options->mesh, read);
+        // A surface mesh's triangles are rated as the solvers rate them: about the surface's normal
+        // at each (docs/surfaces.md).
+        const bool surface = file.mesh.kind() == ElementKind::Triangle && !file.mesh.has_cells() &&
+                             !file.mesh.is_planar() && file.mesh.num_elements() > 0;
+        if (surface) {
+            const BoundarySurface on(file.mesh);
+            file.mesh.set_surface_normals({on.element_normals().begin(), on.element_normals().end()});
+        }
         const QualityReport report = QualityAssessor().assess(file.mesh);
         const OrientationDecision& o = file.orientation;
         nlohmann::json json = nlohmann::json::parse(report.to_json());
@@ -40,7 +49,9 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         if (options->json) std::cout << json.dump(2) << "\n";
         else
             std::cout << options->mesh << ": " << describe_cells(file.mesh) << "; "
-                      << o.describe(file.mesh.kind()) << "\n" << report.to_text();
+                      << o.describe(file.mesh.kind())
+                      << (surface ? "; a surface: each triangle rated about the surface's normal at it" : "")
+                      << "\n" << report.to_text();
         if (!options->json_file.empty()) write_text_file(options->json_file, json.dump(2) + "\n");
         exit_code = kDone;
     });

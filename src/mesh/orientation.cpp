@@ -196,7 +196,7 @@ std::string OrientationDecision::describe(ElementKind kind) const {
             << " swapped; outputs get the file's order back)";
     else
         out << "elements as in the file";
-    if (!oriented) return out.str() + "; triangles not in one plane have no orientation";
+    if (!oriented) return out.str() + "; triangles not in one plane have no file-wide orientation";
     out << "; total signed " << (tets ? "volume " : "area about the plane normal ");
     if (sign == 0) return out.str() + "zero within rounding: the file's convention cannot be told";
     out << std::showpos << std::fixed << std::setprecision(1) << 100.0 * share << std::noshowpos << "% of the absolute "

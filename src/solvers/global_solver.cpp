@@ -140,37 +140,20 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
     return solve(options, observer, run, work, checkpointer, sliding);
 }
 
-// A surface mesh (triangles in 3D that do not lie in one plane).
-bool is_surface(const Mesh& mesh) {
-    return mesh.kind() == ElementKind::Triangle && !mesh.has_cells() && !mesh.is_planar() && mesh.num_elements() > 0;
-}
-
-// A surface mesh: one shape run in which every vertex that is not fixed slides on the input
-// surface, on its patch or along its crease or open edge (free moves in space would leave the
-// surface), each triangle rated about its input normal. Serial, without checkpoints, Newton
-// directions, targets or boundary motion: each of them is refused rather than half done.
+// A surface mesh: one shape run with every vertex sliding on the input surface (free moves in
+// space would leave it). Newton directions are refused: their Hessian solves know nothing of it.
 Summary improve_surface(const GlobalSolverOptions& options, const IterationObserver& observer, MeshPart part) {
-    const Mesh& mesh = part.mesh();
-    if (part.distributed())
-        throw OptionError("surface meshes are smoothed on one process for now: run without mpirun or partitions");
-    if (!options.checkpoint.file.empty() || !options.checkpoint.resume.empty())
-        throw OptionError("checkpoints do not go with surface meshes yet");
     if (options.direction == GlobalSolverOptions::Direction::Newton)
         throw OptionError("direction newton does not go with surface meshes (its Hessian solves know nothing of the "
                           "surface); use conjugate_gradient or steepest_ascent");
-    if (mesh.has_targets()) throw OptionError("targets do not go with surface meshes yet: run with --keep none");
-    if (!mesh.reference_coordinates().empty())
-        throw OptionError("a moved boundary (a reference mesh or a displacement) does not go with surface meshes yet");
-    detail::SlidingBoundary sliding(part, options.surface, options.boundary == GlobalSolverOptions::Boundary::Slide);
-    sliding.release();
     GlobalSolverOptions run = options;
     run.untangle = false;  // an untangling step would leave the surface; no input triangle is turned over
     // A surface's worst triangle often sits at a corner of its creases, where the max-min can do
     // little and so leaves every other triangle as it was: the mean is raised after it.
     if (run.polish == GlobalSolverOptions::Polish::Auto) run.polish = GlobalSolverOptions::Polish::Always;
-    Summary summary = improve_part(run, observer, part, &sliding);
-    summary.boundary = sliding.motion();
-    return summary;
+    const bool open_edges_slide = options.boundary == GlobalSolverOptions::Boundary::Slide;
+    return detail::on_surface(part, options.surface, options.checkpoint, open_edges_slide,
+                              [&](detail::SlidingBoundary* sliding) { return improve_part(run, observer, part, sliding); });
 }
 
 }  // namespace
@@ -194,7 +177,7 @@ Summary GlobalSolver::improve(MeshPart part) {
 }
 
 Summary GlobalSolver::run_once(MeshPart part) {
-    if (part.reducer().max(is_surface(part.mesh()) ? 1.0 : 0.0) > 0.0) return improve_surface(options_, observer(), part);
+    if (detail::is_surface_mesh(part)) return improve_surface(options_, observer(), part);
     if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
     // The sliding run is a shape phase from the valid mesh the first run left: untangling would
     // not keep the boundary on the surface.

@@ -114,7 +114,7 @@ public:
             for (std::size_t i = 0; i < k; ++i)
                 if (q_[i] <= worst + tolerance) active_.push_back(gradient_[i]);
             Vec3 d = min_norm_point(active_);
-            if (mesh_.kind() == ElementKind::Triangle) {
+            if (mesh_.kind() == ElementKind::Triangle && mesh_.is_planar()) {
                 // The gradients lie in the plane up to rounding; keep the vertex exactly in it.
                 const Vec3& n = mesh_.plane_normal();
                 const double along = dot(d, n);
@@ -213,6 +213,16 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
 }
 
 Summary LocalSolver::run_once(MeshPart whole_or_part) {
+    if (detail::is_surface_mesh(whole_or_part)) {
+        // No untangling: its free moves would leave the surface.
+        LocalSolverOptions run = options_;
+        run.untangle = false;
+        LocalSolver solver(run);
+        solver.set_observer(observer());
+        return detail::on_surface(whole_or_part, options_.surface, options_.checkpoint,
+                                  options_.boundary == LocalSolverOptions::Boundary::Slide,
+                                  [&](detail::SlidingBoundary* sliding) { return solver.improve_part(whole_or_part, sliding); });
+    }
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
                                       [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {

@@ -82,8 +82,8 @@ public:
     // The checks every solver makes before moving anything: a finished Summary when there is
     // nothing to move (no elements, no free vertex, no element with one); a MeshError for a
     // triangle mesh that is not planar and is not being smoothed as a surface (its vertices
-    // sliding on it, with their triangles' normals: the global solver), which free vertex moves
-    // would leave.
+    // sliding on it, with their triangles' normals: the global and local solvers), which free
+    // vertex moves would leave.
     std::optional<Summary> nothing_to_move() {
         if (summary.before.elements == 0) return finish(TerminationReason::NothingToMove, "the mesh has no elements");
         if (summary.before.free_vertices == 0)
@@ -93,7 +93,7 @@ public:
             throw MeshError(mesh_.has_cells() ? "the 2D cells do not lie in one plane: surfaces of quadrilaterals are not "
                                                 "smoothed yet (surfaces of triangles are, by the global solver)"
                                               : "the triangles do not lie in one plane: surfaces are smoothed by the "
-                                                "global solver (solver: global), on one process");
+                                                "global and local solvers, on one process");
         if (summary.before.frozen_elements == summary.before.elements)
             return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
         return std::nullopt;

@@ -78,6 +78,24 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
     return std::nullopt;
 }
 
+bool is_surface_mesh(const MeshPart& part) {
+    const Mesh& mesh = part.mesh();
+    const bool surface =
+        mesh.kind() == ElementKind::Triangle && !mesh.has_cells() && !mesh.is_planar() && mesh.num_elements() > 0;
+    return part.reducer().max(surface ? 1.0 : 0.0) > 0.0;
+}
+
+void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint) {
+    const Mesh& mesh = part.mesh();
+    if (part.distributed())
+        throw OptionError("surface meshes are smoothed on one process for now: run without mpirun or partitions");
+    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
+        throw OptionError("checkpoints do not go with surface meshes yet");
+    if (mesh.has_targets()) throw OptionError("targets do not go with surface meshes yet: run with --keep none");
+    if (!mesh.reference_coordinates().empty())
+        throw OptionError("a moved boundary (a reference mesh or a displacement) does not go with surface meshes yet");
+}
+
 SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options, bool open_edges_slide)
     : part_(part), mesh_(part.mesh()), surface_(surface_of(part, options)), fixed_(mesh_.fixed().begin(), mesh_.fixed().end()),
       input_(mesh_.coordinates().begin(), mesh_.coordinates().end()), volume_before_(volume_of(part)) {

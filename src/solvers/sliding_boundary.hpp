@@ -28,6 +28,10 @@
 
 namespace paloverde::detail {
 
+// What surface meshes do not go with yet (OptionError): several processes, checkpoints, targets,
+// a reference mesh or a displacement.
+void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint);
+
 // The options a solver's boundary: slide comes with (throws OptionError): no checkpoints (a
 // sliding run is two runs, which one checkpoint cannot resume). The feature angle is the
 // solver's own surface.validate().
@@ -100,6 +104,25 @@ Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const T
     sliding.release();
     Summary slid = run(*budget, &sliding);
     return sliding.join(std::move(fixed), std::move(slid));
+}
+
+// Whether `part` is a surface mesh: triangles in 3D that do not lie in one plane. Collective.
+bool is_surface_mesh(const MeshPart& part);
+
+// A solver's run on a surface mesh: one shape run, `run(&sliding)`, in which every vertex that is
+// not fixed slides on the input surface (on its patch, along its crease or, where
+// `open_edges_slide`, along its open edge; corners stay), each triangle rated about the surface's
+// normal. Serial; without checkpoints, targets or a moved boundary (OptionError, naming what to
+// drop). The Summary reports the motion.
+template <class Run>
+Summary on_surface(MeshPart part, const SurfaceOptions& surface, const CheckpointOptions& checkpoint,
+                   bool open_edges_slide, Run run) {
+    refuse_on_surfaces(part, checkpoint);
+    SlidingBoundary sliding(part, surface, open_edges_slide);
+    sliding.release();
+    Summary summary = run(&sliding);
+    summary.boundary = sliding.motion();
+    return summary;
 }
 
 }  // namespace paloverde::detail

@@ -40,6 +40,36 @@ BOOST_AUTO_TEST_CASE(quality_json_has_the_documented_keys) {
     BOOST_TEST(std::abs(j["metrics"]["min_dihedral_deg"]["movable"]["min"].get<double>() - 6.10) < 0.01);
 }
 
+// A surface mesh (a bowl of 4 x 4 vertices, one inner vertex off the grid): `quality` rates its
+// triangles about the surface's normals, and improve smooths it on itself.
+BOOST_AUTO_TEST_CASE(quality_and_improve_take_a_surface) {
+    const pv::test::ScratchDir dir("cli_surface");
+    std::string text = "# vtk DataFile Version 3.0\nbowl\nASCII\nDATASET UNSTRUCTURED_GRID\nPOINTS 16 double\n";
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) {
+            const double x = i * 4 + j == 5 ? 1.3 : i, y = i * 4 + j == 5 ? 0.7 : j;
+            text += std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(0.2 * (x * x + y * y)) + "\n";
+        }
+    std::string types;
+    text += "CELLS 18 72\n";
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) {
+            const int a = i * 4 + j, b = a + 4;
+            text += "3 " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(b + 1) + "\n3 " +
+                    std::to_string(a) + " " + std::to_string(b + 1) + " " + std::to_string(a + 1) + "\n";
+            types += "5\n5\n";
+        }
+    pv::test::write_file(dir / "bowl.vtk", text + "CELL_TYPES 18\n" + types);
+    const auto quality = run_cli("quality " + quoted(dir / "bowl.vtk"));
+    BOOST_TEST_REQUIRE(quality.exit_code == 0, quality.output);
+    BOOST_TEST(has(quality.output, "a surface: each triangle rated about the surface's normal"), quality.output);
+    const auto improved = run_cli("improve " + quoted(dir / "bowl.vtk") + " -o " + quoted(dir / "out.vtk"));
+    BOOST_TEST(improved.exit_code == 0, improved.output);
+    BOOST_TEST(has(improved.output, "sliding vertices moved"), improved.output);
+    const auto after = pv::read_mesh(dir / "out.vtk").mesh;
+    BOOST_TEST(after.point(5) != pv::read_mesh(dir / "bowl.vtk").mesh.point(5));  // the inner vertex moved
+}
+
 BOOST_AUTO_TEST_CASE(improve_untangles_writes_history_and_json_and_exits_zero) {
     const pv::test::ScratchDir dir("cli_improve");
     const auto input = pv::test::shared_data("mesquite/tets/tet_4_tangled.vtk");
