@@ -1,13 +1,14 @@
 #!/usr/bin/python3
-"""The surface study: triangle surface meshes in 3D made poorer by sliding their vertices along the
-surface, then smoothed by `paloverde improve` and by CGAL's surface smoothers, and measured alike.
+"""The surface study: surface meshes in 3D made poorer by sliding their vertices along the surface,
+then smoothed by `paloverde improve` and (triangles) by CGAL's surface smoothers, measured alike.
 
     /usr/bin/python3 examples/surface_study.py [--paloverde build/bin/paloverde]
         [--tool build/bin/paloverde_surface_tool] [--work DIR] [--csv docs/data/surfaces.csv]
 
 The cases: the Gmsh meshes examples/surfaces/{torus,cad_part,open_surface}.geo (a closed smooth
-surface, a part with sharp edges and corners, a saddle with an open boundary), and the shared
-sphere patch mesquite/hexes/sph-10-zsquare.vtk, listed but skipped while it is quadrilaterals.
+surface, a part with sharp edges and corners, a saddle with an open boundary); and of
+quadrilaterals, the shared sphere patch mesquite/hexes/sph-10-zsquare.vtk and the Gmsh sphere
+examples/surfaces/sphere_quads.geo (quad_rows(): measured by corners, Paloverde only).
 
 Each mesh is made poorer: every vertex that is on no feature curve (an edge whose two triangles'
 normals are more than --feature-angle apart) and on no open boundary takes a random step in its
@@ -67,13 +68,18 @@ def sphere_snap(points):
 
 # (name, source, how to snap onto the surface: "torus", "sphere" or "triangles")
 CASES = [
-    ("sphere_patch", os.path.join(SHARED, "mesquite", "hexes", "sph-10-zsquare.vtk"), "sphere"),
     ("torus", os.path.join(HERE, "surfaces", "torus.geo"), "torus"),
     ("cad_part", os.path.join(HERE, "surfaces", "cad_part.geo"), "triangles"),
     ("open_surface", os.path.join(HERE, "surfaces", "open_surface.geo"), "triangles"),
 ]
+# Quadrilateral surfaces, both on spheres: Mesquite's patch (its outline open) and a Gmsh sphere.
+QUAD_CASES = [
+    ("sphere_patch", os.path.join(SHARED, "mesquite", "hexes", "sph-10-zsquare.vtk")),
+    ("sphere_quads", os.path.join(HERE, "surfaces", "sphere_quads.geo")),
+]
 
-FIELDS = ["case", "method", "vertices", "triangles", "worst_mean_ratio", "mean_mean_ratio", "worst_min_angle_deg",
+FIELDS = ["case", "method", "vertices", "triangles", "worst_mean_ratio", "mean_mean_ratio", "worst_scaled_jacobian",
+          "worst_min_angle_deg",
           "turned_over", "max_distance_rel", "max_feature_move_rel", "max_feature_off_curve_rel", "seconds", "note",
           "error"]
 
@@ -197,18 +203,25 @@ def tool_distance(tool, surface_off, points, triangles, path):
     return float(re.search(r"^relative (\S+)", result.stdout, re.M).group(1))
 
 
+def mesh_file(name, source, work, paloverde):
+    """The case's mesh file: a .geo meshed by Gmsh and written by paloverde's own reader and writer
+    (the files its users will hand it), anything else as it is."""
+    if not source.endswith(".geo"):
+        return source
+    msh = os.path.join(work, name + ".msh")
+    result = run(["gmsh", "-2", source, "-o", msh])
+    if result.returncode != 0:
+        raise RuntimeError(f"gmsh: {result.stdout[-500:]}{result.stderr[-500:]}")
+    vtk = os.path.join(work, name + ".vtk")
+    result = run([paloverde, "convert", msh, vtk])
+    if result.returncode != 0:
+        raise RuntimeError(f"paloverde convert: {result.stderr.strip()}")
+    return vtk
+
+
 def load_case(name, source, work, paloverde):
     """The case's points and triangles, or the reason it is skipped."""
-    if source.endswith(".geo"):
-        msh = os.path.join(work, name + ".msh")
-        result = run(["gmsh", "-2", source, "-o", msh])
-        if result.returncode != 0:
-            raise RuntimeError(f"gmsh: {result.stdout[-500:]}{result.stderr[-500:]}")
-        # Through paloverde's own reader and writer: the files its users will hand it.
-        source = os.path.join(work, name + ".vtk")
-        result = run([paloverde, "convert", msh, source])
-        if result.returncode != 0:
-            raise RuntimeError(f"paloverde convert: {result.stderr.strip()}")
+    source = mesh_file(name, source, work, paloverde)
     mesh = meshio.read(source)
     types = sorted({block.type for block in mesh.cells if block.type not in ("vertex", "line")})
     if "triangle" not in types:
@@ -245,6 +258,113 @@ def smooth_cgal(tool, poor_off, work, name, method, iterations, feature_angle):
         raise RuntimeError(f"exit {result.returncode}: {result.stderr.strip()}")
     note = "angle smoothing only (CGAL without Ceres)" if "area smoothing off" in result.stdout else ""
     return read_points(out), float(re.search(r"^seconds (\S+)", result.stdout, re.M).group(1)), note
+
+
+def read_quads(source, name, work, paloverde):
+    source = mesh_file(name, source, work, paloverde)
+    mesh = meshio.read(source)
+    quads = np.vstack([block.data for block in mesh.cells if block.type == "quad"])
+    used = np.unique(quads)
+    renumber = np.full(len(mesh.points), -1)
+    renumber[used] = np.arange(len(used))
+    return mesh.points[used, :3].astype(float), renumber[quads]
+
+
+def quad_normals(points, quads):
+    """Each quadrilateral's normal: the sum of its corners' cross products."""
+    p = points[quads]
+    return sum(np.cross(p[:, (k + 1) % 4] - p[:, k], p[:, (k + 3) % 4] - p[:, k]) for k in range(4))
+
+
+def measure_quads(points, quads, reference_normals):
+    """Worst and mean corner-triangle mean ratio, worst corner scaled Jacobian (about each
+    quadrilateral's own normal), and the quadrilaterals with a corner turned against the reference."""
+    p = points[quads]
+    n = quad_normals(points, quads)
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    ratios, jacobians, turned = [], [], np.zeros(len(quads), bool)
+    for k in range(4):
+        a, b, c = p[:, (k + 3) % 4], p[:, k], p[:, (k + 1) % 4]
+        e1, e2 = c - b, a - b
+        cross = np.cross(e1, e2)
+        turned |= (cross * reference_normals).sum(1) <= 0
+        jacobians.append((cross * n).sum(1) / (np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)))
+        squares = (e1 ** 2).sum(1) + (e2 ** 2).sum(1) + ((c - a) ** 2).sum(1)
+        ratios.append(2 * np.sqrt(3) * np.linalg.norm(cross, axis=1) / squares)
+    ratios = np.array(ratios)
+    return {"worst_mean_ratio": f"{ratios.min():.4f}", "mean_mean_ratio": f"{ratios.mean():.4f}",
+            "worst_scaled_jacobian": f"{np.min(jacobians):.4f}", "turned_over": int(turned.sum())}
+
+
+def quad_rows(args, work):
+    """The quadrilateral cases: made poorer on their sphere, smoothed by both Paloverde solvers (with
+    the outline fixed, and sliding), measured by corners; CGAL's smoothers take triangles only."""
+    rows = []
+    for name, source in QUAD_CASES:
+        try:
+            points, quads = read_quads(source, name, work, args.paloverde)
+        except (RuntimeError, ValueError) as error:
+            print(f"{name}: skipped ({error})")
+            continue
+        edges = np.sort(quads[:, [0, 1, 1, 2, 2, 3, 3, 0]].reshape(-1, 2), axis=1)
+        unique, count = np.unique(edges, axis=0, return_counts=True)
+        frozen = np.zeros(len(points), bool)
+        frozen[unique[count == 1].ravel()] = True  # the outline
+        # The same cut as Paloverde's (first corner to third): the input surface its vertices keep to.
+        split = np.vstack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+        snap = sphere_snap(points)
+        poor = poorer(points, split, frozen, snap, args.shift, args.seed)
+        # A quadrilateral corner turned by the move is undone: its vertices go back.
+        for _ in range(12):
+            bad = measure_quads(poor, quads, quad_normals(points, quads))["turned_over"]
+            if bad == 0:
+                break
+            turned = np.zeros(len(quads), bool)
+            n0 = quad_normals(points, quads)
+            p = poor[quads]
+            for k in range(4):
+                turned |= (np.cross(p[:, (k + 1) % 4] - p[:, k], p[:, (k + 3) % 4] - p[:, k]) * n0).sum(1) <= 0
+            back = np.unique(quads[turned])
+            poor[back] = points[back]
+        poor_vtk, poor_off = os.path.join(work, name + "_poor.vtk"), os.path.join(work, name + "_poor.off")
+        meshio.write(poor_vtk, meshio.Mesh(poor, [("quad", quads)]), file_format="vtk", binary=True)
+        write_off(poor_off, poor, split)
+        unperturbed_off = os.path.join(work, name + ".off")
+        write_off(unperturbed_off, points, split)
+        print(f"{name}: {len(points)} vertices, {len(quads)} quadrilaterals, {int(frozen.sum())} on the outline",
+              flush=True)
+        poor_normals = quad_normals(poor, quads)
+        methods = [("unperturbed", None, []), ("poorer", None, [])]
+        for method in ("global", "local"):
+            methods.append((f"paloverde_{method}", method, []))
+            if frozen.any():
+                methods.append((f"paloverde_{method}_slide", method, ["--boundary", "slide"]))
+        for label, method, extra in methods:
+            row = {"case": name, "method": label, "vertices": len(points), "triangles": f"{len(quads)} quads"}
+            try:
+                if method is None:
+                    result, seconds = (points if label == "unperturbed" else poor), None
+                else:
+                    out = os.path.join(work, f"{name}_{label}.vtk")
+                    summary = os.path.join(work, f"{name}_{label}.json")
+                    done = run([args.paloverde, "improve", poor_vtk, "-o", out, "--method", method, "--threads", "1",
+                                "--summary", summary, "-q"] + extra)
+                    if done.returncode != 0:
+                        raise RuntimeError(f"exit {done.returncode}: {(done.stderr or done.stdout).strip()}")
+                    result = read_points(out)
+                    with open(summary) as f:
+                        seconds = json.load(f)["seconds"]
+                reference = quad_normals(points, quads) if seconds is None else poor_normals
+                row.update(measure_quads(result, quads, reference))
+                surface_off = unperturbed_off if seconds is None else poor_off
+                row["max_distance_rel"] = f"{tool_distance(args.tool, surface_off, result, split, os.path.join(work, f'{name}_{label}_measured.off')):.2e}"
+                moved = np.linalg.norm(result[frozen] - poor[frozen], axis=1) if frozen.any() else np.zeros(1)
+                row["max_feature_move_rel"] = f"{moved.max() / np.linalg.norm(points.max(0) - points.min(0)):.1e}"
+                row["seconds"] = "" if seconds is None else f"{seconds:.3f}"
+            except RuntimeError as error:
+                row["error"] = " ".join(str(error).split())[:300] or "failed"
+            rows.append(row)
+    return rows
 
 
 def main():
@@ -329,13 +449,16 @@ def main():
                 row["error"] = " ".join(str(error).split())[:300] or "failed"
             rows.append(row)
 
+    rows += quad_rows(args, work)
+
     if args.csv:
         os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)
         with open(args.csv, "w", newline="") as f:
             writer = csv.DictWriter(f, fieldnames=FIELDS)
             writer.writeheader()
             writer.writerows(rows)
-    shown = ["case", "method", "worst_mean_ratio", "mean_mean_ratio", "worst_min_angle_deg", "turned_over",
+    shown = ["case", "method", "worst_mean_ratio", "mean_mean_ratio", "worst_scaled_jacobian", "worst_min_angle_deg",
+             "turned_over",
              "max_distance_rel", "max_feature_move_rel", "max_feature_off_curve_rel", "seconds", "note", "error"]
     print("\n| " + " | ".join(shown) + " |\n|" + "---|" * len(shown))
     for row in rows:

@@ -1,4 +1,4 @@
-// A sphere of quadrilaterals (recombined), for when surface smoothing handles quads; radius 1.
+// A sphere of quadrilaterals (recombined), radius 1: the surface study's closed quadrilateral case.
 SetFactory("OpenCASCADE");
 Sphere(1) = {0, 0, 0, 1};
 Physical Surface("sphere") = Surface{:};

@@ -36,12 +36,9 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         MeshFile file = read_mesh(options->mesh, read);
         // A surface mesh's triangles are rated as the solvers rate them: about the surface's normal
         // at each (docs/surfaces.md).
-        const bool surface = file.mesh.kind() == ElementKind::Triangle && !file.mesh.has_cells() &&
-                             !file.mesh.is_planar() && file.mesh.num_elements() > 0;
-        if (surface) {
-            const BoundarySurface on(file.mesh);
-            file.mesh.set_surface_normals({on.element_normals().begin(), on.element_normals().end()});
-        }
+        const bool surface =
+            file.mesh.kind() == ElementKind::Triangle && !file.mesh.is_planar() && file.mesh.num_elements() > 0;
+        if (surface) file.mesh.set_surface_normals(BoundarySurface(file.mesh).normals_of(file.mesh));
         const QualityReport report = QualityAssessor().assess(file.mesh);
         const OrientationDecision& o = file.orientation;
         nlohmann::json json = nlohmann::json::parse(report.to_json());

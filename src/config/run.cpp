@@ -69,7 +69,10 @@ std::string origin(const RunSpec& spec, const std::string& key) {
 
 void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name,
                      const Mesh* reference) {
-    const TargetOptions targets = spec.targets.options(mesh.has_cells(), reference != nullptr);
+    // keep: auto keeps the aspect of cells in a plane or in space, not of a surface's quadrilaterals
+    // (rated about the surface's normals, whose targets are not built yet: docs/surfaces.md).
+    const bool surface = mesh.kind() == ElementKind::Triangle && !mesh.is_planar();
+    const TargetOptions targets = spec.targets.options(mesh.has_cells() && !surface, reference != nullptr);
     const std::string& path = spec.targets.reference;
     std::optional<MeshFile> file;
     if (!path.empty()) {

@@ -235,15 +235,15 @@ BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
     BoundaryFacets out;
     out.kind = mesh.kind();
     const bool tets = out.kind == ElementKind::Tetrahedron;
-    if (mesh.has_cells())
-        throw MeshError("boundary vertices slide on meshes of triangles and tetrahedra only, for now");
     if (!tets && !mesh.is_planar()) {
-        // A surface mesh is its own surface: every triangle a facet, every vertex on it.
+        // A surface mesh is its own surface: every triangle a facet, every quadrilateral two
+        // (cut along its diagonal from its first corner), every vertex on it.
         out.surface = true;
         const auto xyz = mesh.coordinates();
-        for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-            const auto c = mesh.element(e);
-            out.facets.push_back({c[0], c[1], c[2]});
+        for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+            const auto k = mesh.cell(c);
+            for (std::size_t i = 2; i < k.size(); ++i) out.facets.push_back({k[0], k[i - 1], k[i]});
+            for (std::size_t i = 2; i + 1 < k.size(); ++i) out.cuts.push_back({k[0], k[i]});
         }
         for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
             if (mesh.elements_of(v).empty()) continue;
@@ -254,6 +254,8 @@ BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
         out.diagonal = diagonal_of(xyz);
         return out;
     }
+    if (mesh.has_cells())
+        throw MeshError("boundary vertices slide on meshes of triangles and tetrahedra only, for now");
     std::vector<Facet> all;
     all.reserve(static_cast<std::size_t>(mesh.num_elements()) * (tets ? 4 : 3));
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
@@ -388,6 +390,12 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         bool feature;
     };
     std::vector<Edge> edges_of_facets;
+    std::vector<std::array<GlobalId, 2>> cuts;  // in boundary vertices, each pair ascending, sorted
+    for (const auto& [a, b] : boundary.cuts) {
+        const GlobalId ra = boundary_vertex(a), rb = boundary_vertex(b);
+        cuts.push_back({std::min(ra, rb), std::max(ra, rb)});
+    }
+    std::sort(cuts.begin(), cuts.end());
     std::vector<int> creases(n, 0);  // per vertex, its edges that are features by their angle alone
     std::vector<std::uint8_t> on_open(n, 0);  // per vertex: on an open (or a planar mesh's boundary) edge
     for (std::size_t i = 0; i < uses.size();) {
@@ -400,7 +408,8 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
                             " meet at the edge of vertices " + std::to_string(id_of(a)) + " and " +
                             std::to_string(id_of(b)) + ", so no surface to slide on is defined there");
         const bool open = !tets || j - i != 2;
-        const bool crease = !open && angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
+        const bool crease = !open && !std::binary_search(cuts.begin(), cuts.end(), std::array<GlobalId, 2>{a, b}) &&
+                            angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
         if (crease) ++creases[static_cast<std::size_t>(a)], ++creases[static_cast<std::size_t>(b)];
         if (open) on_open[static_cast<std::size_t>(a)] = on_open[static_cast<std::size_t>(b)] = 1;
         edges_of_facets.push_back({{a, b}, i, j - i, open || crease});
@@ -512,6 +521,24 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     for (auto& curve : trees_->curves) curve->build();
     trees_->all_faces.build();
     trees_->all_edges.build();
+}
+
+std::vector<Vec3> BoundarySurface::normals_of(const Mesh& mesh) const {
+    if (!surface_) throw MeshError("normals_of: the surface is not a surface mesh's own");
+    if (!mesh.has_cells()) return {element_normals_.begin(), element_normals_.end()};
+    // Each cell's facets (BoundaryFacets::of: a cell of k corners gave k - 2, in cell order) give
+    // their mean normal to every corner element of the cell.
+    std::vector<Vec3> cell_normal(static_cast<std::size_t>(mesh.num_cells()));
+    std::size_t f = 0;
+    for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+        Vec3 sum = {0.0, 0.0, 0.0};
+        for (std::size_t i = 2; i < mesh.cell(c).size(); ++i, ++f)
+            for (int k = 0; k < 3; ++k) sum[k] += element_normals_[f][k];
+        cell_normal[static_cast<std::size_t>(c)] = unit(sum);
+    }
+    std::vector<Vec3> out(static_cast<std::size_t>(mesh.num_elements()));
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) out[static_cast<std::size_t>(e)] = cell_normal[static_cast<std::size_t>(mesh.cell_of(e))];
+    return out;
 }
 
 int BoundarySurface::freedom(VertexId v) const {

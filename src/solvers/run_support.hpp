@@ -90,10 +90,9 @@ public:
             return finish(TerminationReason::NothingToMove, "every vertex is fixed: nothing can move");
         const bool off_plane = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() && !mesh_.has_surface_normals();
         if (part_.reducer().min(off_plane ? 0.0 : 1.0) == 0.0)
-            throw MeshError(mesh_.has_cells() ? "the 2D cells do not lie in one plane: surfaces of quadrilaterals are not "
-                                                "smoothed yet (surfaces of triangles are, by the global solver)"
-                                              : "the triangles do not lie in one plane: surfaces are smoothed by the "
-                                                "global and local solvers, on one process");
+            throw MeshError(std::string(mesh_.has_cells() ? "the 2D cells" : "the triangles") +
+                            " do not lie in one plane: surfaces are smoothed by the global and local solvers, on one "
+                            "process");
         if (summary.before.frozen_elements == summary.before.elements)
             return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
         return std::nullopt;
@@ -141,11 +140,14 @@ private:
         summary.worst_before = worst_movable(summary.before);
     }
     QualityReport assess() const { return assessor_.assess(part_); }
-    // A mesh of cells with targets (the command line's default for cells) is judged by its users'
-    // measure too: a valid input's minimum corner scaled Jacobian over its cells (hexahedra,
-    // wedges, pyramids, quadrilaterals; a mixed mesh's simplices are rated by the solver's metric)
-    // is never lowered. -inf where it does not apply (no cells, no targets, an inverted input).
-    bool guards_scaled_jacobian() const { return mesh_.has_cells() && mesh_.has_targets(); }
+    // A mesh of cells with targets (the command line's default for cells), or a surface of cells,
+    // is judged by its users' measure too: a valid input's minimum corner scaled Jacobian over its
+    // cells (hexahedra, wedges, pyramids, quadrilaterals; a mixed mesh's simplices are rated by the
+    // solver's metric) is never lowered. -inf where it does not apply (no cells, neither targets
+    // nor a surface, an inverted input).
+    bool guards_scaled_jacobian() const {
+        return mesh_.has_cells() && (mesh_.has_targets() || mesh_.has_surface_normals());
+    }
     double worst_scaled_jacobian(const QualityReport& report) const {
         if (summary.before.inverted > 0) return -INFINITY;
         double worst = INFINITY;

@@ -80,8 +80,7 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 
 bool is_surface_mesh(const MeshPart& part) {
     const Mesh& mesh = part.mesh();
-    const bool surface =
-        mesh.kind() == ElementKind::Triangle && !mesh.has_cells() && !mesh.is_planar() && mesh.num_elements() > 0;
+    const bool surface = mesh.kind() == ElementKind::Triangle && !mesh.is_planar() && mesh.num_elements() > 0;
     return part.reducer().max(surface ? 1.0 : 0.0) > 0.0;
 }
 
@@ -137,8 +136,7 @@ void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
         slides_[v] = 1;
         released_[v] = role == BoundaryRole::Surface ? 2 : 1;
     }
-    const auto normals = surface_.element_normals();
-    mesh_.set_surface_normals({normals.begin(), normals.end()});
+    mesh_.set_surface_normals(surface_.normals_of(mesh_));
     normals_set_ = true;
 }
 

@@ -77,13 +77,15 @@ double diagonal(const pv::Mesh& mesh) {
     return std::hypot(high[0] - low[0], high[1] - low[1], high[2] - low[2]);
 }
 
-// The largest distance of a vertex of `out` to the triangles of `in`, over in's diagonal.
+// The largest distance of a vertex of `out` to the triangles of `in` (its cells cut into
+// triangles), over in's diagonal.
 double largest_distance(const pv::Mesh& in, const pv::Mesh& out) {
     std::vector<Kernel::Triangle_3> triangles;
     auto at = [](const Vec3& p) { return Kernel::Point_3(p[0], p[1], p[2]); };
-    for (pv::ElementId e = 0; e < in.num_elements(); ++e) {
-        const auto c = in.element(e);
-        triangles.emplace_back(at(point(in, c[0])), at(point(in, c[1])), at(point(in, c[2])));
+    for (pv::ElementId e = 0; e < in.num_cells(); ++e) {
+        const auto c = in.cell(e);  // a quadrilateral cut as Paloverde cuts it: from its first corner
+        for (std::size_t k = 2; k < c.size(); ++k)
+            triangles.emplace_back(at(point(in, c[0])), at(point(in, c[k - 1])), at(point(in, c[k])));
     }
     double largest = 0.0;
     for (pv::VertexId v = 0; v < out.num_vertices(); ++v) {
@@ -244,6 +246,30 @@ BOOST_AUTO_TEST_CASE(an_open_surface_keeps_its_outline) {
     BOOST_TEST(worst_mean_ratio(mesh) > worst_mean_ratio(input));
     for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (input.fixed()[static_cast<std::size_t>(v)]) BOOST_TEST(point(mesh, v) == point(input, v));
+}
+
+// Mesquite's patch of quadrilaterals on a sphere, its outline sliding: every vertex stays on the
+// input's quadrilaterals (cut along their first diagonal, which is no crease however much it
+// folds), no corner turns over, the worst corner rises and the scaled Jacobian does not fall.
+BOOST_AUTO_TEST_CASE(a_sphere_of_quadrilaterals_is_mended_on_itself) {
+    const pv::Mesh input = pv::read_mesh(pv::test::shared_data("mesquite/hexes/sph-10-zsquare.vtk")).mesh;
+    pv::Mesh mesh = input;
+    pv::GlobalSolverOptions options = one_thread();
+    options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
+    const pv::Summary summary = pv::GlobalSolver(options).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(summary.worst_after > 2.0 * summary.worst_before);  // 0.399 -> 0.826
+    BOOST_TEST(turned_over(input, mesh) == 0);
+    BOOST_TEST(largest_distance(input, mesh) < 1e-9);
+    auto worst_scaled_jacobian = [](const pv::QualityReport& report) {
+        for (const auto& type : report.by_type)
+            for (const auto& [metric, value] : type.worst)
+                if (metric == "scaled_jacobian") return value;
+        return -1.0;
+    };
+    BOOST_TEST(worst_scaled_jacobian(summary.after) >= worst_scaled_jacobian(summary.before));
+    BOOST_TEST(worst_scaled_jacobian(summary.before) > 0.8);  // the guard reads it
 }
 
 // Three triangles on one edge: no surface to slide on. The command line names the file.

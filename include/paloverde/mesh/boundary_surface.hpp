@@ -53,6 +53,9 @@ struct BoundaryFacets {
     // own triangles (turned as in the file, which need not agree).
     std::vector<std::array<GlobalId, 3>> facets;
     bool surface = false;   // the facets are a surface mesh's triangles: every vertex is on them
+    // A surface mesh of quadrilaterals: the diagonals its cells were cut along, which are edges of
+    // the facets but not of the mesh, and so never a crease.
+    std::vector<std::array<GlobalId, 2>> cuts;
     double diagonal = 0.0;  // of the whole mesh's bounding box
     // A mesh's own boundary, its vertices named by their index: for a surface (non-planar
     // triangle) mesh, the surface itself. Throws MeshError for a mesh with cells.
@@ -98,6 +101,10 @@ public:
     // can face anywhere on a curved surface, is rated in the surface's tangent plane as it is
     // mended. Its own normal where that mean is not on its side. Empty for other meshes.
     std::span<const Vec3> element_normals() const { return element_normals_; }
+    // The same for the elements of `mesh`, the surface mesh this surface was built from: a
+    // triangle mesh's element_normals(); in a mesh of triangle and quadrilateral cells, each
+    // corner element takes the mean normal of its cell's triangles (Mesh::surface_normals).
+    std::vector<Vec3> normals_of(const Mesh& mesh) const;
     std::size_t boundary_faces() const { return face_count_; }  // triangles (edges for triangle meshes)
     std::size_t feature_edges() const { return feature_count_; }
     std::size_t count(BoundaryRole role) const;  // of the caller's vertices
