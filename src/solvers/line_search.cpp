@@ -53,11 +53,13 @@ bool Phase::line_search(double objective, double max_direction) {
     return false;
 }
 
-// A sliding vertex moves at most one reference length per step: its tangent plane says little
-// about the surface farther away, and the projection of a far point is slow and lands anywhere.
-// As a damping factor, the Armijo slope and damp() take it into account like any other.
+// On a surface mesh, where every vertex slides, a vertex moves at most one reference length per
+// step: its tangent plane says little about the surface farther away, and the projection of a
+// far point is slow and lands anywhere. As a damping factor, the Armijo slope and damp() take it
+// into account like any other. (A volume mesh's sliding boundary vertices are left uncapped: there
+// the cap raises the worst element a little at up to twice the time.)
 double Phase::slide_damping(VertexId v, double s, double length) const {
-    if (!work_.mesh().slides(v)) return 1.0;
+    if (!work_.mesh().has_surface_normals() || !work_.mesh().slides(v)) return 1.0;
     const double* d = &direction_[3 * static_cast<std::size_t>(v)];
     const double move = s * std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     return move > length ? length / move : 1.0;
