@@ -232,10 +232,14 @@ BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
 BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
 
 BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
+    return of(mesh, mesh.kind() == ElementKind::Triangle && !mesh.is_planar());
+}
+
+BoundaryFacets BoundaryFacets::of(const Mesh& mesh, bool surface) {
     BoundaryFacets out;
     out.kind = mesh.kind();
     const bool tets = out.kind == ElementKind::Tetrahedron;
-    if (!tets && !mesh.is_planar()) {
+    if (surface && !tets) {
         // A surface mesh is its own surface: every triangle a facet, every quadrilateral two
         // (cut along its diagonal from its first corner), every vertex on it.
         out.surface = true;
@@ -420,6 +424,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     // can face anywhere: the creases of a part run on, from corner to corner or round a loop.
     // Kept, it would hold the sliver's corners, and the sliver could never be mended.
     if (surface_) drop_short_loose_creases(edges_of_facets, creases, on_open);
+    if (surface_) on_open_ = on_open;
     std::vector<std::array<GlobalId, 2>> features;
     std::vector<std::vector<GlobalId>> along(n);
     Groups faces(facets.size());
@@ -516,7 +521,15 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     for (std::size_t v = 0; v < n; ++v) star_start_[v + 1] += star_start_[v];
     star_.clear();
     for (const auto& [v, primitive] : touching) star_.push_back(primitive);
-    if (surface_) element_normals_ = smoothed_normals(facets, turn, original_, roles_, direction_);
+    if (surface_) {
+        element_normals_ = smoothed_normals(facets, turn, original_, roles_, direction_);
+        for (std::size_t f = 0; f < boundary.facets.size(); ++f) {
+            auto key = boundary.facets[f];
+            std::sort(key.begin(), key.end());
+            facet_keys_.push_back({key, f});
+        }
+        std::sort(facet_keys_.begin(), facet_keys_.end());
+    }
     for (auto& patch : trees_->patches) patch->build();
     for (auto& curve : trees_->curves) curve->build();
     trees_->all_faces.build();
@@ -524,20 +537,34 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
 }
 
 std::vector<Vec3> BoundarySurface::normals_of(const Mesh& mesh) const {
+    return normals_of(mesh, identity(mesh.num_vertices()));
+}
+
+std::vector<Vec3> BoundarySurface::normals_of(const Mesh& mesh, std::span<const GlobalId> vertex_ids) const {
     if (!surface_) throw MeshError("normals_of: the surface is not a surface mesh's own");
-    if (!mesh.has_cells()) return {element_normals_.begin(), element_normals_.end()};
-    // Each cell's facets (BoundaryFacets::of: a cell of k corners gave k - 2, in cell order) give
-    // their mean normal to every corner element of the cell.
+    auto normal_of = [&](std::array<GlobalId, 3> key) {
+        std::sort(key.begin(), key.end());
+        const auto at = std::lower_bound(facet_keys_.begin(), facet_keys_.end(), std::make_pair(key, std::size_t{0}));
+        if (at == facet_keys_.end() || at->first != key)
+            throw MeshError("normals_of: a triangle of the mesh is not on the surface it was built from");
+        return element_normals_[at->second];
+    };
+    // Each cell's triangles (cut as BoundaryFacets::of cuts them) give their mean normal to every
+    // corner element of the cell; a triangle cell is its own.
     std::vector<Vec3> cell_normal(static_cast<std::size_t>(mesh.num_cells()));
-    std::size_t f = 0;
     for (ElementId c = 0; c < mesh.num_cells(); ++c) {
+        const auto k = mesh.cell(c);
+        auto id = [&](std::size_t i) { return vertex_ids[static_cast<std::size_t>(k[i])]; };
         Vec3 sum = {0.0, 0.0, 0.0};
-        for (std::size_t i = 2; i < mesh.cell(c).size(); ++i, ++f)
-            for (int k = 0; k < 3; ++k) sum[k] += element_normals_[f][k];
-        cell_normal[static_cast<std::size_t>(c)] = unit(sum);
+        for (std::size_t i = 2; i < k.size(); ++i) {
+            const Vec3 n = normal_of({id(0), id(i - 1), id(i)});
+            for (int j = 0; j < 3; ++j) sum[j] += n[j];
+        }
+        cell_normal[static_cast<std::size_t>(c)] = k.size() == 3 ? sum : unit(sum);
     }
     std::vector<Vec3> out(static_cast<std::size_t>(mesh.num_elements()));
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) out[static_cast<std::size_t>(e)] = cell_normal[static_cast<std::size_t>(mesh.cell_of(e))];
+    for (ElementId e = 0; e < mesh.num_elements(); ++e)
+        out[static_cast<std::size_t>(e)] = cell_normal[static_cast<std::size_t>(mesh.cell_of(e))];
     return out;
 }
 

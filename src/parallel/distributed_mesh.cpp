@@ -416,14 +416,14 @@ void DistributedMesh::write_partitioned(const Mesh& whole, int parts, const std:
     if (path.extension() == ".pvtu") write_pvtu(path, parts);
 }
 
-BoundaryFacets DistributedMesh::gather_boundary() const {
+BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
     // A part holds every element around the vertices it owns, so a facet on its boundary with a
     // corner it owns is on the whole mesh's boundary; the owner of its corner with the smallest
     // global id reports it. (The faces where the part was cut have no owned corner.)
     BoundaryFacets local;
     std::string failure;
     try {
-        local = BoundaryFacets::of(mesh);
+        local = BoundaryFacets::of(mesh, surface);
     } catch (const MeshError& e) {
         failure = e.what();
     }
@@ -438,6 +438,10 @@ BoundaryFacets DistributedMesh::gather_boundary() const {
         if (!owned(first)) continue;
         for (GlobalId v : f) facets.push_back(v < 0 ? -1 : global[v]);
     }
+    // A cut is reported by the owner of its end with the smaller global id, which holds its cell.
+    std::vector<std::int64_t> cuts;
+    for (const auto& [a, b] : local.cuts)
+        if (owned(global[a] < global[b] ? a : b)) cuts.insert(cuts.end(), {global[a], global[b]});
     std::vector<std::int64_t> ids;
     std::vector<double> xyz;
     for (std::size_t i = 0; i < local.ids.size(); ++i)
@@ -460,6 +464,9 @@ BoundaryFacets DistributedMesh::gather_boundary() const {
 
     BoundaryFacets out;
     out.kind = mesh.kind();
+    out.surface = surface;
+    const auto all_cuts = gather_to_all(comm, cuts);
+    for (std::size_t i = 0; i + 1 < all_cuts.size(); i += 2) out.cuts.push_back({all_cuts[i], all_cuts[i + 1]});
     const auto all_facets = gather_to_all(comm, facets);
     for (std::size_t i = 0; i + 2 < all_facets.size(); i += 3)
         out.facets.push_back({all_facets[i], all_facets[i + 1], all_facets[i + 2]});

@@ -91,8 +91,7 @@ public:
         const bool off_plane = mesh_.kind() == ElementKind::Triangle && !mesh_.is_planar() && !mesh_.has_surface_normals();
         if (part_.reducer().min(off_plane ? 0.0 : 1.0) == 0.0)
             throw MeshError(std::string(mesh_.has_cells() ? "the 2D cells" : "the triangles") +
-                            " do not lie in one plane: surfaces are smoothed by the global and local solvers, on one "
-                            "process");
+                            " do not lie in one plane: surfaces are smoothed by the global and local solvers");
         if (summary.before.frozen_elements == summary.before.elements)
             return finish(TerminationReason::NothingToMove, "no element has a free vertex: nothing can move");
         return std::nullopt;

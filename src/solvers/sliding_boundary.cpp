@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/core/exact_sum.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 
@@ -11,22 +12,25 @@ namespace paloverde::detail {
 
 namespace {
 
-// A surface mesh's area, in element order (surface meshes run serially).
-double area_of(const Mesh& mesh) {
-    double area = 0.0;
+// A surface mesh's area (of its elements: a quadrilateral's corner triangles count twice), the
+// same exact sum on any number of processes.
+double area_of(const MeshPart& part) {
+    const Mesh& mesh = part.mesh();
+    ExactSum area;
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        if (!part.counts(e)) continue;
         const auto c = mesh.element(e);
         const Vec3 a = mesh.point(c[0]), b = mesh.point(c[1]), d = mesh.point(c[2]);
         const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
-        area += 0.5 * std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]);
+        area.add(0.5 * std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]));
     }
-    return area;
+    return part.reducer().total(area);
 }
 
 // The whole mesh's volume (area for triangles), at the input's scale.
 double volume_of(const MeshPart& part) {
     const Mesh& mesh = part.mesh();
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar()) return area_of(mesh);
+    if (is_surface_mesh(part)) return area_of(part);
     const auto xyz = mesh.coordinates();
     double largest = 0.0;
     for (double c : xyz) largest = std::max(largest, std::abs(c));
@@ -41,7 +45,8 @@ double volume_of(const MeshPart& part) {
 
 // The input's boundary: a part's is the whole mesh's, its vertices named by global id.
 BoundarySurface surface_of(const MeshPart& part, const SurfaceOptions& options) {
-    if (const DistributedMesh* d = part.distributed()) return BoundarySurface(d->gather_boundary(), d->mesh.global_ids(), options);
+    if (const DistributedMesh* d = part.distributed())
+        return BoundarySurface(d->gather_boundary(is_surface_mesh(part)), d->mesh.global_ids(), options);
     return BoundarySurface(part.mesh(), options);
 }
 
@@ -86,8 +91,6 @@ bool is_surface_mesh(const MeshPart& part) {
 
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint) {
     const Mesh& mesh = part.mesh();
-    if (part.distributed())
-        throw OptionError("surface meshes are smoothed on one process for now: run without mpirun or partitions");
     if (!checkpoint.file.empty() || !checkpoint.resume.empty())
         throw OptionError("checkpoints do not go with surface meshes yet");
     if (mesh.has_targets()) throw OptionError("targets do not go with surface meshes yet: run with --keep none");
@@ -125,8 +128,11 @@ SlidingBoundary::SlidingBoundary(MeshPart part, const SurfaceOptions& options, b
 // triangle is rated and oriented about its normal in the input.
 void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
     const auto n = static_cast<std::size_t>(mesh_.num_vertices());
-    const std::vector<std::uint8_t> open_edges = boundary_vertices(mesh_);
-    const bool boundary_fixed = open_edges == fixed_;
+    // The outline from the whole surface (a part's own open edges include where it was cut), and
+    // whether the fixed flags are exactly it on every part.
+    std::vector<std::uint8_t> open_edges(n);
+    for (std::size_t v = 0; v < n; ++v) open_edges[v] = surface_.on_open_edge(static_cast<VertexId>(v));
+    const bool boundary_fixed = part_.reducer().max(open_edges == fixed_ ? 0.0 : 1.0) == 0.0;
     slides_.assign(n, 0);
     released_.assign(n, 0);
     for (std::size_t v = 0; v < n; ++v) {
@@ -136,7 +142,8 @@ void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
         slides_[v] = 1;
         released_[v] = role == BoundaryRole::Surface ? 2 : 1;
     }
-    mesh_.set_surface_normals(surface_.normals_of(mesh_));
+    const DistributedMesh* d = part_.distributed();
+    mesh_.set_surface_normals(d ? surface_.normals_of(mesh_, d->mesh.global_ids()) : surface_.normals_of(mesh_));
     normals_set_ = true;
 }
 

@@ -28,8 +28,8 @@
 
 namespace paloverde::detail {
 
-// What surface meshes do not go with yet (OptionError): several processes, checkpoints, targets,
-// a reference mesh or a displacement.
+// What surface meshes do not go with yet (OptionError): checkpoints, targets, a reference mesh or
+// a displacement.
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint);
 
 // The options a solver's boundary: slide comes with (throws OptionError): no checkpoints (a
@@ -112,8 +112,8 @@ bool is_surface_mesh(const MeshPart& part);
 // A solver's run on a surface mesh: one shape run, `run(&sliding)`, in which every vertex that is
 // not fixed slides on the input surface (on its patch, along its crease or, where
 // `open_edges_slide`, along its open edge; corners stay), each triangle rated about the surface's
-// normal. Serial; without checkpoints, targets or a moved boundary (OptionError, naming what to
-// drop). The Summary reports the motion.
+// normal. Without checkpoints, targets or a moved boundary (OptionError, naming what to drop).
+// The Summary reports the motion. Collective: a part slides on the whole surface.
 template <class Run>
 Summary on_surface(MeshPart part, const SurfaceOptions& surface, const CheckpointOptions& checkpoint,
                    bool open_edges_slide, Run run) {

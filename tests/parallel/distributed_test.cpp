@@ -23,6 +23,7 @@
 #include "paloverde/solvers/local_solver.hpp"
 #include "paloverde/wrappers.hpp"
 #include "support/sliding_checks.hpp"
+#include "support/surface_meshes.hpp"
 #include "support/solver_checks.hpp"
 #include "distributed_checks.hpp"
 
@@ -687,6 +688,23 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
     BOOST_TEST(slid.boundary->volume_after == serial.boundary->volume_after);
     check_no_worse_than_fixed<pv::GlobalSolver>(input, options, slid);
     if (rank() == 0) pv::test::check_on_the_input_boundary(input, gathered, slid);
+}
+
+// A surface mesh slides on itself, on every rank the whole surface (gathered, ordered by
+// coordinates; each element's normal found by its corners' global ids): the serial mesh bit for
+// bit, for a torus of triangles and for Mesquite's sphere patch of quadrilaterals, its outline
+// sliding along itself.
+BOOST_DATA_TEST_CASE(a_surface_mesh_slides_to_the_serial_mesh, boost::unit_test::data::make({0, 1}), which) {
+    const auto input = which == 0 ? pv::test::torus(32, 16, 0.3) : pv::test::shared_mesh("mesquite/hexes/sph-10-zsquare.vtk");
+    pv::GlobalSolverOptions options;
+    options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
+    options.termination.max_iterations = 60;
+    const auto [serial, slid] = serial_and_distributed(input, options);
+    BOOST_REQUIRE(slid.boundary.has_value());
+    BOOST_TEST(slid.boundary->moved > 0);
+    BOOST_TEST(slid.boundary->moved == serial.boundary->moved);
+    BOOST_TEST(slid.boundary->largest_distance == serial.boundary->largest_distance);
+    BOOST_TEST(slid.boundary->volume_after == serial.boundary->volume_after);
 }
 
 // The local smoother sweeps a part by colors from the global ids: sliding, it makes the same

@@ -22,6 +22,7 @@
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/laplace_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
+#include "support/surface_meshes.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -30,6 +31,8 @@ using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
 namespace {
 
 using pv::Vec3;
+using pv::test::jitter;
+using pv::test::torus;
 Vec3 point(const pv::Mesh& mesh, pv::VertexId v) { return mesh.point(v); }
 
 
@@ -94,30 +97,6 @@ double largest_distance(const pv::Mesh& in, const pv::Mesh& out) {
         largest = std::max(largest, std::sqrt(nearest));
     }
     return largest / diagonal(in);
-}
-
-// A number in [-1, 1] from the generator, the same on every standard library.
-double jitter(std::mt19937& random) { return 2.0 * (random() / 4294967295.0) - 1.0; }
-
-// A torus of nu x nv quads cut into triangles, facing outward; with `amount` > 0 each vertex is
-// moved in the torus's parameters by up to that fraction of a cell, and so stays on the torus.
-pv::Mesh torus(int nu, int nv, double amount) {
-    constexpr double R = 1.0, r = 0.4, pi = std::numbers::pi;
-    std::mt19937 random(7);
-    std::vector<double> xyz;
-    for (int i = 0; i < nu; ++i)
-        for (int j = 0; j < nv; ++j) {
-            const double u = 2 * pi * (i + amount * jitter(random)) / nu, v = 2 * pi * (j + amount * jitter(random)) / nv;
-            xyz.insert(xyz.end(), {(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-        }
-    std::vector<pv::VertexId> triangles;
-    auto id = [&](int i, int j) { return static_cast<pv::VertexId>((i % nu) * nv + j % nv); };
-    for (int i = 0; i < nu; ++i)
-        for (int j = 0; j < nv; ++j) {
-            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-        }
-    return pv::Mesh(pv::ElementKind::Triangle, std::move(xyz), std::move(triangles));
 }
 
 // The surface of the unit cube, k x k squares a face cut into triangles facing outward. With

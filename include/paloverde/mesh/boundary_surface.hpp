@@ -60,6 +60,9 @@ struct BoundaryFacets {
     // A mesh's own boundary, its vertices named by their index: for a surface (non-planar
     // triangle) mesh, the surface itself. Throws MeshError for a mesh with cells.
     static BoundaryFacets of(const Mesh& mesh);
+    // The same, `surface` saying whether the mesh is a surface mesh (a part of a distributed
+    // surface can lie in one plane while the whole does not).
+    static BoundaryFacets of(const Mesh& mesh, bool surface);
 };
 
 enum class BoundaryRole : std::uint8_t { Interior, Surface, Curve, Corner };
@@ -95,6 +98,11 @@ public:
     double distance(const Vec3& p) const;
 
     bool is_surface_mesh() const { return surface_; }  // built from a surface mesh's own triangles
+    // Vertex v is on an open edge of a surface mesh (an edge of one triangle: its outline).
+    bool on_open_edge(VertexId v) const {
+        const std::int32_t i = index_[static_cast<std::size_t>(v)];
+        return surface_ && i >= 0 && on_open_[static_cast<std::size_t>(i)];
+    }
     // A surface mesh's: per triangle (in the order of BoundaryFacets::facets, the mesh's element
     // order), the unit normal its quality and orientation are taken about (Mesh::surface_normals):
     // the mean of its corners' normals of the input surface, so that a sliver, whose own normal
@@ -105,6 +113,9 @@ public:
     // triangle mesh's element_normals(); in a mesh of triangle and quadrilateral cells, each
     // corner element takes the mean normal of its cell's triangles (Mesh::surface_normals).
     std::vector<Vec3> normals_of(const Mesh& mesh) const;
+    // The same for a part of a distributed surface mesh, its vertices named by `vertex_ids` (the
+    // surface's ids: global ids).
+    std::vector<Vec3> normals_of(const Mesh& mesh, std::span<const GlobalId> vertex_ids) const;
     std::size_t boundary_faces() const { return face_count_; }  // triangles (edges for triangle meshes)
     std::size_t feature_edges() const { return feature_count_; }
     std::size_t count(BoundaryRole role) const;  // of the caller's vertices
@@ -123,10 +134,14 @@ private:
     // tangent of their curve; zero otherwise.
     std::vector<Vec3> direction_;
     std::vector<std::int32_t> piece_;  // surface vertices: their patch; curve vertices: their curve
+    std::vector<std::uint8_t> on_open_;  // per boundary vertex: on an open edge (surface meshes)
     // Per boundary vertex (rows star_start_[i] .. star_start_[i + 1]): the primitives of its patch or
     // curve that touched it in the input, where project() looks first.
     std::vector<std::int32_t> star_start_, star_;
     std::vector<Vec3> element_normals_;  // surface meshes: see element_normals()
+    // Surface meshes: each facet's corners by id, sorted, with its place in BoundaryFacets::facets;
+    // sorted, so that a caller's element finds its facets (normals_of).
+    std::vector<std::pair<std::array<GlobalId, 3>, std::size_t>> facet_keys_;
     std::size_t face_count_ = 0, feature_count_ = 0;
     double diagonal_ = 0.0;
     std::unique_ptr<Trees> trees_;

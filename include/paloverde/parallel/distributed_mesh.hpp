@@ -94,8 +94,10 @@ public:
 
     // Collective: the whole mesh's boundary at the current coordinates, in global ids, on every
     // rank (a part's own boundary also has the faces where it was cut from the others'). Refused
-    // (MeshError on every rank) for a mesh with cells, as BoundaryFacets::of refuses it.
-    BoundaryFacets gather_boundary() const;
+    // (MeshError on every rank) for a volume mesh with cells, as BoundaryFacets::of refuses it.
+    // With `surface` (the whole mesh is a surface mesh), the whole surface: every triangle (cells
+    // cut into triangles, with their cuts).
+    BoundaryFacets gather_boundary(bool surface = false) const;
 
     // Collective: refreshes ghost coordinates from their owners.
     void update_ghost_coordinates();

@@ -1,0 +1,36 @@
+#pragma once
+// Surface meshes made in code for the tests: a torus of triangles, made poorer along itself.
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "paloverde/mesh/mesh.hpp"
+
+namespace paloverde::test {
+
+// A number in [-1, 1] from the generator, the same on every standard library.
+inline double jitter(std::mt19937& random) { return 2.0 * (random() / 4294967295.0) - 1.0; }
+
+// A torus of nu x nv quads cut into triangles, facing outward; with `amount` > 0 each vertex is
+// moved in the torus's parameters by up to that fraction of a cell, and so stays on the torus.
+inline Mesh torus(int nu, int nv, double amount) {
+    constexpr double R = 1.0, r = 0.4, pi = std::numbers::pi;
+    std::mt19937 random(7);
+    std::vector<double> xyz;
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            const double u = 2 * pi * (i + amount * jitter(random)) / nu, v = 2 * pi * (j + amount * jitter(random)) / nv;
+            xyz.insert(xyz.end(), {(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+        }
+    std::vector<VertexId> triangles;
+    auto id = [&](int i, int j) { return static_cast<VertexId>((i % nu) * nv + j % nv); };
+    for (int i = 0; i < nu; ++i)
+        for (int j = 0; j < nv; ++j) {
+            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+            triangles.insert(triangles.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+        }
+    return Mesh(ElementKind::Triangle, std::move(xyz), std::move(triangles));
+}
+
+}  // namespace paloverde::test
