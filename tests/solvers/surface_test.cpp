@@ -251,6 +251,36 @@ BOOST_AUTO_TEST_CASE(a_sphere_of_quadrilaterals_is_mended_on_itself) {
     BOOST_TEST(worst_scaled_jacobian(summary.before) > 0.8);  // the guard reads it
 }
 
+// A torus of quadrilaterals with one ring of them cut into triangles (a mixed surface), made
+// poorer along itself: every vertex on the input's cells, nothing turned over, the worst corner
+// and the minimum scaled Jacobian raised.
+BOOST_AUTO_TEST_CASE(a_mixed_surface_is_mended_on_itself) {
+    const pv::Mesh points = torus(24, 12, 0.25);  // its vertices; its cells are made here
+    std::vector<pv::CellType> types;
+    std::vector<pv::VertexId> cells;
+    auto id = [](int i, int j) { return static_cast<pv::VertexId>((i % 24) * 12 + j % 12); };
+    for (int i = 0; i < 24; ++i)
+        for (int j = 0; j < 12; ++j) {
+            if (i == 0) {
+                types.insert(types.end(), 2, pv::CellType::Triangle);
+                cells.insert(cells.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+            } else {
+                types.push_back(pv::CellType::Quadrilateral);
+                cells.insert(cells.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+            }
+        }
+    const pv::Mesh input = pv::Mesh::from_cells({points.coordinates().begin(), points.coordinates().end()}, types,
+                                                std::move(cells));
+    BOOST_REQUIRE(input.has_cells());
+    pv::Mesh mesh = input;
+    const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(summary.worst_after > summary.worst_before + 0.1);
+    BOOST_TEST(turned_over(input, mesh) == 0);
+    BOOST_TEST(largest_distance(input, mesh) < 1e-9);
+}
+
 // Three triangles on one edge: no surface to slide on. The command line names the file.
 BOOST_AUTO_TEST_CASE(a_non_manifold_surface_is_refused) {
     pv::Mesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0.5, 1, 0, 0.5, -1, 0, 0.5, 0, 1, 0.5, 0.5, 0.6},
