@@ -423,6 +423,40 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     // read as the turned normal of a sliver, whose nearly collinear corners on a curved surface
     // can face anywhere: the creases of a part run on, from corner to corner or round a loop.
     // Kept, it would hold the sliver's corners, and the sliver could never be mended.
+    // On a surface mesh, a triangle creased against every neighbour (cuts of a quadrilateral
+    // aside) while those neighbours agree among themselves is read as a fold of its own, not as a
+    // face of the part: a sliver on a smooth surface can face anywhere. Its edges are made smooth
+    // again. (A face of one triangle between faces that meet at creases themselves, as on a
+    // tetrahedron, stays.)
+    if (surface_) {
+        auto is_cut = [&](const Edge& e) { return std::binary_search(cuts.begin(), cuts.end(), e.ends); };
+        std::vector<std::vector<std::size_t>> across(facets.size());  // neighbours across creases
+        std::vector<int> smooth(facets.size(), 0);                    // shared edges that are not creases
+        for (const Edge& e : edges_of_facets) {
+            if (e.count != 2 || is_cut(e)) continue;
+            const std::size_t f = uses[e.first].facet, g = uses[e.first + 1].facet;
+            if (e.feature) across[f].push_back(g), across[g].push_back(f);
+            else ++smooth[f], ++smooth[g];
+        }
+        // Neighbours agree when their normals are at most twice the feature angle apart (the
+        // sliver's own fold aside, a coarse curved surface turns by up to that across two
+        // triangles), and never more than a right angle (faces of a part meeting at creases).
+        const double agree = std::min(2.0 * options.feature_angle, 90.0);
+        auto fold = [&](std::size_t f) {
+            if (smooth[f] > 0 || across[f].size() < 2) return false;
+            for (std::size_t i = 0; i < across[f].size(); ++i)
+                for (std::size_t j = i + 1; j < across[f].size(); ++j)
+                    if (angle_between(normal(across[f][i]), normal(across[f][j])) > agree) return false;
+            return true;
+        };
+        std::vector<std::uint8_t> folds(facets.size());
+        for (std::size_t f = 0; f < facets.size(); ++f) folds[f] = fold(f);
+        for (Edge& e : edges_of_facets)
+            if (e.feature && e.count == 2 && (folds[uses[e.first].facet] || folds[uses[e.first + 1].facet])) {
+                e.feature = false;
+                --creases[static_cast<std::size_t>(e.ends[0])], --creases[static_cast<std::size_t>(e.ends[1])];
+            }
+    }
     if (surface_) drop_short_loose_creases(edges_of_facets, creases, on_open);
     if (surface_) on_open_ = on_open;
     std::vector<std::array<GlobalId, 2>> features;
