@@ -51,7 +51,7 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 class SlidingBoundary {
 public:
     // From the input mesh or a rank's part of it, at its own scale (before any run moves or
-    // rescales it). Collective. A surface mesh (serial) slides on itself: see
+    // rescales it). Collective. A surface mesh slides on itself: see
     // slide_on_surface(); `open_edges_slide` says whether its open edges' vertices slide too.
     SlidingBoundary(MeshPart part, const SurfaceOptions& options, bool open_edges_slide = false);
     ~SlidingBoundary();  // gives the mesh its fixed flags back (and clears a surface's normals)

@@ -177,13 +177,14 @@ public:
     bool is_planar() const noexcept { return planar_; }
     const Vec3& plane_normal() const noexcept { return plane_normal_; }
 
-    // Surface meshes (triangles in 3D that do not lie in one plane): per triangle, the unit normal
-    // of the surface there, about which its signed area, its orientation and its metrics are
-    // taken (a triangle whose normal turns past 90 degrees from it is inverted). Empty otherwise:
-    // a planar mesh is oriented by its plane, and a surface triangle alone by its own normal
-    // (never inverted). A solver sets them from its input surface for a run
-    // (BoundarySurface::element_normals) and clears them after. Throws MeshError for a wrong
-    // count, or naming the first normal that is not a unit vector.
+    // Surface meshes (triangles and 2D cells in 3D that do not lie in one plane): per element, the
+    // unit normal of the surface there (a cell's corner elements share their cell's), about which
+    // its signed area, its orientation and its metrics are taken (an element whose normal turns
+    // past 90 degrees from it is inverted). Empty otherwise: a planar mesh is oriented by its
+    // plane, and a surface triangle alone by its own normal (never inverted). A solver sets them
+    // from its input surface for a run (BoundarySurface::normals_of) and clears them after; so
+    // does `paloverde quality`. Throws MeshError for a wrong count, or naming the first normal
+    // that is not a unit vector.
     bool has_surface_normals() const noexcept { return !surface_normals_.empty(); }
     std::span<const Vec3> surface_normals() const noexcept { return surface_normals_; }
     void set_surface_normals(std::vector<Vec3> normals);
