@@ -151,6 +151,7 @@ struct Piece {
     }
 };
 using Patch = Piece<Triangles, TriangleTree>;
+using Curve = Piece<Segments, SegmentTree>;
 
 // Per facet, +1 or -1: the turn that makes it agree with its neighbours across every edge of
 // exactly two facets (they then run along it in opposite directions), by a breadth-first walk
@@ -182,7 +183,6 @@ std::vector<double> consistent_turns(std::size_t count, const std::vector<EdgeUs
     }
     return turn;
 }
-using Curve = Piece<Segments, SegmentTree>;
 
 // A surface mesh's triangles' normals to rate them about (BoundarySurface::element_normals), from
 // the input's places, roles and surface vertices' normals (`direction`), by facet source.
@@ -419,10 +419,6 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         edges_of_facets.push_back({{a, b}, i, j - i, open || crease});
         i = j;
     }
-    // On a surface mesh, a short crease chain with a loose end (a vertex on no other crease) is
-    // read as the turned normal of a sliver, whose nearly collinear corners on a curved surface
-    // can face anywhere: the creases of a part run on, from corner to corner or round a loop.
-    // Kept, it would hold the sliver's corners, and the sliver could never be mended.
     // On a surface mesh, a triangle creased against every neighbour (cuts of a quadrilateral
     // aside) while those neighbours agree among themselves is read as a fold of its own, not as a
     // face of the part: a sliver on a smooth surface can face anywhere. Its edges are made smooth
@@ -457,8 +453,13 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
                 --creases[static_cast<std::size_t>(e.ends[0])], --creases[static_cast<std::size_t>(e.ends[1])];
             }
     }
-    if (surface_) drop_short_loose_creases(edges_of_facets, creases, on_open);
-    if (surface_) on_open_ = on_open;
+    // So is a short crease chain with a loose end (a vertex on no other crease): the creases of a
+    // part run on, from corner to corner or round a loop. Kept, either would hold the sliver's
+    // corners, and the sliver could never be mended.
+    if (surface_) {
+        drop_short_loose_creases(edges_of_facets, creases, on_open);
+        on_open_ = on_open;
+    }
     std::vector<std::array<GlobalId, 2>> features;
     std::vector<std::vector<GlobalId>> along(n);
     Groups faces(facets.size());
