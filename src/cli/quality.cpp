@@ -36,8 +36,7 @@ void add_quality_command(CLI::App& app, int& exit_code) {
         MeshFile file = read_mesh(options->mesh, read);
         // A surface mesh's triangles are rated as the solvers rate them: about the surface's normal
         // at each (docs/surfaces.md).
-        const bool surface =
-            file.mesh.kind() == ElementKind::Triangle && !file.mesh.is_planar() && file.mesh.num_elements() > 0;
+        const bool surface = is_surface_mesh(file.mesh);
         if (surface) file.mesh.set_surface_normals(BoundarySurface(file.mesh).normals_of(file.mesh));
         const QualityReport report = QualityAssessor().assess(file.mesh);
         const OrientationDecision& o = file.orientation;

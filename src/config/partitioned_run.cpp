@@ -260,7 +260,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     // reference coordinates (scattered with the whole mesh's; RunSpec::check_runnable refuses a
     // reference for pieces).
     // keep: auto keeps nothing of a surface's cells (as set_run_targets: no targets on surfaces yet).
-    const bool surface = part.reducer().max(part.mesh.kind() == ElementKind::Triangle && !part.mesh.is_planar() ? 1.0 : 0.0) > 0.0;
+    const bool surface = part.reducer().max(is_surface_mesh(part.mesh) ? 1.0 : 0.0) > 0.0;
     set_targets(MeshPart(part),
                 spec.targets.options(part.mesh.has_cells() && !surface, !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.

@@ -11,6 +11,7 @@
 #include "config/plot.hpp"
 #include "config/registry_internal.hpp"
 #include "paloverde/io/atomic_file.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/solvers/stop.hpp"
 #include "solvers/run_support.hpp"
 
@@ -71,8 +72,7 @@ void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool fli
                      const Mesh* reference) {
     // keep: auto keeps the aspect of cells in a plane or in space, not of a surface's quadrilaterals
     // (rated about the surface's normals, whose targets are not built yet: docs/surfaces.md).
-    const bool surface = mesh.kind() == ElementKind::Triangle && !mesh.is_planar();
-    const TargetOptions targets = spec.targets.options(mesh.has_cells() && !surface, reference != nullptr);
+    const TargetOptions targets = spec.targets.options(mesh.has_cells() && !is_surface_mesh(mesh), reference != nullptr);
     const std::string& path = spec.targets.reference;
     std::optional<MeshFile> file;
     if (!path.empty()) {

@@ -231,9 +231,11 @@ BoundarySurface::~BoundarySurface() = default;
 BoundarySurface::BoundarySurface(BoundarySurface&&) noexcept = default;
 BoundarySurface& BoundarySurface::operator=(BoundarySurface&&) noexcept = default;
 
-BoundaryFacets BoundaryFacets::of(const Mesh& mesh) {
-    return of(mesh, mesh.kind() == ElementKind::Triangle && !mesh.is_planar());
+bool is_surface_mesh(const Mesh& mesh) {
+    return mesh.kind() == ElementKind::Triangle && !mesh.is_planar() && mesh.num_elements() > 0;
 }
+
+BoundaryFacets BoundaryFacets::of(const Mesh& mesh) { return of(mesh, is_surface_mesh(mesh)); }
 
 BoundaryFacets BoundaryFacets::of(const Mesh& mesh, bool surface) {
     BoundaryFacets out;

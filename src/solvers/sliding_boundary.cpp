@@ -84,9 +84,7 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 }
 
 bool is_surface_mesh(const MeshPart& part) {
-    const Mesh& mesh = part.mesh();
-    const bool surface = mesh.kind() == ElementKind::Triangle && !mesh.is_planar() && mesh.num_elements() > 0;
-    return part.reducer().max(surface ? 1.0 : 0.0) > 0.0;
+    return part.reducer().max(paloverde::is_surface_mesh(part.mesh()) ? 1.0 : 0.0) > 0.0;
 }
 
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint) {

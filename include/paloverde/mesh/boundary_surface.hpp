@@ -65,6 +65,10 @@ struct BoundaryFacets {
     static BoundaryFacets of(const Mesh& mesh, bool surface);
 };
 
+// Whether `mesh` is a surface mesh: triangles or 2D cells in 3D that do not lie in one plane (a
+// part of a distributed surface may; MeshPart callers ask every part).
+bool is_surface_mesh(const Mesh& mesh);
+
 enum class BoundaryRole : std::uint8_t { Interior, Surface, Curve, Corner };
 
 class BoundarySurface {
