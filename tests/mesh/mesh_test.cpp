@@ -1,6 +1,7 @@
 #include <boost/test/unit_test.hpp>
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <numeric>
 #include <set>
 #include <string>
@@ -251,6 +252,29 @@ BOOST_AUTO_TEST_CASE(openmesh_triangles_copy_in_and_out_through_the_batch_interf
     adapter.set_coordinates(centre, xyz);
     BOOST_TEST(om.point(v[4])[0] == 1.25);
     BOOST_TEST(om.point(v[4])[1] == 0.75);
+}
+
+BOOST_AUTO_TEST_SUITE_END()
+
+BOOST_AUTO_TEST_SUITE(surface_normals)
+
+// Surface normals are per element, of unit length, for triangle meshes only; flipping the
+// elements turns them with the elements, and a mesh renumbered carries them.
+BOOST_AUTO_TEST_CASE(surface_normals_are_checked_and_carried) {
+    pv::Mesh mesh(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 0, 1, 3});
+    BOOST_CHECK_THROW(mesh.set_surface_normals({{0, 0, 1}}), pv::MeshError);             // one for two triangles
+    BOOST_CHECK_THROW(mesh.set_surface_normals({{0, 0, 1}, {0, 0, 2}}), pv::MeshError);  // not a unit vector
+    BOOST_CHECK_THROW(mesh.set_surface_normals({{0, 0, 1}, {0, NAN, 1}}), pv::MeshError);
+    BOOST_TEST(!mesh.has_surface_normals());
+    mesh.set_surface_normals({{0, 0, 1}, {0, -1, 0}});
+    BOOST_TEST(mesh.surface_normals()[1][1] == -1.0);
+    mesh.flip_elements();
+    BOOST_TEST(mesh.surface_normals()[0][2] == -1.0);
+    BOOST_TEST(mesh.surface_normals()[1][1] == 1.0);
+    mesh.clear_surface_normals();
+    BOOST_TEST(!mesh.has_surface_normals());
+    pv::Mesh tets(pv::ElementKind::Tetrahedron, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 1, 2, 3});
+    BOOST_CHECK_THROW(tets.set_surface_normals({{0, 0, 1}}), pv::MeshError);
 }
 
 BOOST_AUTO_TEST_SUITE_END()
