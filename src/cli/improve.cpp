@@ -24,7 +24,7 @@ namespace {
 void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
     struct Options {
         std::string input, output, method, history, summary, table, plot, fixed, metric, objective, threads, orientation;
-        std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle;
+        std::string iterations, target, time_limit, barrier_shrink, improve_below, boundary, feature_angle, domain;
         std::string checkpoint, checkpoint_every, resume, keep, reference, displacement, size_field, metric_field;
         bool untangle_only = false, no_untangle = false, ascii = false, steepest = false;
         ReportFlags report;
@@ -78,6 +78,12 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
                     "surface.feature_angle (global, local, with --boundary slide): boundary faces meeting at more than this "
                     "angle (degrees; default 40) make a feature curve that stays")
         ->type_name("DEG");
+    cmd->add_option("--domain", o->domain,
+                    "surface.domain (global, local): the analytic shape a surface mesh's vertices (or, with --boundary "
+                    "slide, a tet mesh's boundary vertices) stay on, as a YAML map, e.g. '{shape: sphere, point: [0, 0, "
+                    "0], radius: 10}' or '{shape: cylinder, point: [0, 0, 0], direction: [0, 0, 1], radius: 2}'; "
+                    "default: the input's own triangles (docs/surfaces.md)")
+        ->type_name("MAP");
     cmd->add_option("--keep", o->keep,
                     "targets.keep: what each element keeps of the input, any of size, orientation, aspect, skew (comma "
                     "separated) or all; the rest is made ideal. none: every element is pulled toward the regular "
@@ -168,6 +174,12 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         if (!o->objective.empty()) flag(step + "objective.name", o->objective, "--objective");
         if (!o->barrier_shrink.empty()) flag(step + "objective.barrier_shrink", o->barrier_shrink, "--barrier-shrink");
         if (!o->improve_below.empty()) flag(step + "improve_below", o->improve_below, "--improve-below");
+        if (!o->domain.empty()) {
+            if (!method.empty() && method != "global" && method != "local")
+                throw OptionError("--domain: only the global solver and the local smoother keep vertices on a domain "
+                                  "(--method global or local)");
+            flag(step + "surface.domain", o->domain, "--domain");
+        }
         if (!o->boundary.empty() || !o->feature_angle.empty()) {
             // The global solver (the default) and the local smoother slide boundary vertices;
             // Laplace smoothing keeps them fixed.

@@ -164,6 +164,7 @@ struct Tables {
     Table<LaplaceSolverOptions> laplace{"a Laplace solver", [](const LaplaceSolverOptions& o) { o.validate(); }};
     Table<AssessSpec> assess{"an assess step", [](const AssessSpec& a) { a.validate(); }};
     Table<CheckpointOptions> checkpoint{"checkpoint", [](const CheckpointOptions& c) { c.validate(); }};
+    Table<SurfaceDomain> domain{"domain", [](const SurfaceDomain& d) { d.validate(); }};
     Table<SurfaceOptions> surface{"surface", [](const SurfaceOptions& s) { s.validate(); }};
     OptionsKind global_kind, local_kind, laplace_kind;
     std::vector<SolverKind> solvers;
@@ -210,9 +211,22 @@ Tables::Tables() {
               "With the automatic first mu: about how many elements the barrier first weighs like the worst, >= 1; 0: 0.5% of the elements, at least 10,000.");
     p_mean.real("p", &ObjectiveOptions::p, "Exponent, nonzero; negative stresses the worst elements.");
 
+    domain.choice("shape", &SurfaceDomain::shape,
+                  {{"mesh", SurfaceDomain::Shape::Mesh},
+                   {"plane", SurfaceDomain::Shape::Plane},
+                   {"sphere", SurfaceDomain::Shape::Sphere},
+                   {"cylinder", SurfaceDomain::Shape::Cylinder}},
+                  "What vertices on the surface's patches stay on: mesh (the input's own triangles), or a plane, "
+                  "sphere or cylinder every such vertex of the input lies on (to 1e-6 of the bounding-box diagonal).")
+        .vector3("point", &SurfaceDomain::point, "A point of the plane, the sphere's centre, a point on the cylinder's axis.")
+        .vector3("direction", &SurfaceDomain::direction, "The plane's normal, the cylinder's axis (any non-zero length).")
+        .real("radius", &SurfaceDomain::radius, "The sphere's or cylinder's radius, > 0.");
     surface.real("feature_angle", &SurfaceOptions::feature_angle,
                  "Boundary faces meeting at more than this angle (degrees, in (0, 180)) make a feature curve that "
-                 "stays; curves turning more sharply make corners, which stay put.");
+                 "stays; curves turning more sharply make corners, which stay put.")
+        .object("domain", &SurfaceOptions::domain, domain,
+                "An analytic shape for the vertices to stay on instead of the input's triangles: surface meshes, "
+                "the sliding boundary of tetrahedral meshes (boundary: slide), a planar mesh's plane (checked).");
 
     checkpoint.path("file", &CheckpointOptions::file,
                     "Write the solver's state here (a temporary, then a rename) to resume from; ~: no checkpoints.")
@@ -226,7 +240,8 @@ Tables::Tables() {
     const char* surface_help =
         "The boundary surface slid on (boundary: slide): feature_angle, in degrees in (0, 180): boundary faces "
         "meeting at a sharper angle make a feature curve, which stays; curves turning more sharply make corners, "
-        "which stay put.";
+        "which stay put; domain: an analytic shape (plane, sphere, cylinder) the vertices stay on instead of the "
+        "input's triangles.";
     const auto objective_field = named_field<GlobalSolverOptions, ObjectiveOptions>(
         "objective", "objective", "What the global solver maximizes: log_barrier, p_mean or min_quality.",
         &GlobalSolverOptions::objective, &GlobalSolverOptions::objective_options,

@@ -213,6 +213,27 @@ public:
                     }});
     }
 
+    // A point or vector: a list of three numbers.
+    Table& vector3(std::string key, Vec3 T::*m, std::string help) {
+        return add({std::move(key), "list of 3 numbers", std::move(help),
+                    [m](T& t, const Node& n, const std::string& p, const Reader&) {
+                        Vec3 v{};
+                        std::size_t count = 0;
+                        for_each_item(n, p, [&](const Node& item, const std::string& ip) {
+                            if (count < 3) v[count] = to_real(item, ip);
+                            ++count;
+                        });
+                        if (count != 3) fail(n.where, p, "expected a list of 3 numbers, got " + std::to_string(count));
+                        t.*m = v;
+                    },
+                    [m](const T& t, bool) {
+                        Node list;
+                        list.kind = Node::Kind::Sequence;
+                        for (double c : t.*m) list.items.push_back(Node::text(format_real(c), {}));
+                        return list;
+                    }});
+    }
+
     // A nested options struct with a table of its own.
     template <class U>
     Table& object(std::string key, U T::*m, const Table<U>& sub, std::string help) {

@@ -213,6 +213,34 @@ std::vector<Vec3> smoothed_normals(std::span<const Facet> facets, std::span<cons
     return out;
 }
 
+// The input's vertices must lie on an analytic domain: a vertex far off it would jump at its
+// first move. Float rounding of the file's coordinates is allowed, nothing more (as for a planar
+// mesh). Throws MeshError naming the first vertex off it.
+void check_on_domain(const BoundaryFacets& boundary, const SurfaceDomain& domain) {
+    const double tolerance = 1e-6 * boundary.diagonal;
+    for (std::size_t i = 0; i < boundary.ids.size(); ++i) {
+        const Vec3 x{boundary.xyz[3 * i], boundary.xyz[3 * i + 1], boundary.xyz[3 * i + 2]};
+        const double off = domain.distance(x);
+        if (!(off <= tolerance))
+            throw MeshError(domain.off_message(boundary.ids[i], off) +
+                            ": give the shape the mesh lies on, or no domain to slide on the mesh itself");
+    }
+}
+
+// On an analytic domain each triangle is rated about the shape's normal at its centroid, turned
+// to the side of the normal the input gave it (`normals`, which follow the file's orientation).
+void turn_to_domain(std::span<const Facet> facets, std::span<const Vec3> original, const SurfaceDomain& domain,
+                    std::span<Vec3> normals) {
+    for (const Facet& f : facets) {
+        Vec3 centroid{0.0, 0.0, 0.0};
+        for (GlobalId v : f.corner)
+            for (int k = 0; k < 3; ++k) centroid[k] += original[static_cast<std::size_t>(v)][k] / 3.0;
+        Vec3& n = normals[f.source];
+        const Vec3 g = domain.normal(centroid);
+        n = dot(g, n) < 0.0 ? Vec3{-g[0], -g[1], -g[2]} : g;
+    }
+}
+
 }  // namespace
 
 struct BoundarySurface::Trees {
@@ -225,6 +253,11 @@ struct BoundarySurface::Trees {
 void SurfaceOptions::validate() const {
     if (!(feature_angle > 0.0 && feature_angle < 180.0))
         throw OptionError("feature_angle must lie in (0, 180) degrees (got " + std::to_string(feature_angle) + ")");
+    try {
+        domain.validate();
+    } catch (const OptionError& e) {
+        throw OptionError("domain: " + std::string(e.what()));
+    }
 }
 
 BoundarySurface::~BoundarySurface() = default;
@@ -311,7 +344,10 @@ BoundarySurface::BoundarySurface(const Mesh& mesh, const SurfaceOptions& options
 
 BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const GlobalId> vertex_ids,
                                  const SurfaceOptions& options)
-    : kind_(boundary.kind), surface_(boundary.surface), diagonal_(boundary.diagonal), trees_(std::make_unique<Trees>()) {
+    : kind_(boundary.kind), surface_(boundary.surface),
+      // A planar mesh keeps to its plane without one (the solvers check a plane domain there).
+      domain_(boundary.surface || boundary.kind == ElementKind::Tetrahedron ? options.domain : SurfaceDomain{}),
+      diagonal_(boundary.diagonal), trees_(std::make_unique<Trees>()) {
     options.validate();
     // The facets are triangles (a tet mesh's boundary faces, or a surface mesh's own triangles),
     // else a planar triangle mesh's boundary edges.
@@ -552,6 +588,16 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         const Vec3 out = unit(minus(original_[static_cast<std::size_t>(along[v][1])], original_[v]));
         direction_[v] = unit({in[0] + out[0], in[1] + out[1], in[2] + out[2]});
     }
+    if (domain_.analytic()) {
+        check_on_domain(boundary, domain_);
+        // A patch vertex's tangent plane is the shape's; its normal keeps the side the
+        // input's triangles gave it.
+        for (std::size_t v = 0; v < n; ++v) {
+            if (roles_[v] != BoundaryRole::Surface) continue;
+            const Vec3 g = domain_.normal(original_[v]);
+            direction_[v] = dot(g, direction_[v]) < 0.0 ? Vec3{-g[0], -g[1], -g[2]} : g;
+        }
+    }
     std::stable_sort(touching.begin(), touching.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
     star_start_.assign(n + 1, 0);
     for (const auto& [v, primitive] : touching) ++star_start_[static_cast<std::size_t>(v) + 1];
@@ -560,6 +606,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     for (const auto& [v, primitive] : touching) star_.push_back(primitive);
     if (surface_) {
         element_normals_ = smoothed_normals(facets, turn, original_, roles_, direction_);
+        if (domain_.analytic()) turn_to_domain(facets, original_, domain_, element_normals_);
         for (std::size_t f = 0; f < boundary.facets.size(); ++f) {
             auto key = boundary.facets[f];
             std::sort(key.begin(), key.end());
@@ -640,8 +687,13 @@ Vec3 BoundarySurface::project(VertexId v, const Vec3& p) const {
     };
     switch (role(v)) {
         case BoundaryRole::Interior: return p;
-        case BoundaryRole::Surface: return nearest(*trees_->patches[static_cast<std::size_t>(piece_[i])]);
-        case BoundaryRole::Curve: return nearest(*trees_->curves[static_cast<std::size_t>(piece_[i])]);
+        case BoundaryRole::Surface:
+            if (domain_.analytic()) return domain_.nearest(p);
+            return nearest(*trees_->patches[static_cast<std::size_t>(piece_[i])]);
+        case BoundaryRole::Curve: {
+            const Vec3 q = nearest(*trees_->curves[static_cast<std::size_t>(piece_[i])]);
+            return domain_.analytic() ? domain_.nearest(q) : q;
+        }
         case BoundaryRole::Corner: return original_[i];
     }
     return p;
@@ -662,6 +714,7 @@ Vec3 BoundarySurface::tangent(VertexId v, const Vec3& d) const {
 }
 
 double BoundarySurface::distance(const Vec3& p) const {
+    if (domain_.analytic()) return domain_.distance(p);
     const Kernel::Point_3 q(p[0], p[1], p[2]);
     const auto& faces = trees_->all_faces;
     const auto& edges = trees_->all_edges;

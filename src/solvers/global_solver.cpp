@@ -162,6 +162,7 @@ GlobalSolver::GlobalSolver(GlobalSolverOptions options) : options_(std::move(opt
 
 Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
+    detail::check_domain(part, options_.surface.domain, options_.boundary == GlobalSolverOptions::Boundary::Slide);
     if (options_.untangle && detail::has_boundary_motion(part)) {
         detail::refuse_checkpoints_of_motion(options_.checkpoint);
         // The time limit bounds the steps together: each run gets what is left of it.

@@ -198,6 +198,7 @@ LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(option
 
 Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
+    detail::check_domain(whole_or_part, options_.surface.domain, options_.boundary == LocalSolverOptions::Boundary::Slide);
     if (options_.untangle && detail::has_boundary_motion(whole_or_part)) {
         detail::refuse_checkpoints_of_motion(options_.checkpoint);
         // The time limit bounds the steps together: each run gets what is left of it.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/core/exact_sum.hpp"
@@ -85,6 +86,52 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 
 bool is_surface_mesh(const MeshPart& part) {
     return part.reducer().max(paloverde::is_surface_mesh(part.mesh()) ? 1.0 : 0.0) > 0.0;
+}
+
+void check_domain(const MeshPart& part, const SurfaceDomain& domain, bool boundary_slides) {
+    if (!domain.analytic()) return;
+    const Mesh& mesh = part.mesh();
+    if (is_surface_mesh(part)) return;  // every vertex checked as the surface is built
+    const bool planar = mesh.kind() == ElementKind::Triangle;
+    if (mesh.kind() == ElementKind::Tetrahedron && !mesh.has_cells()) {
+        if (!boundary_slides)
+            throw OptionError("surface.domain: a tetrahedral mesh's boundary vertices slide on the " + domain.name() +
+                              " with boundary: slide only; without it they stay where they are");
+        return;  // its boundary vertices are checked as the sliding boundary is built
+    }
+    if (!planar || domain.shape != SurfaceDomain::Shape::Plane)
+        throw OptionError("surface.domain: a " + domain.name() + " is a domain for surface meshes" +
+                          (domain.shape == SurfaceDomain::Shape::Plane ? ", planar 2D meshes" : "") +
+                          " and the sliding boundary of tetrahedral meshes, not for this mesh");
+    // A planar mesh keeps to its own plane: the domain must be that plane, to rounding of the
+    // file's coordinates (as Mesh::is_planar allows).
+    Vec3 lo{0.0, 0.0, 0.0}, hi{0.0, 0.0, 0.0};
+    const auto xyz = mesh.coordinates();
+    for (int k = 0; k < 3; ++k) {
+        double low = std::numeric_limits<double>::infinity(), high = -low;
+        for (std::size_t i = static_cast<std::size_t>(k); i < xyz.size(); i += 3) {
+            low = std::min(low, xyz[i]);
+            high = std::max(high, xyz[i]);
+        }
+        lo[k] = -part.reducer().max(-low);
+        hi[k] = part.reducer().max(high);
+    }
+    const double tolerance = 1e-6 * std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    double farthest = 0.0;
+    GlobalId which = -1;
+    const auto ids = mesh.global_ids();
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const double off = domain.distance(mesh.point(v));
+        if (off > farthest) {
+            farthest = off;
+            which = ids.empty() ? static_cast<GlobalId>(v) : ids[static_cast<std::size_t>(v)];
+        }
+    }
+    // The same message on every process: the farthest vertex, the lowest id among equals.
+    const double worst = part.reducer().max(farthest);
+    if (worst <= tolerance) return;
+    const double id = -part.reducer().max(farthest == worst ? -static_cast<double>(which) : -1e300);
+    throw MeshError(domain.off_message(static_cast<GlobalId>(id), worst) + ": a planar mesh keeps to its own plane");
 }
 
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint) {

@@ -32,6 +32,12 @@ namespace paloverde::detail {
 // a displacement.
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint);
 
+// Refuses an analytic domain (SurfaceOptions::domain) that does not go with the mesh (OptionError),
+// and a planar mesh off its plane domain (MeshError naming the vertex farthest off). A surface
+// mesh, and a tetrahedral mesh whose boundary slides, are checked as their surface is built.
+// Collective.
+void check_domain(const MeshPart& part, const SurfaceDomain& domain, bool boundary_slides);
+
 // The options a solver's boundary: slide comes with (throws OptionError): no checkpoints (a
 // sliding run is two runs, which one checkpoint cannot resume). The feature angle is the
 // solver's own surface.validate().

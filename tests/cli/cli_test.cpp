@@ -9,6 +9,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "support/cell_meshes.hpp"
 #include "support/solver_checks.hpp"
+#include "support/surface_meshes.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -68,6 +69,30 @@ BOOST_AUTO_TEST_CASE(quality_and_improve_take_a_surface) {
     BOOST_TEST(has(improved.output, "sliding vertices moved"), improved.output);
     const auto after = pv::read_mesh(dir / "out.vtk").mesh;
     BOOST_TEST(after.point(5) != pv::read_mesh(dir / "bowl.vtk").mesh.point(5));  // the inner vertex moved
+}
+
+// --domain: a sphere's vertices end on the sphere given, to rounding; a sphere the mesh is not on,
+// and a shape that is no shape, are refused naming what to change, and nothing is written.
+BOOST_AUTO_TEST_CASE(improve_keeps_a_surface_on_its_domain) {
+    const pv::test::ScratchDir dir("cli_domain");
+    pv::write_mesh(dir / "ball.vtk", pv::test::sphere(12, 8, 0.3, {1.0, 2.0, 3.0}, 2.0));
+    const std::string in = "improve " + quoted(dir / "ball.vtk") + " -o " + quoted(dir / "out.vtk");
+    const auto improved = run_cli(in + " --domain '{shape: sphere, point: [1, 2, 3], radius: 2}'");
+    BOOST_TEST_REQUIRE(improved.exit_code == 0, improved.output);
+    const auto after = pv::read_mesh(dir / "out.vtk").mesh;
+    for (pv::VertexId v = 0; v < after.num_vertices(); ++v) {
+        const auto p = after.point(v);
+        BOOST_TEST(std::abs(std::hypot(p[0] - 1.0, p[1] - 2.0, p[2] - 3.0) - 2.0) < 1e-14);
+    }
+    const auto off = run_cli(in.substr(0, in.find(" -o ")) + " -o " + quoted(dir / "off.vtk") +
+                             " --domain '{shape: sphere, point: [1, 2, 3], radius: 2.5}'");
+    BOOST_TEST(off.exit_code == 1, off.output);
+    BOOST_TEST(has(off.output, "ball.vtk"), off.output);
+    BOOST_TEST(has(off.output, "lies 0.5 off the sphere"), off.output);
+    BOOST_TEST(!std::filesystem::exists(dir / "off.vtk"));
+    const auto cone = run_cli(in + " --domain '{shape: cone}'");
+    BOOST_TEST(cone.exit_code == 2, cone.output);
+    BOOST_TEST(has(cone.output, "surface.domain.shape: unknown value 'cone'"), cone.output);
 }
 
 BOOST_AUTO_TEST_CASE(improve_untangles_writes_history_and_json_and_exits_zero) {

@@ -692,12 +692,15 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
 
 // A surface mesh slides on itself, on every rank the whole surface (gathered, ordered by
 // coordinates; each element's normal found by its corners' global ids): the serial mesh bit for
-// bit, for a torus of triangles and for Mesquite's sphere patch of quadrilaterals, its outline
-// sliding along itself.
-BOOST_DATA_TEST_CASE(a_surface_mesh_slides_to_the_serial_mesh, boost::unit_test::data::make({0, 1}), which) {
-    const auto input = which == 0 ? pv::test::torus(32, 16, 0.3) : pv::test::shared_mesh("mesquite/hexes/sph-10-zsquare.vtk");
+// bit, for a torus of triangles, for Mesquite's sphere patch of quadrilaterals, its outline
+// sliding along itself, and for a sphere of triangles on the sphere as its domain.
+BOOST_DATA_TEST_CASE(a_surface_mesh_slides_to_the_serial_mesh, boost::unit_test::data::make({0, 1, 2}), which) {
+    const auto input = which == 0   ? pv::test::torus(32, 16, 0.3)
+                       : which == 1 ? pv::test::shared_mesh("mesquite/hexes/sph-10-zsquare.vtk")
+                                    : pv::test::sphere(16, 10, 0.3);
     pv::GlobalSolverOptions options;
     options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
+    if (which == 2) options.surface.domain.shape = pv::SurfaceDomain::Shape::Sphere;
     options.termination.max_iterations = 60;
     const auto [serial, slid] = serial_and_distributed(input, options);
     BOOST_REQUIRE(slid.boundary.has_value());

@@ -33,12 +33,17 @@
 
 #include "paloverde/core/types.hpp"
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/mesh/surface_domain.hpp"
 
 namespace paloverde {
 
 struct SurfaceOptions {
     double feature_angle = 40.0;  // degrees, in (0, 180): sharper creases are kept as curves
-    void validate() const;        // throws OptionError
+    // Where a surface mesh's vertices on patches (and a volume mesh's sliding ones) project: the
+    // input's triangles, or an analytic shape every such vertex of the input lies on (see
+    // BoundarySurface::project).
+    SurfaceDomain domain;
+    void validate() const;  // throws OptionError
 };
 
 // A boundary triangulation, its vertices named by ids of any numbering: what a BoundarySurface is
@@ -129,6 +134,7 @@ private:
     struct Trees;  // CGAL's AABB trees, kept out of this header
     ElementKind kind_;
     bool surface_ = false;  // built from a surface mesh's own triangles
+    SurfaceDomain domain_;  // where patch vertices project, when analytic
     // Per vertex of the caller's mesh: its boundary vertex, or -1 inside. Boundary vertices are
     // numbered by their coordinates (lexicographically), and the arrays below are per boundary vertex.
     std::vector<std::int32_t> index_;
