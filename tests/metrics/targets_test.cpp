@@ -512,6 +512,19 @@ BOOST_AUTO_TEST_CASE(gradients_through_surface_targets_match_finite_differences)
         }
 }
 
+// A size field sizes a surface's elements as it sizes a plane's.
+BOOST_AUTO_TEST_CASE(a_size_field_sizes_a_surface_s_elements) {
+    pv::TargetOptions field = pv::TargetOptions::from("aspect");
+    field.size = pv::TargetSource::Field;
+    pv::Mesh torus = perturbed_torus();
+    pv::Mesh plane(pv::ElementKind::Triangle, {0, 0, 0, 3, 0, 0, 0.5, 0.2, 0}, {0, 1, 2});
+    for (pv::Mesh* mesh : {&torus, &plane}) {
+        mesh->set_target_edge_lengths(std::vector<double>(static_cast<std::size_t>(mesh->num_vertices()), 0.25));
+        pv::set_targets(*mesh, field);
+    }
+    for (double volume : torus.target_volumes()) BOOST_TEST(std::abs(volume - plane.target_volumes()[0]) <= 1e-15 * volume);
+}
+
 // What surfaces do not take yet is refused, saying what they do take.
 BOOST_AUTO_TEST_CASE(a_surface_refuses_targets_from_a_reference_or_a_metric_field) {
     pv::Mesh torus = perturbed_torus();
