@@ -368,7 +368,6 @@ void basis_of(const Mesh& mesh, metrics::P& a, metrics::P& b) {
 class Frames {
 public:
     Frames(const Mesh& mesh, bool surface) : surface_(surface) { basis_of(mesh, a_, b_); }
-    bool surface() const { return surface_; }
     void of(const Mesh& mesh, ElementId e, metrics::P& a, metrics::P& b) const {
         if (!surface_) {
             a = a_, b = b_;
