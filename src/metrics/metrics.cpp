@@ -305,7 +305,7 @@ public:
     // the one-element calls value() and value_and_gradient() cannot see.
     double element_value(const Mesh& mesh, std::span<const double> xyz, ElementId e,
                          double* gradient = nullptr) const override {
-        if (!(kTargetSize && mesh.has_targets()) && !mesh.has_surface_normals())
+        if (!(kTargetSize && mesh.has_targets()) && !mesh.has_surface_normals() && !has_surface_targets(mesh))
             return QualityMetric::element_value(mesh, xyz, e, gradient);
         if (gradient) require_gradient();
         MetricScale local = scale_;
@@ -404,15 +404,23 @@ private:
         return scale_.element_reference_volume.empty() ? scale_.reference_volume
                                                        : scale_.element_reference_volume[static_cast<std::size_t>(e)];
     }
+    // Triangles with targets on a surface, whether or not a run has set its normals (triangles not
+    // in one plane are not oriented without them): each element's root has carried it to the xy
+    // plane (targets.cpp, surface_root).
+    bool has_surface_targets(const Mesh& mesh) const {
+        return mesh.has_targets() && mesh.kind() == ElementKind::Triangle && (mesh.has_surface_normals() || !scale_.oriented_triangles);
+    }
     // The scale of element e: the mesh's, with e's own reference volume, and on a surface mesh
-    // with e's own normal as its plane's.
+    // with e's own normal as its plane's, or with targets the z axis: its metric root has carried
+    // it to the xy plane, its target's frame.
     const MetricScale& scale_of(const Mesh& mesh, ElementId e, MetricScale& local) const {
-        const bool surface = mesh.has_surface_normals();
-        if (scale_.element_reference_volume.empty() && !(kTargetSize && mesh.has_targets()) && !surface) return scale_;
+        const bool surface = mesh.has_surface_normals(), surface_targets = has_surface_targets(mesh);
+        if (scale_.element_reference_volume.empty() && !(kTargetSize && mesh.has_targets()) && !surface && !surface_targets)
+            return scale_;
         local.reference_volume = reference_volume_of(mesh, e);
-        if (surface) {
+        if (surface || surface_targets) {
             local.oriented_triangles = true;
-            local.plane_normal = mesh.surface_normals()[static_cast<std::size_t>(e)];
+            local.plane_normal = surface_targets ? Vec3{0.0, 0.0, 1.0} : mesh.surface_normals()[static_cast<std::size_t>(e)];
         }
         return local;
     }

@@ -10,6 +10,7 @@
 #include "geometry.hpp"
 #include "mesh/small_matrix.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 
 namespace paloverde {
@@ -208,6 +209,46 @@ Matrix edge_matrix(const Mesh& mesh, std::span<const double> xyz, ElementId e, c
     return m;
 }
 
+// A surface element's metric root: the map of space that takes its input plane's basis (a, b) to
+// the x and y axes through the plane's metric root n (2 x 2: the identity for an element rated in
+// no metric), and its normal a x b to the z axis. Carried by it, the element lies in the xy plane
+// in the frame its target was taken in, and the metrics rate it about the z axis (scale_of in
+// metrics.cpp): its input corners against its own target are exactly the target.
+CornerMap surface_root(const Matrix& n, const metrics::P& a, const metrics::P& b) {
+    const metrics::P normal = metrics::cross(a, b);
+    const double basis[3][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}, {normal.x, normal.y, normal.z}};
+    CornerMap out{};
+    for (int c = 0; c < 3; ++c) {
+        for (int r = 0; r < 2; ++r) out[r][c] = n[r][0] * basis[0][c] + n[r][1] * basis[1][c];
+        out[2][c] = basis[2][c];
+    }
+    return out;
+}
+
+// A symmetric 3 x 3 matrix seen in the plane of basis (a, b) (u^T M w for u, w of the basis), and
+// a symmetric 2 x 2 matrix m in that basis as one of space (B m B^T, B = [a b]).
+Matrix in_plane(const Matrix& full, const metrics::P& a, const metrics::P& b) {
+    const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
+    Matrix out{};
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j) {
+            double sum = 0.0;
+            for (int p = 0; p < 3; ++p)
+                for (int q = 0; q < 3; ++q) sum += u[i][p] * full[p][q] * u[j][q];
+            out[i][j] = sum;
+        }
+    return out;
+}
+Matrix in_space(const Matrix& m, const metrics::P& a, const metrics::P& b) {
+    const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
+    Matrix out{};
+    for (int p = 0; p < 3; ++p)
+        for (int q = 0; q < 3; ++q)
+            for (int i = 0; i < 2; ++i)
+                for (int j = 0; j < 2; ++j) out[p][q] += u[i][p] * m[i][j] * u[j][q];
+    return out;
+}
+
 // The regular simplex's corner (unit edges) and, for element e, the ideal element's corner, both
 // in the ideal element's coordinates: the cell's corner map M = W^-1 W_regular gives W.
 Matrix regular_frame(int d) {
@@ -321,9 +362,36 @@ void basis_of(const Mesh& mesh, metrics::P& a, metrics::P& b) {
     metrics::plane_basis({n[0], n[1], n[2]}, a, b);
 }
 
+// The basis each element's corner edges are read in (edge_matrix): the mesh's (basis_of), or on a
+// surface mesh each element's own, the basis (plane_basis) of its corners' own normal in the
+// input, where its target is taken; surface_root carries it to the x and y axes.
+class Frames {
+public:
+    Frames(const Mesh& mesh, bool surface) : surface_(surface) { basis_of(mesh, a_, b_); }
+    void of(const Mesh& mesh, ElementId e, metrics::P& a, metrics::P& b) const {
+        if (!surface_) {
+            a = a_, b = b_;
+            return;
+        }
+        const auto corners = mesh.element(e);
+        const double* xyz = mesh.coordinates().data();
+        const metrics::P origin = metrics::load(xyz, corners[0]);
+        const metrics::P n = metrics::cross(metrics::load(xyz, corners[1]) - origin, metrics::load(xyz, corners[2]) - origin);
+        const double length = metrics::norm(n);
+        // A degenerate element has no plane; its target is then the ideal one (factor() says so).
+        metrics::plane_basis(length > 0.0 ? (1.0 / length) * n : metrics::P{0.0, 0.0, 1.0}, a, b);
+    }
+
+private:
+    bool surface_;
+    metrics::P a_, b_;
+};
+
 // |det A| / det W_ideal of element e: its size against the ideal element's.
-double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const metrics::P& a, const metrics::P& b) {
+double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const Frames& frames) {
     const int d = mesh.corners() - 1;
+    metrics::P a, b;
+    frames.of(mesh, e, a, b);
     return std::abs(determinant(edge_matrix(mesh, mesh.coordinates(), e, a, b), d)) /
            determinant(ideal_frame(mesh, e, regular, d), d);
 }
@@ -350,12 +418,14 @@ struct MetricSpace {
     CornerMap root;
 };
 MetricSpace metric_space(const Matrix& metric, const Factors& source, const Matrix& regular, int d, const metrics::P& a,
-                         const metrics::P& b) {
+                         const metrics::P& b, bool surface) {
     const Matrix root = at_unit_determinant(symmetric_function(metric, d, [](double x) { return std::sqrt(x); }), d);
     MetricSpace out;
     out.shape = at_unit_determinant(product(turn_in_metric(root, source, regular, d), regular, d), d);
     if (d == 3) {
         out.root = root;
+    } else if (surface) {
+        out.root = surface_root(root, a, b);
     } else {  // B N B^T + n n^T, B = [a b], n = a x b
         const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
         const double n[3] = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
@@ -384,17 +454,7 @@ MetricTarget metric_target(const Mesh& mesh, ElementId element, const Matrix& id
                            const metrics::P& a, const metrics::P& b, const Matrix& regular) {
     const int d = mesh.corners() - 1;
     const Matrix full = mean_at_corners(mesh, element, mesh.target_metrics());
-    Matrix mean = full;
-    if (d == 2) {  // u^T M w for u, w in the plane's basis
-        const double u[2][3] = {{a.x, a.y, a.z}, {b.x, b.y, b.z}};
-        for (int i = 0; i < 2; ++i)
-            for (int j = 0; j < 2; ++j) {
-                double sum = 0.0;
-                for (int p = 0; p < 3; ++p)
-                    for (int q = 0; q < 3; ++q) sum += u[i][p] * full[p][q] * u[j][q];
-                mean[i][j] = sum;
-            }
-    }
+    const Matrix mean = d == 2 ? in_plane(full, a, b) : full;
     if (!(mean[0][0] > 0.0 && determinant(mean, d) > 0.0 && (d == 2 || mean[0][0] * mean[1][1] > mean[0][1] * mean[0][1])))
         throw MeshError("element " + std::to_string(element) + ": the mean of its vertices' target metrics is not positive definite" +
                         (d == 2 ? " in the mesh's plane" : ""));
@@ -404,7 +464,7 @@ MetricTarget metric_target(const Mesh& mesh, ElementId element, const Matrix& id
     out.volume = volume_ratio * determinant(regular, d) / (d == 3 ? 6.0 : 2.0);
     Matrix shape;
     if (is_simplex(mesh, element)) {
-        const MetricSpace space = metric_space(mean, in, regular, d, a, b);
+        const MetricSpace space = metric_space(mean, in, regular, d, a, b, false);
         shape = space.shape;
         out.root = space.root;
     } else {
@@ -427,13 +487,15 @@ bool stretches_from_neighbourhood(const TargetOptions& options) {
 }
 
 std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference) {
+    return vertex_metrics(mesh, options, reference, is_surface_mesh(mesh));
+}
+
+std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference, bool surface) {
     if (!stretches_from_neighbourhood(options)) return {};
-    if (options.aspect == TargetSource::Reference && !reference) return {};  // set_targets says what is missing
+    if (options.aspect == TargetSource::Reference && (!reference || surface)) return {};  // set_targets says what is missing
     if (reference) check_reference(mesh, *reference);
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar()) return {};  // likewise
     const Mesh& source = options.aspect == TargetSource::Reference ? *reference : mesh;
-    metrics::P a, b;
-    basis_of(source, a, b);
+    const Frames frames(source, surface);
     const int d = mesh.corners() - 1;
     const Matrix regular_inverse = inverse(regular_frame(d), d);
     const auto m = static_cast<std::size_t>(mesh.num_elements());
@@ -441,9 +503,13 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
     std::vector<std::uint8_t> usable(m);
     for (std::size_t e = 0; e < m; ++e) {
         Matrix element{};
+        metrics::P a, b;
+        frames.of(source, static_cast<ElementId>(e), a, b);
         if (!is_simplex(mesh, static_cast<ElementId>(e)) ||
             !element_metric(source, source.coordinates(), static_cast<ElementId>(e), a, b, regular_inverse, element))
             continue;
+        // A surface's elements each have their own plane: their metrics meet at a vertex in space.
+        if (surface) element = in_space(element, a, b);
         usable[e] = 1;
         for (int k = 0; k < Mesh::kMetricValues; ++k) metric[e][k] = element[kMetricIndex[k][0]][kMetricIndex[k][1]];
     }
@@ -464,11 +530,14 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
 }
 
 ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted) {
-    metrics::P a, b;
-    basis_of(mesh, a, b);
+    return ideal_size_sum(mesh, counted, is_surface_mesh(mesh));
+}
+
+ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted, bool surface) {
+    const Frames frames(mesh, surface);
     const Matrix regular = regular_frame(mesh.corners() - 1);
     const auto sums = detail::exact_sums<1>(static_cast<std::size_t>(mesh.num_elements()), [&](std::size_t e, auto& acc) {
-        if (counted.empty() || counted[e]) acc[0].add(size_ratio(mesh, static_cast<ElementId>(e), regular, a, b));
+        if (counted.empty() || counted[e]) acc[0].add(size_ratio(mesh, static_cast<ElementId>(e), regular, frames));
     });
     return sums[0];
 }
@@ -481,6 +550,11 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
 
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
                  std::span<const double> metrics) {
+    set_targets(mesh, options, reference, ideal_scale, metrics, is_surface_mesh(mesh));
+}
+
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
+                 std::span<const double> metrics, bool surface) {
     if (!options.any()) {
         mesh.clear_targets();
         return;
@@ -503,13 +577,14 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
     if (from_metric && mesh.target_metrics().empty())
         throw OptionError("targets from a metric field need its metrics (targets.metric_field, --metric-field, or "
                           "Mesh::set_target_metrics)");
+    if (surface && (options.uses(TargetSource::Reference) || from_metric))
+        throw OptionError("targets on a surface mesh come from the input (keep) or a size field: a reference mesh and a "
+                          "metric field do not go with surface meshes yet");
     if (reference) check_reference(mesh, *reference);
-    if (mesh.kind() == ElementKind::Triangle && !mesh.is_planar())
-        throw MeshError("targets are for volume meshes and planar 2D meshes: the triangles do not lie in one plane");
     const int d = mesh.corners() - 1;
     const auto m = static_cast<std::size_t>(mesh.num_elements());
-    metrics::P a, b, ra, rb;
-    basis_of(mesh, a, b);
+    const Frames frames(mesh, surface);
+    metrics::P ra, rb;
     if (reference) basis_of(*reference, ra, rb);
     const Matrix regular = regular_frame(d);
     const double regular_volume = determinant(regular, d) / (d == 3 ? 6.0 : 2.0);
@@ -526,6 +601,8 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
     };
     for (std::size_t e = 0; e < m; ++e) {
         const auto element = static_cast<ElementId>(e);
+        metrics::P a, b;
+        frames.of(mesh, element, a, b);
         const Matrix ideal = ideal_frame(mesh, element, regular, d);
         const Factors id = factor(ideal, d);
         const Factors in = factor(edge_matrix(mesh, mesh.coordinates(), element, a, b), d);
@@ -562,7 +639,9 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             // Rated in the mean M of its vertices' metrics, against the regular simplex turned
             // there as the aspect's source corner is (shape metrics ignore the turn, orientation
             // metrics compare with it; an ideal orientation leaves it out).
-            const MetricSpace space = metric_space(mean_at_corners(mesh, element, metrics), pick(options.aspect), regular, d, a, b);
+            const Matrix mean = mean_at_corners(mesh, element, metrics);
+            const MetricSpace space = metric_space(surface ? in_plane(mean, a, b) : mean, pick(options.aspect), regular, d, a,
+                                                   b, surface);
             shape = space.shape;
             if (options.orientation == TargetSource::Ideal) shape = at_unit_determinant(regular, d);
             set_root(e, space.root);
@@ -570,6 +649,7 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
             const Matrix skew_aspect = product(pick(options.skew).q, pick(options.aspect).d, d);
             const Matrix v = product(polar_rotation(source, d), transpose(polar_rotation(skew_aspect, d), d), d);
             shape = product(v, skew_aspect, d);
+            if (surface) set_root(e, surface_root(Matrix{{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}}, a, b));
         }
         const Matrix map = product(inverse(shape, d), regular, d);
         for (int i = 0; i < 3; ++i)

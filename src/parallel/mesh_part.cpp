@@ -4,6 +4,7 @@
 #include <optional>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
@@ -44,11 +45,13 @@ void set_targets(MeshPart part, const TargetOptions& options, const Mesh* refere
     }
     std::vector<std::uint8_t> counted(static_cast<std::size_t>(mesh.num_elements()));
     for (ElementId e = 0; e < mesh.num_elements(); ++e) counted[static_cast<std::size_t>(e)] = part.counts(e);
-    const double sum = part.reducer().total(ideal_size_sum(mesh, counted));
+    // A part of a surface mesh may lie in one plane: the whole mesh says what it is.
+    const bool surface = part.reducer().max(is_surface_mesh(mesh) ? 1.0 : 0.0) > 0.0;
+    const double sum = part.reducer().total(ideal_size_sum(mesh, counted, surface));
     const double elements = part.reducer().total(static_cast<double>(std::count(counted.begin(), counted.end(), 1)));
-    std::vector<double> metrics = vertex_metrics(mesh, options, reference);
+    std::vector<double> metrics = vertex_metrics(mesh, options, reference, surface);
     if (!metrics.empty()) part.halo().update(metrics, Mesh::kMetricValues);
-    set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0, metrics);
+    set_targets(part.mesh(), options, reference, elements > 0.0 ? sum / elements : 1.0, metrics, surface);
 }
 
 }  // namespace paloverde

@@ -138,7 +138,6 @@ void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoin
     const Mesh& mesh = part.mesh();
     if (!checkpoint.file.empty() || !checkpoint.resume.empty())
         throw OptionError("checkpoints do not go with surface meshes yet");
-    if (mesh.has_targets()) throw OptionError("targets do not go with surface meshes yet: run with --keep none");
     if (!mesh.reference_coordinates().empty())
         throw OptionError("a moved boundary (a reference mesh or a displacement) does not go with surface meshes yet");
 }

@@ -28,7 +28,7 @@
 
 namespace paloverde::detail {
 
-// What surface meshes do not go with yet (OptionError): checkpoints, targets, a reference mesh or
+// What surface meshes do not go with yet (OptionError): checkpoints, a reference mesh or
 // a displacement.
 void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint);
 

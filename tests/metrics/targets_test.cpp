@@ -7,10 +7,14 @@
 #include <vector>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/io/mesh_io.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/metrics/targets.hpp"
 #include "support/cell_meshes.hpp"
+#include "support/surface_meshes.hpp"
+#include "support/test_support.hpp"
 
 namespace pv = paloverde;
 
@@ -66,6 +70,37 @@ pv::Mesh random_tets(int count, unsigned seed) {
         for (int i = 0; i < 4; ++i) corners.push_back(static_cast<pv::VertexId>(4 * t + i));
     }
     return pv::Mesh(pv::ElementKind::Tetrahedron, std::move(xyz), std::move(corners));
+}
+
+// Surface meshes as the solvers rate them: each element about its normal of the input surface.
+pv::Mesh with_surface_normals(pv::Mesh mesh) {
+    mesh.set_surface_normals(pv::BoundarySurface(mesh).normals_of(mesh));
+    return mesh;
+}
+pv::Mesh perturbed_torus() { return with_surface_normals(pv::test::torus(24, 12, 0.3)); }
+pv::Mesh sphere_of_quadrilaterals() {
+    return with_surface_normals(pv::read_mesh(pv::test::shared_data("mesquite/hexes/sph-10-zsquare.vtk")).mesh);
+}
+
+// Every element's gradient of `name` at xyz against central differences.
+void check_gradients(const pv::Mesh& mesh, std::span<const double> xyz, const char* name) {
+    auto metric = pv::make_metric(name);
+    metric->prepare(mesh);
+    const int k = mesh.corners();
+    for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+        double g[12];
+        metric->element_value(mesh, xyz, e, g);
+        for (int i = 0; i < k; ++i)
+            for (int d = 0; d < 3; ++d) {
+                const auto at = 3 * static_cast<std::size_t>(mesh.element(e)[i]) + d;
+                const double h = 1e-7;
+                std::vector<double> plus(xyz.begin(), xyz.end()), minus = plus;
+                plus[at] += h, minus[at] -= h;
+                const double fd = (metric->element_value(mesh, plus, e) - metric->element_value(mesh, minus, e)) / (2 * h);
+                BOOST_TEST(std::abs(fd - g[3 * i + d]) <= 1e-5 * (1.0 + std::abs(fd)),
+                           name << " element " << e << " corner " << i << ": " << g[3 * i + d] << " vs " << fd);
+            }
+    }
 }
 
 }  // namespace
@@ -424,6 +459,86 @@ BOOST_AUTO_TEST_CASE(bad_factors_and_bad_targets_are_refused_clearly) {
     tet.set_targets({identity}, {1.0});
     BOOST_TEST(tet.target_metric_roots().empty());
     BOOST_CHECK_THROW(tet.flip_elements(), pv::MeshError);
+}
+
+// A surface element's target is taken in its own input plane, where the metrics then rate it: a
+// torus of triangles and a sphere of quadrilaterals, every factor kept, rate 1 everywhere, with
+// the surface's normals set (as the solvers rate) or not (as a report after the run does).
+BOOST_AUTO_TEST_CASE(a_surface_element_against_its_own_target_rates_one) {
+    for (pv::Mesh mesh : {perturbed_torus(), sphere_of_quadrilaterals()}) {
+        const auto ideal = rate("mean_ratio", mesh);
+        BOOST_TEST(*std::min_element(ideal.begin(), ideal.end()) < 0.9);
+        pv::set_targets(mesh, pv::TargetOptions::from("all"));
+        BOOST_TEST(mesh.target_metric_roots().size() == static_cast<std::size_t>(mesh.num_elements()));
+        for (const char* metric : {"mean_ratio", "aspect_ratio", "inverse_condition", "shape_size", "shape_size_orient"})
+            BOOST_TEST_CONTEXT(metric << ", " << mesh.num_elements() << " elements") check_all_near(rate(metric, mesh), 1.0, 1e-12);
+        mesh.clear_surface_normals();
+        check_all_near(rate("shape_size_orient", mesh), 1.0, 1e-12);
+    }
+    // The shape alone kept (size and orientation ideal) is the shape metrics' 1 too.
+    pv::Mesh sphere = sphere_of_quadrilaterals();
+    pv::set_targets(sphere, pv::TargetOptions::from("aspect,skew"));
+    check_all_near(rate("mean_ratio", sphere), 1.0, 1e-12);
+}
+
+// A surface element's kept size is its input area: the target's volume (its regular triangle's at
+// the target's size) is the same multiple of it for every element.
+BOOST_AUTO_TEST_CASE(a_surface_keeps_the_size_of_its_elements) {
+    pv::Mesh torus = perturbed_torus();
+    pv::set_targets(torus, pv::TargetOptions::from("size"));
+    std::vector<double> area(static_cast<std::size_t>(torus.num_elements()));
+    for (pv::ElementId e = 0; e < torus.num_elements(); ++e) {
+        const auto c = torus.element(e);
+        const pv::Vec3 a = torus.point(c[0]), b = torus.point(c[1]), d = torus.point(c[2]);
+        const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        area[static_cast<std::size_t>(e)] = 0.5 * std::hypot(u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]);
+    }
+    const double ratio = torus.target_volumes()[0] / area[0];
+    for (std::size_t e = 0; e < area.size(); ++e)
+        BOOST_TEST(std::abs(torus.target_volumes()[e] - ratio * area[e]) <= 1e-12 * area[e], "element " << e);
+}
+
+// Gradients through a surface element's map and root (with the neighbourhood's metric where the
+// aspect is kept and the skew ideal) match central differences, the vertices moved off the input.
+BOOST_AUTO_TEST_CASE(gradients_through_surface_targets_match_finite_differences) {
+    std::mt19937 rng(4);
+    std::normal_distribution<double> jitter(0.0, 0.02);
+    for (const char* keep : {"size,aspect", "size,aspect,orientation", "all"})
+        for (pv::Mesh mesh : {with_surface_normals(pv::test::torus(8, 6, 0.3)), sphere_of_quadrilaterals()}) {
+            pv::set_targets(mesh, pv::TargetOptions::from(keep));
+            std::vector<double> xyz(mesh.coordinates().begin(), mesh.coordinates().end());
+            for (double& x : xyz) x += jitter(rng);
+            for (const char* name : {"shape_size", "mean_ratio", "shape_size_orient"}) check_gradients(mesh, xyz, name);
+        }
+}
+
+// A size field sizes a surface's elements as it sizes a plane's.
+BOOST_AUTO_TEST_CASE(a_size_field_sizes_a_surface_s_elements) {
+    pv::TargetOptions field = pv::TargetOptions::from("aspect");
+    field.size = pv::TargetSource::Field;
+    pv::Mesh torus = perturbed_torus();
+    pv::Mesh plane(pv::ElementKind::Triangle, {0, 0, 0, 3, 0, 0, 0.5, 0.2, 0}, {0, 1, 2});
+    for (pv::Mesh* mesh : {&torus, &plane}) {
+        mesh->set_target_edge_lengths(std::vector<double>(static_cast<std::size_t>(mesh->num_vertices()), 0.25));
+        pv::set_targets(*mesh, field);
+    }
+    for (double volume : torus.target_volumes()) BOOST_TEST(std::abs(volume - plane.target_volumes()[0]) <= 1e-15 * volume);
+}
+
+// What surfaces do not take yet is refused, saying what they do take.
+BOOST_AUTO_TEST_CASE(a_surface_refuses_targets_from_a_reference_or_a_metric_field) {
+    pv::Mesh torus = perturbed_torus();
+    const pv::Mesh reference = torus;
+    BOOST_CHECK_EXCEPTION(pv::set_targets(torus, pv::TargetOptions::from("all", pv::TargetSource::Reference), &reference),
+                          pv::OptionError, [](const pv::OptionError& e) {
+                              return std::string(e.what()).find("surface") != std::string::npos;
+                          });
+    std::vector<double> identity;
+    for (pv::VertexId v = 0; v < torus.num_vertices(); ++v) identity.insert(identity.end(), {1.0, 1.0, 1.0, 0.0, 0.0, 0.0});
+    torus.set_target_metrics(std::move(identity));
+    pv::TargetOptions metric;
+    metric.size = metric.aspect = metric.orientation = pv::TargetSource::Metric;
+    BOOST_CHECK_THROW(pv::set_targets(torus, metric), pv::OptionError);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

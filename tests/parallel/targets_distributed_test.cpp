@@ -12,6 +12,7 @@
 #include "paloverde/solvers/global_solver.hpp"
 #include "distributed_checks.hpp"
 #include "support/cell_meshes.hpp"
+#include "support/surface_meshes.hpp"
 
 namespace pv = paloverde;
 namespace bdata = boost::unit_test::data;
@@ -40,8 +41,10 @@ pv::Mesh stretched(Fill fill) {
 
 // `input` with `targets` set serially and on this rank's part: the parts report what the whole
 // mesh does, and the global solver ends on the serial mesh, bit for bit.
-void check_parts_give_the_serial_answer(const pv::Mesh& input, const pv::TargetOptions& targets, const char* shape_metric) {
+void check_parts_give_the_serial_answer(const pv::Mesh& input, const pv::TargetOptions& targets, const char* shape_metric,
+                                        bool outline_slides = false) {
     pv::GlobalSolverOptions options;
+    if (outline_slides) options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
     options.shape_metric = targets.metric(shape_metric);
     options.termination.max_iterations = 15;
     options.untangle_termination.max_iterations = 150;
@@ -75,6 +78,19 @@ BOOST_AUTO_TEST_SUITE(targets_distributed)
 
 BOOST_DATA_TEST_CASE(the_parts_targets_are_the_serial_ones_and_so_is_the_result, bdata::make(kCases), c) {
     check_parts_give_the_serial_answer(stretched(c.fill), pv::TargetOptions::from(c.keep), "aspect_ratio");
+}
+
+// A surface mesh's targets, each element's taken in its own input plane, and the sliding run
+// against them: a torus of triangles with size and aspect kept (its neighbourhood's metrics summed
+// over each part), a graded cylinder and Mesquite's sphere patch of quadrilaterals.
+BOOST_DATA_TEST_CASE(a_surface_s_targets_and_result_are_the_serial_ones, bdata::make({0, 1, 2}), which) {
+    if (which == 0) check_parts_give_the_serial_answer(pv::test::torus(32, 16, 0.3), pv::TargetOptions::from("size,aspect"), "aspect_ratio");
+    if (which == 1)
+        check_parts_give_the_serial_answer(pv::test::graded_cylinder(24, 10, 0.045, 1.35, 0.3),
+                                           pv::TargetOptions::from("size,aspect,orientation"), "aspect_ratio");
+    if (which == 2)
+        check_parts_give_the_serial_answer(pv::test::shared_mesh("mesquite/hexes/sph-10-zsquare.vtk"), pv::TargetOptions::from("aspect"),
+                                           "aspect_ratio", true);
 }
 
 // The target edge lengths travel with the parts like the coordinates.

@@ -1,11 +1,13 @@
 #pragma once
-// Surface meshes made in code for the tests: a torus and a sphere of triangles, made poorer along
-// themselves.
+// Surface meshes made in code for the tests: a torus and a sphere of triangles and a graded
+// cylinder of quadrilaterals, made poorer along themselves.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
 #include <vector>
 
+#include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/mesh.hpp"
 
 namespace paloverde::test {
@@ -61,6 +63,40 @@ inline Mesh sphere(int around, int rings, double amount, const Vec3& centre = {0
         }
     }
     return Mesh(ElementKind::Triangle, std::move(xyz), std::move(triangles));
+}
+
+// The z of the rings of a cylinder's rows: `along` rows from z = 0, the first `first` high and
+// each next `growth` times the last.
+inline std::vector<double> graded_rings(int along, double first, double growth) {
+    std::vector<double> z{0.0};
+    for (int j = 0; j < along; ++j) z.push_back(z.back() + first * std::pow(growth, j));
+    return z;
+}
+
+// An open cylinder of radius 1 of quadrilaterals facing outward, `around` of them in each of the
+// rows of graded_rings(along, first, growth); with `amount` > 0 each vertex off the two rims is
+// moved along the cylinder, around it and along its axis, by up to that fraction of its shortest edge.
+inline Mesh graded_cylinder(int around, int along, double first, double growth, double amount) {
+    constexpr double pi = std::numbers::pi;
+    std::mt19937 random(11);
+    const std::vector<double> z = graded_rings(along, first, growth);
+    std::vector<double> xyz;
+    for (int j = 0; j <= along; ++j)
+        for (int i = 0; i < around; ++i) {
+            double u = i, h = z[j];
+            if (j > 0 && j < along) {
+                const double width = 2 * pi / around, shortest = std::min({width, z[j] - z[j - 1], z[j + 1] - z[j]});
+                u += amount * jitter(random) * shortest / width;
+                h += amount * jitter(random) * shortest;
+            }
+            xyz.insert(xyz.end(), {std::cos(2 * pi * u / around), std::sin(2 * pi * u / around), h});
+        }
+    std::vector<VertexId> quads;
+    auto id = [&](int i, int j) { return static_cast<VertexId>(j * around + i % around); };
+    for (int j = 0; j < along; ++j)
+        for (int i = 0; i < around; ++i) quads.insert(quads.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)});
+    const std::vector<CellType> types(static_cast<std::size_t>(around * along), CellType::Quadrilateral);
+    return Mesh::from_cells(std::move(xyz), types, std::move(quads));
 }
 
 }  // namespace paloverde::test

@@ -14,7 +14,8 @@
 // with a positive diagonal): lambda = det(R)^(1/d), D from R's column lengths, Q from R with its
 // columns normalized. An input or reference corner that is inverted gives its size, aspect and
 // skew (those of its mirror image) but not its orientation, which is then ideal; a degenerate
-// one gives nothing (its target is the ideal element at the mesh's mean size).
+// one gives nothing (its target is the ideal element at the mesh's mean size). A surface mesh's
+// element is read in its own input plane (set_targets).
 #include <span>
 #include <string>
 #include <string_view>
@@ -57,6 +58,9 @@ struct TargetOptions {
 // is 1: this sums |det A| / det W_ideal over the elements with counted[e] (all when empty), for
 // a distributed mesh to add over its parts before it divides by the number of elements.
 ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted = {});
+// Each overload with `surface` is told whether the mesh is a surface mesh (is_surface_mesh), which a
+// part of one cannot tell when its own triangles happen to lie in one plane; the others ask the mesh.
+ExactSum ideal_size_sum(const Mesh& mesh, std::span<const std::uint8_t> counted, bool surface);
 
 // A simplex (tetrahedron, triangle) is a single corner, and its aspect alone cannot tell the
 // stretch a mesh means (a boundary layer's) from the distortion to remove, nor from the stretch
@@ -74,6 +78,7 @@ bool stretches_from_neighbourhood(const TargetOptions& options);
 // of the vertex's elements). Empty unless stretches_from_neighbourhood(options). A part's values
 // at its ghost vertices miss elements it does not hold: replace them with their owners'.
 std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference);
+std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& options, const Mesh* reference, bool surface);
 
 // Sets every element's target on `mesh` (Mesh::set_targets) from its coordinates now (Input) and
 // from `reference`'s (Reference): the same element kind, cells and connectivity, vertex for
@@ -82,11 +87,16 @@ std::vector<double> vertex_metrics(const Mesh& mesh, const TargetOptions& option
 // targets. Throws MeshError naming the first difference of a reference that does not match,
 // OptionError when a factor asks for a reference and none is given, or for field edge lengths or
 // metrics the mesh does not carry, or for a factor other than size from a field, or for metric
-// factors other than size, aspect and orientation together, and MeshError for a triangle mesh that
-// is not planar or an element whose mean metric is not positive definite (in its plane).
-// `metrics` are vertex_metrics(mesh, options, reference), complete at every vertex.
+// factors other than size, aspect and orientation together, or for a reference or a metric field on
+// a surface mesh, and MeshError for an element whose mean metric is not positive definite (in its
+// plane). `metrics` are vertex_metrics(mesh, options, reference), complete at every vertex.
+// A surface mesh's element takes its target in its own input plane (the basis of its corners' own
+// normal), and its metric root (Mesh::target_metric_roots) carries that plane to the xy plane,
+// where the metrics rate it: the input element against its own target is exactly the target.
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
                  std::span<const double> metrics);
+void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference, double ideal_scale,
+                 std::span<const double> metrics, bool surface);
 void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference = nullptr);
 // Throws MeshError unless `reference` has the mesh's element kind, counts and connectivity.
 void check_reference(const Mesh& mesh, const Mesh& reference);
