@@ -84,7 +84,7 @@ std::string options_text(const GlobalSolverOptions& o) {
 }
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
-// With `sliding`, its vertices slide in the shape phase.
+// With `sliding`, its vertices slide in the shape phase (and, on a surface mesh, untangling).
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
               detail::Workspace& work, detail::Checkpointer& checkpointer, const detail::SlidingBoundary* sliding) {
     Summary& summary = run.summary;
@@ -98,7 +98,9 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     PhaseResult result{TerminationReason::TargetReached, ""};
     const bool tangled = summary.before.inverted - summary.before.inverted_frozen > 0 || summary.before.degenerate > 0;
     if (tangled && options.untangle && (!resume || resume_untangling)) {
-        result = detail::untangle(context, xyz, resume);
+        // Only a surface mesh is tangled with its vertices sliding: a volume mesh slides from the
+        // valid mesh its boundary-fixed run left.
+        result = detail::untangle(context, xyz, sliding, resume);
         if (result.reason != TerminationReason::TargetReached) {
             work.copy_back(xyz);
             return run.finish(result.reason, result.message);

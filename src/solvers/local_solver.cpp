@@ -379,8 +379,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
-                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_);
-                detail::VertexEnergy energy(mesh, reference, scale, epsilon);
+                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_, sliding);
+                detail::VertexEnergy energy(mesh, reference, scale, epsilon, sliding);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)
                     moved += visit(members[static_cast<std::size_t>(i)], shape, untangle, energy);
@@ -495,7 +495,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                 if (!touches_inverted) return 0;
                 // The linear program finds a position where every element is valid when there
                 // is one; otherwise the ascent at least raises the smallest volume.
-                if (detail::untangle_vertex(mesh, xyz, v, scale).moved) return 1;
+                if (detail::untangle_vertex(mesh, xyz, v, scale, sliding).moved) return 1;
                 return ascent.improve(xyz, v) ? 1 : 0;
             });
             ++summary.iterations;
