@@ -214,14 +214,10 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
 
 Summary LocalSolver::run_once(MeshPart whole_or_part) {
     if (detail::is_surface_mesh(whole_or_part)) {
-        // No untangling: its free moves would leave the surface.
-        LocalSolverOptions run = options_;
-        run.untangle = false;
-        LocalSolver solver(run);
-        solver.set_observer(observer());
+        // Untangling slides too: each vertex of a turned-over triangle moves on its patch or curve.
         return detail::on_surface(whole_or_part, options_.surface, options_.checkpoint,
                                   options_.boundary == LocalSolverOptions::Boundary::Slide,
-                                  [&](detail::SlidingBoundary* sliding) { return solver.improve_part(whole_or_part, sliding); });
+                                  [&](detail::SlidingBoundary* sliding) { return improve_part(whole_or_part, sliding); });
     }
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
