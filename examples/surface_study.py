@@ -28,6 +28,12 @@ feature or boundary vertex and its largest distance to the unperturbed feature a
 (the three over the unperturbed bounding box's diagonal), and the seconds of the smoothing call.
 A method that fails gets its row with the error and the measures left empty.
 
+With --tangle K (triangle cases only, its own CSV: docs/data/surfaces_tangled.csv), K free vertices
+of the poorer mesh, far apart, are then each slid past one of their free neighbours (to 1.5 times the
+edge towards it, snapped onto the surface), which turns the triangles between them over; every row's
+turned-over count is then against the unperturbed triangles, and a Paloverde run that exits with 1
+(a tangle it could not undo) keeps its row, with a note.
+
 Needs numpy and meshio (Debian's python3-numpy, python3-meshio), gmsh and the two programs.
 """
 import argparse
@@ -172,6 +178,35 @@ def poorer(points, triangles, frozen, snap, shift, seed):
     return place(step)
 
 
+def tangle(points, triangles, frozen, snap, count, seed):
+    """The mesh with `count` free vertices slid past a free neighbour each (see the module's comment);
+    vertices within two rings of a slid one are not slid, so each tangle is its own."""
+    rng = np.random.default_rng(seed + 1)
+    edges = np.unique(np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    neighbours = [[] for _ in range(len(points))]
+    for a, b in edges:
+        neighbours[a].append(b)
+        neighbours[b].append(a)
+    blocked = frozen.copy()
+    moved = points.copy()
+    slid = []
+    for v in rng.permutation(len(points)):
+        if len(slid) == count:
+            break
+        if blocked[v] or any(frozen[w] for w in neighbours[v]):
+            continue
+        w = neighbours[v][rng.integers(len(neighbours[v]))]
+        moved[v] = points[w] + 0.5 * (points[w] - points[v])
+        slid.append(v)
+        for a in [v] + neighbours[v]:
+            blocked[a] = True
+            blocked[neighbours[a]] = True
+    snapped = snap(moved)
+    out = points.copy()
+    out[slid] = snapped[slid]
+    return out
+
+
 def measure(points, triangles, reference_normals, unperturbed, features, distance):
     frozen = np.unique(features)
     a, b = unperturbed[features[:, 0]], unperturbed[features[:, 1]]
@@ -233,21 +268,23 @@ def load_case(name, source, work, paloverde):
     return (mesh.points[used, :3].astype(float), renumber[triangles]), None
 
 
-def smooth_paloverde(paloverde, poor_vtk, work, name, feature_angle, method):
+def smooth_paloverde(paloverde, poor_vtk, work, name, feature_angle, method, tangled=False):
     out = os.path.join(work, f"{name}_paloverde_{method}.vtk")
     summary = os.path.join(work, f"{name}_paloverde_{method}.json")
     start = time.perf_counter()
     result = run([paloverde, "improve", poor_vtk, "-o", out, "--method", method, "--threads", "1",
                   "--feature-angle", feature_angle, "--summary", summary, "-q"])
     seconds = time.perf_counter() - start
-    if result.returncode != 0:
+    # A tangle it could not undo: exit 1, the mesh with the fewest turned over written.
+    note = "exit 1: could not untangle" if tangled and result.returncode == 1 and os.path.exists(out) else ""
+    if result.returncode != 0 and not note:
         raise RuntimeError(f"exit {result.returncode}: {(result.stderr or result.stdout).strip()}")
     try:
         with open(summary) as f:
             seconds = json.load(f)["seconds"]  # the solver's own time, like CGAL's below
     except (OSError, KeyError, ValueError):
         pass
-    return read_points(out), seconds, ""
+    return read_points(out), seconds, note
 
 
 def smooth_cgal(tool, poor_off, work, name, method, iterations, feature_angle):
@@ -378,7 +415,11 @@ def main():
     parser.add_argument("--shift", type=float, default=0.35, help="largest step, times the vertex's shortest edge")
     parser.add_argument("--cgal-iterations", type=int, default=10)
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--tangle", type=int, default=0,
+                        help="vertices of the poorer mesh to slide past a neighbour (triangle cases only)")
     args = parser.parse_args()
+    if args.tangle and args.csv == parser.get_default("csv"):
+        args.csv = os.path.join(HERE, "..", "docs", "data", "surfaces_tangled.csv")
     for program in (args.paloverde, args.tool):
         if not os.access(program, os.X_OK):
             sys.exit(f"{program}: not found (build it, or pass its path)")
@@ -415,6 +456,8 @@ def main():
                     raise RuntimeError(result.stderr.strip())
                 return read_points(snapped_off)
         poor = poorer(points, triangles, frozen, snap, args.shift, args.seed)
+        if args.tangle:
+            poor = tangle(poor, triangles, frozen, snap, args.tangle, args.seed)
         poor_off, poor_vtk = os.path.join(work, name + "_poor.off"), os.path.join(work, name + "_poor.vtk")
         write_off(poor_off, poor, triangles)
         meshio.write(poor_vtk, meshio.Mesh(poor, [("triangle", triangles)]), file_format="vtk", binary=True)
@@ -425,7 +468,7 @@ def main():
         methods = [("unperturbed", lambda: (points, None, "")), ("poorer", lambda: (poor, None, ""))]
         for method in ("global", "local"):
             methods.append((f"paloverde_{method}", lambda method=method: smooth_paloverde(
-                args.paloverde, poor_vtk, work, name, args.feature_angle, method)))
+                args.paloverde, poor_vtk, work, name, args.feature_angle, method, args.tangle > 0)))
         for method in ("angle_area", "tangential"):
             methods.append((f"cgal_{method}", lambda method=method: smooth_cgal(
                 args.tool, poor_off, work, name, method, args.cgal_iterations, args.feature_angle)))
@@ -437,7 +480,8 @@ def main():
                     raise RuntimeError(f"{len(result)} vertices came back, not {len(points)}")
                 # The unperturbed and poorer meshes are judged against the unperturbed triangles'
                 # orientation, the results against their input's.
-                reference = normals(points, triangles) if seconds is None else poor_normals
+                # (A tangled input's own orientation is what is judged: against the unperturbed.)
+                reference = normals(points, triangles) if seconds is None or args.tangle else poor_normals
                 # Smoothed meshes are measured against their input surface (the poorer mesh), the
                 # two inputs against the unperturbed triangles.
                 surface_off = unperturbed_off if seconds is None else poor_off
@@ -449,7 +493,8 @@ def main():
                 row["error"] = " ".join(str(error).split())[:300] or "failed"
             rows.append(row)
 
-    rows += quad_rows(args, work)
+    if not args.tangle:
+        rows += quad_rows(args, work)
 
     if args.csv:
         os.makedirs(os.path.dirname(os.path.abspath(args.csv)), exist_ok=True)

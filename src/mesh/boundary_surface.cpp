@@ -184,13 +184,59 @@ std::vector<double> consistent_turns(std::size_t count, const std::vector<EdgeUs
     return turn;
 }
 
+// Per facet of a surface mesh: 1 where the input turned it over. A vertex slid past its
+// neighbours turns a few triangles over in a surface that faces one way around them: of the
+// facets that share a corner with such a triangle, at least two thirds face against it (normals
+// more than 90 degrees apart; `normal(f)` is turned to agree with the neighbours), those agree
+// among themselves (their unit normals' mean is at least 3/4 long) and their mean makes more
+// than 120 degrees with its own. A tetrahedron's faces (their neighbours disagree) and a thin
+// fin's sides (its own side shares its corners too) are not turned over.
+template <class Normal>
+std::vector<std::uint8_t> turned_over_facets(std::span<const Facet> facets, Normal normal) {
+    std::size_t vertices = 0;
+    for (const Facet& f : facets) vertices = std::max(vertices, static_cast<std::size_t>(f.key[2]) + 1);
+    std::vector<std::size_t> start(vertices + 1, 0), at;
+    for (const Facet& f : facets)
+        for (GlobalId v : f.key) ++start[static_cast<std::size_t>(v) + 1];
+    for (std::size_t v = 0; v < vertices; ++v) start[v + 1] += start[v];
+    at.resize(start.back());
+    std::vector<std::size_t> next(start.begin(), start.end() - 1);
+    for (std::size_t f = 0; f < facets.size(); ++f)
+        for (GlobalId v : facets[f].key) at[next[static_cast<std::size_t>(v)]++] = f;
+    std::vector<Vec3> unit_normal(facets.size());
+    for (std::size_t f = 0; f < facets.size(); ++f) unit_normal[f] = unit(normal(f));
+    std::vector<std::uint8_t> turned(facets.size(), 0);
+    std::vector<std::size_t> around;
+    for (std::size_t f = 0; f < facets.size(); ++f) {
+        around.clear();
+        for (GlobalId v : facets[f].key)
+            for (std::size_t k = start[static_cast<std::size_t>(v)]; k < start[static_cast<std::size_t>(v) + 1]; ++k)
+                if (at[k] != f) around.push_back(at[k]);
+        std::sort(around.begin(), around.end());
+        around.erase(std::unique(around.begin(), around.end()), around.end());
+        Vec3 against{0.0, 0.0, 0.0};
+        std::size_t count = 0;
+        for (std::size_t g : around)
+            if (dot(unit_normal[f], unit_normal[g]) < 0.0) {
+                for (int k = 0; k < 3; ++k) against[k] += unit_normal[g][k];
+                ++count;
+            }
+        const double length = norm(against);
+        turned[f] = count > 0 && 3 * count >= 2 * around.size() && length >= 0.75 * static_cast<double>(count) &&
+                    dot(unit_normal[f], against) < -0.5 * length;
+    }
+    return turned;
+}
+
 // A surface mesh's triangles' normals to rate them about (BoundarySurface::element_normals), from
 // the input's places, roles and surface vertices' normals (`direction`), by facet source.
 std::vector<Vec3> smoothed_normals(std::span<const Facet> facets, std::span<const double> turn,
-                                   std::span<const Vec3> original_, std::span<const BoundaryRole> roles_,
-                                   std::span<const Vec3> direction_) {
+                                   std::span<const std::uint8_t> turned, std::span<const Vec3> original_,
+                                   std::span<const BoundaryRole> roles_, std::span<const Vec3> direction_) {
     // The mean of the corners' normals, each the area-weighted normal of its patch at that
     // corner (a crease or corner vertex gives the triangle's own), in the triangle's own turn.
+    // A turned-over triangle keeps the surface's mean, against which it is inverted; a crease
+    // or corner vertex then gives its own turned back.
     std::vector<Vec3> out(facets.size());
     for (std::size_t f = 0; f < facets.size(); ++f) {
         const auto& c = facets[f].corner;
@@ -199,16 +245,18 @@ std::vector<Vec3> smoothed_normals(std::span<const Facet> facets, std::span<cons
         if (own == Vec3{0.0, 0.0, 0.0})
             throw MeshError("triangle " + std::to_string(facets[f].source) +
                             " has no area, so the surface has no normal there: remove or repair it first");
+        const bool over = turned[f] != 0;
+        const Vec3 side = over ? Vec3{-own[0], -own[1], -own[2]} : own;
         Vec3 sum = {0.0, 0.0, 0.0};
         for (GlobalId v : c) {
             const auto i = static_cast<std::size_t>(v);
             const Vec3 n = roles_[i] == BoundaryRole::Surface ? Vec3{turn[f] * direction_[i][0], turn[f] * direction_[i][1],
                                                                      turn[f] * direction_[i][2]}
-                                                              : own;
+                                                              : side;
             for (int k = 0; k < 3; ++k) sum[k] += n[k];
         }
         const Vec3 mean = unit(sum);
-        out[facets[f].source] = dot(mean, own) > 0.0 ? mean : own;
+        out[facets[f].source] = over ? (mean == Vec3{0.0, 0.0, 0.0} ? side : mean) : dot(mean, own) > 0.0 ? mean : own;
     }
     return out;
 }
@@ -424,6 +472,14 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
         const Vec3 n = cross(minus(original_[c[1]], original_[c[0]]), minus(original_[c[2]], original_[c[0]]));
         return Vec3{turn[f] * n[0], turn[f] * n[1], turn[f] * n[2]};
     };
+    // A surface mesh's triangles that the input turned over (see turned_over_facets), and each
+    // facet's normal turned back where it was: the side of the surface it lies on. Creases, folds
+    // and vertex normals are read from these, so that a tangle makes no crease of its own.
+    const std::vector<std::uint8_t> turned = surface_ ? turned_over_facets(facets, normal) : std::vector<std::uint8_t>{};
+    auto facing = [&](std::size_t f) {
+        const Vec3 n = normal(f);
+        return !turned.empty() && turned[f] ? Vec3{-n[0], -n[1], -n[2]} : n;
+    };
     // Feature edges, each vertex's feature edges by the vertex at their other end, and the faces
     // joined into patches across the smooth edges.
     struct Edge {
@@ -451,7 +507,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
                             std::to_string(id_of(b)) + ", so no surface to slide on is defined there");
         const bool open = !tets || j - i != 2;
         const bool crease = !open && !std::binary_search(cuts.begin(), cuts.end(), std::array<GlobalId, 2>{a, b}) &&
-                            angle_between(normal(uses[i].facet), normal(uses[i + 1].facet)) > options.feature_angle;
+                            angle_between(facing(uses[i].facet), facing(uses[i + 1].facet)) > options.feature_angle;
         if (crease) ++creases[static_cast<std::size_t>(a)], ++creases[static_cast<std::size_t>(b)];
         if (open) on_open[static_cast<std::size_t>(a)] = on_open[static_cast<std::size_t>(b)] = 1;
         edges_of_facets.push_back({{a, b}, i, j - i, open || crease});
@@ -480,7 +536,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
             if (smooth[f] > 0 || across[f].size() < 2) return false;
             for (std::size_t i = 0; i < across[f].size(); ++i)
                 for (std::size_t j = i + 1; j < across[f].size(); ++j)
-                    if (angle_between(normal(across[f][i]), normal(across[f][j])) > agree) return false;
+                    if (angle_between(facing(across[f][i]), facing(across[f][j])) > agree) return false;
             return true;
         };
         std::vector<std::uint8_t> folds(facets.size());
@@ -539,7 +595,7 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     for (std::size_t f = 0; f < facets.size(); ++f) {
         if (!tets) break;
         const auto& c = facets[f].corner;
-        const Vec3 nf = normal(f);
+        const Vec3 nf = facing(f);
         for (GlobalId v : c)
             if (roles_[static_cast<std::size_t>(v)] == BoundaryRole::Surface) {
                 auto& d = direction_[static_cast<std::size_t>(v)];
@@ -605,8 +661,9 @@ BoundarySurface::BoundarySurface(const BoundaryFacets& boundary, std::span<const
     star_.clear();
     for (const auto& [v, primitive] : touching) star_.push_back(primitive);
     if (surface_) {
-        element_normals_ = smoothed_normals(facets, turn, original_, roles_, direction_);
+        element_normals_ = smoothed_normals(facets, turn, turned, original_, roles_, direction_);
         if (domain_.analytic()) turn_to_domain(facets, original_, domain_, element_normals_);
+        turned_over_ = std::count(turned.begin(), turned.end(), std::uint8_t{1});
         for (std::size_t f = 0; f < boundary.facets.size(); ++f) {
             auto key = boundary.facets[f];
             std::sort(key.begin(), key.end());

@@ -36,8 +36,8 @@ struct Volumes {
 class EnergyUntangler {
 public:
     EnergyUntangler(Workspace& work, std::vector<double>& xyz, Summary& summary, const IterationObserver& observer,
-                    Clock::time_point start)
-        : work_(work), x_(xyz), summary_(summary), observer_(observer), start_(start),
+                    Clock::time_point start, const SlidingVertices* sliding)
+        : work_(work), x_(xyz), summary_(summary), observer_(observer), start_(start), sliding_(sliding),
           reference_(work.local_reference_volumes()), volume_(make_metric("scaled_volume")) {
         // Sizes measured against each element's neighbourhood, as in the hybrid metric: a graded
         // mesh keeps its grading, and the energy does not depend on the mesh's units.
@@ -83,6 +83,7 @@ private:
     Summary& summary_;
     const IterationObserver& observer_;
     Clock::time_point start_;
+    const SlidingVertices* sliding_;  // a surface mesh's vertices, which slide on it
     std::vector<double> reference_;
     MetricScale scale_;
     std::unique_ptr<QualityMetric> volume_;
@@ -132,6 +133,8 @@ void EnergyUntangler::energy_gradient(const QualityMetric& metric, std::span<con
     work_.gradient(metric, x, ones_, g);
     ++summary_.gradient_passes;
     for (double& v : g) v = -v;
+    // A sliding vertex descends along its surface or curve: the memory then learns that space.
+    if (sliding_) sliding_->tangent(g);
 }
 
 double EnergyUntangler::largest_move(const std::vector<double>& d) const {
@@ -302,6 +305,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
                           valid_found_ ? "untangled" : "the untangling energy found no more steps");
 
         direction(d);
+        if (sliding_) sliding_->tangent(d);  // the projected steps' pairs are not tangent quite
         double slope = dot(g_, d);
         if (!(slope < 0.0)) {  // not a descent direction: start the memory afresh
             for (std::size_t i = 0; i < n3; ++i) d[i] = -step_scale_[i / 3] * g_[i];
@@ -317,12 +321,16 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
             // Without curvature pairs yet, the first trial moves the farthest vertex a tenth of
             // the reference length; then the quasi-Newton step 1 is the natural first trial.
             // Steps that throw a vertex further than a few reference lengths are never needed.
-            double step = std::min(s_history_.empty() ? std::min(1.0, 0.1 * length / move) : 1.0, 4.0 * length / move);
+            // A sliding vertex goes at most one: its tangent plane says little about the surface
+            // farther away, and the projection of a far point lands anywhere.
+            const double farthest = (sliding_ ? 1.0 : 4.0) * length / move;
+            double step = std::min(s_history_.empty() ? std::min(1.0, 0.1 * length / move) : 1.0, farthest);
             double e_trial = e_;
             bool accepted = false;
             for (int attempt = 0; attempt < 40 && !accepted; ++attempt) {
                 if (attempt > 0) step *= 0.5;
                 for (std::size_t i = 0; i < n3; ++i) trial[i] = x_[i] + step * d[i];
+                if (sliding_) sliding_->project(work_.mesh(), trial);
                 e_trial = energy(*metric_, trial);
                 accepted = e_trial < e_ && e_trial <= e_ + 1e-4 * step * slope;
             }
@@ -336,7 +344,7 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
                 energy_gradient(*metric_, x_, g_new);
                 std::vector<double> s(n3), y(n3);
                 for (std::size_t i = 0; i < n3; ++i) {
-                    s[i] = step * d[i];
+                    s[i] = sliding_ ? x_[i] - trial[i] : step * d[i];  // (trial: the iterate before)
                     y[i] = g_new[i] - g_[i];
                 }
                 remember(std::move(s), std::move(y));
@@ -385,8 +393,10 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
 
 EnergyUntangling energy_untangle(Workspace& work, std::vector<double>& xyz, int max_iterations, double max_seconds,
                                  Summary& summary, const IterationObserver& observer, Clock::time_point start,
-                                 Checkpointer& checkpointer, const SolverState* resume) {
-    return EnergyUntangler(work, xyz, summary, observer, start).run(max_iterations, max_seconds, checkpointer, resume);
+                                 Checkpointer& checkpointer, const SolverState* resume,
+                                 const SlidingVertices* sliding) {
+    return EnergyUntangler(work, xyz, summary, observer, start, sliding)
+        .run(max_iterations, max_seconds, checkpointer, resume);
 }
 
 }  // namespace paloverde::detail

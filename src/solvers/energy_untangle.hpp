@@ -11,6 +11,7 @@
 #include "paloverde/solvers/summary.hpp"
 #include "checkpointer.hpp"
 #include "run_support.hpp"
+#include "sliding_vertices.hpp"
 #include "workspace.hpp"
 
 namespace paloverde::detail {
@@ -24,9 +25,12 @@ struct EnergyUntangling {
 // seen: fewest non-positive elements, then the largest smallest volume. At most `max_iterations`
 // steps, each counted in the summary as an untangling iteration; collective over the workspace's
 // processes, with the same steps on any number of them. Writes checkpoints (state "energy") as
-// the checkpointer says and at a stop request; `resume` continues from one.
+// the checkpointer says and at a stop request; `resume` continues from one. With `sliding` (a
+// surface mesh), its vertices step along their patches or curves, each trial projected back
+// onto them, and none moves more than one reference length a step.
 EnergyUntangling energy_untangle(Workspace& work, std::vector<double>& xyz, int max_iterations, double max_seconds,
                                  Summary& summary, const IterationObserver& observer, Clock::time_point start,
-                                 Checkpointer& checkpointer, const SolverState* resume);
+                                 Checkpointer& checkpointer, const SolverState* resume,
+                                 const SlidingVertices* sliding = nullptr);
 
 }  // namespace paloverde::detail

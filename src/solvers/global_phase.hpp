@@ -291,8 +291,10 @@ private:
 
 // The global solver's stages after one another (solve() in global_solver.cpp runs them).
 // Untangling (global_untangle.cpp): TargetReached once untangled, else how the run ends (reason
-// and message). Resets `resume` once it has resumed from it.
-PhaseResult untangle(const PhaseContext& context, std::vector<double>& xyz, std::optional<SolverState>& resume);
+// and message). Resets `resume` once it has resumed from it. With `sliding` (a surface mesh),
+// its vertices slide on the surface while untangling too.
+PhaseResult untangle(const PhaseContext& context, std::vector<double>& xyz, const SlidingBoundary* sliding,
+                     std::optional<SolverState>& resume);
 // The shape stages (shape_stages.cpp) from `before`, how the untangling ended: how the run ends.
 PhaseResult improve_shape(const PhaseContext& context, std::vector<double>& xyz, const SlidingBoundary* sliding,
                           const std::optional<SolverState>& resume, PhaseResult before);

@@ -84,7 +84,7 @@ std::string options_text(const GlobalSolverOptions& o) {
 }
 
 // Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
-// With `sliding`, its vertices slide in the shape phase.
+// With `sliding`, its vertices slide in the shape phase (and, on a surface mesh, untangling).
 Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
               detail::Workspace& work, detail::Checkpointer& checkpointer, const detail::SlidingBoundary* sliding) {
     Summary& summary = run.summary;
@@ -98,7 +98,9 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     PhaseResult result{TerminationReason::TargetReached, ""};
     const bool tangled = summary.before.inverted - summary.before.inverted_frozen > 0 || summary.before.degenerate > 0;
     if (tangled && options.untangle && (!resume || resume_untangling)) {
-        result = detail::untangle(context, xyz, resume);
+        // Only a surface mesh is tangled with its vertices sliding: a volume mesh slides from the
+        // valid mesh its boundary-fixed run left.
+        result = detail::untangle(context, xyz, sliding, resume);
         if (result.reason != TerminationReason::TargetReached) {
             work.copy_back(xyz);
             return run.finish(result.reason, result.message);
@@ -140,14 +142,14 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
     return solve(options, observer, run, work, checkpointer, sliding);
 }
 
-// A surface mesh: one shape run with every vertex sliding on the input surface (free moves in
-// space would leave it). Newton directions are refused: their Hessian solves know nothing of it.
+// A surface mesh: one run with every vertex sliding on the input surface (free moves in space
+// would leave it), untangling what the input turned over first. Newton directions are refused:
+// their Hessian solves know nothing of it.
 Summary improve_surface(const GlobalSolverOptions& options, const IterationObserver& observer, MeshPart part) {
     if (options.direction == GlobalSolverOptions::Direction::Newton)
         throw OptionError("direction newton does not go with surface meshes (its Hessian solves know nothing of the "
                           "surface); use conjugate_gradient or steepest_ascent");
     GlobalSolverOptions run = options;
-    run.untangle = false;  // an untangling step would leave the surface; no input triangle is turned over
     // A surface's worst triangle often sits at a corner of its creases, where the max-min can do
     // little and so leaves every other triangle as it was: the mean is raised after it.
     if (run.polish == GlobalSolverOptions::Polish::Auto) run.polish = GlobalSolverOptions::Polish::Always;

@@ -18,11 +18,11 @@ namespace {
 // neighbours held still, to where its elements' smallest volume is largest; until a sweep moves
 // none, at most ten. Serially the vertices go one after the other in id order; a distributed run
 // goes color by color (`coloring`, from the global ids: the same moves on any number of ranks),
-// ghosts taking their owners' positions after each color. Records one history entry;
-// returns the vertices moved everywhere.
+// ghosts taking their owners' positions after each color. A sliding vertex (`slide`) moves on
+// its patch or curve. Records one history entry; returns the vertices moved everywhere.
 int local_untangle_sweeps(const Workspace& work, const VertexColoring* coloring, std::vector<double>& xyz,
                           const QualityMetric& hybrid, Summary& summary, const IterationObserver& observer,
-                          Clock::time_point start) {
+                          Clock::time_point start, const VertexSlide* slide) {
     const Mesh& mesh = work.mesh();
     const auto owned = work.owned();
     const auto classes = coloring ? coloring->classes() : std::vector<std::vector<VertexId>>{};
@@ -38,7 +38,7 @@ int local_untangle_sweeps(const Workspace& work, const VertexColoring* coloring,
         double moved_now = 0.0;
         auto visit = [&](VertexId v) {
             if (candidate[v] && owned[v] && mesh.can_move(v))
-                moved_now += untangle_vertex(mesh, xyz, v, work.scale()).moved ? 1.0 : 0.0;
+                moved_now += untangle_vertex(mesh, xyz, v, work.scale(), slide).moved ? 1.0 : 0.0;
         };
         if (coloring) {
             for (const auto& members : classes) {
@@ -71,13 +71,16 @@ int local_untangle_sweeps(const Workspace& work, const VertexColoring* coloring,
 }
 
 // First the regularized energy, which needs no valid start; where it does not free every element,
-// the barrier ascent on the hybrid metric and local rounds go on from its best iterate.
+// the barrier ascent on the hybrid metric and local rounds go on from its best iterate. On a
+// surface mesh (`sliding`) every one of them moves its vertices along the surface.
 class Untangling {
 public:
-    Untangling(const PhaseContext& context, std::vector<double>& xyz, std::optional<SolverState>& resume)
+    Untangling(const PhaseContext& context, std::vector<double>& xyz, const SlidingBoundary* sliding,
+               std::optional<SolverState>& resume)
         : context_(context), work_(context.work), options_(context.options), xyz_(xyz), resume_(resume),
           hybrid_(make_metric("untangle_hybrid", options_.metric_options)),
           local_volumes_(work_.local_reference_volumes()) {
+        if (sliding) sliding_.emplace(work_, *sliding);
         MetricScale hybrid_scale = work_.scale();
         hybrid_scale.element_reference_volume = local_volumes_;
         hybrid_->set_scale(hybrid_scale);
@@ -110,7 +113,7 @@ private:
         const TerminationCriterion& limits = options_.untangle_termination;
         const auto energy = energy_untangle(work_, xyz_, limits.max_iterations, limits.max_seconds, context_.summary,
                                             context_.observer, context_.start, context_.checkpointer,
-                                            resume_energy ? &*resume_ : nullptr);
+                                            resume_energy ? &*resume_ : nullptr, slides());
         if (resume_energy) resume_.reset();
         result = {energy.reason, energy.message};
         if (!ends_run(result)) return std::nullopt;
@@ -131,7 +134,8 @@ private:
                                        : std::max(0, stop.max_iterations - context_.summary.untangle_iterations);
             // Hybrid qualities start negative: only the barrier (any t below them) is defined there.
             auto objective = make_objective("log_barrier", options_.objective_options);
-            result = Phase(context_, xyz_, *hybrid_, *objective, stop, Stage{.kind = StageKind::Untangle, .round = round})
+            result = Phase(context_, xyz_, *hybrid_, *objective, stop, Stage{.kind = StageKind::Untangle, .round = round},
+                           slides())
                          .run(here);
             if (result.reason == TerminationReason::TargetReached) break;
             if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
@@ -140,12 +144,14 @@ private:
                 colors_ = color_vertices(*work_.distributed());
             if (out_of_budget(result) || round == options_.local_untangle_rounds ||
                 local_untangle_sweeps(work_, colors_ ? &*colors_ : nullptr, xyz_, *hybrid_, context_.summary,
-                                      context_.observer, context_.start) == 0)
+                                      context_.observer, context_.start, slides()) == 0)
                 return {TerminationReason::CannotUntangle,
                         "untangling stopped (" + result.message + ") with elements still inverted"};
         }
         return result;
     }
+
+    const SlidingVertices* slides() const { return sliding_ ? &*sliding_ : nullptr; }
 
     const PhaseContext& context_;
     Workspace& work_;
@@ -157,12 +163,14 @@ private:
     // small inverted elements weigh as much as its large ones.
     std::vector<double> local_volumes_;
     std::optional<VertexColoring> colors_;  // distributed runs; collective: made when first needed
+    std::optional<SlidingVertices> sliding_;
 };
 
 }  // namespace
 
-PhaseResult untangle(const PhaseContext& context, std::vector<double>& xyz, std::optional<SolverState>& resume) {
-    return Untangling(context, xyz, resume).run();
+PhaseResult untangle(const PhaseContext& context, std::vector<double>& xyz, const SlidingBoundary* sliding,
+                     std::optional<SolverState>& resume) {
+    return Untangling(context, xyz, sliding, resume).run();
 }
 
 }  // namespace paloverde::detail

@@ -215,14 +215,10 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
 
 Summary LocalSolver::run_once(MeshPart whole_or_part) {
     if (detail::is_surface_mesh(whole_or_part)) {
-        // No untangling: its free moves would leave the surface.
-        LocalSolverOptions run = options_;
-        run.untangle = false;
-        LocalSolver solver(run);
-        solver.set_observer(observer());
+        // Untangling slides too: each vertex of a turned-over triangle moves on its patch or curve.
         return detail::on_surface(whole_or_part, options_.surface, options_.checkpoint,
                                   options_.boundary == LocalSolverOptions::Boundary::Slide,
-                                  [&](detail::SlidingBoundary* sliding) { return solver.improve_part(whole_or_part, sliding); });
+                                  [&](detail::SlidingBoundary* sliding) { return improve_part(whole_or_part, sliding); });
     }
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
@@ -380,8 +376,8 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
-                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_);
-                detail::VertexEnergy energy(mesh, reference, scale, epsilon);
+                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_, sliding);
+                detail::VertexEnergy energy(mesh, reference, scale, epsilon, sliding);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)
                     moved += visit(members[static_cast<std::size_t>(i)], shape, untangle, energy);
@@ -496,7 +492,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
                 if (!touches_inverted) return 0;
                 // The linear program finds a position where every element is valid when there
                 // is one; otherwise the ascent at least raises the smallest volume.
-                if (detail::untangle_vertex(mesh, xyz, v, scale).moved) return 1;
+                if (detail::untangle_vertex(mesh, xyz, v, scale, sliding).moved) return 1;
                 return ascent.improve(xyz, v) ? 1 : 0;
             });
             ++summary.iterations;

@@ -115,9 +115,53 @@ std::vector<Vec3> move_basis(ElementKind kind, const MetricScale& scale) {
     return {u, w};
 }
 
+// Unit directions a sliding vertex v moves in: an orthonormal basis of its tangent plane (2
+// degrees of freedom) or its curve's direction (1), from the tangents of the axes.
+std::vector<Vec3> slide_basis(const Mesh& mesh, const VertexSlide& slide, VertexId v) {
+    const int dimensions = mesh.degrees_of_freedom(v);
+    std::vector<Vec3> basis;
+    for (int k = 0; k < dimensions; ++k) {
+        Vec3 longest{0, 0, 0};
+        double longest_norm = 0.0;
+        for (int axis = 0; axis < 3; ++axis) {
+            Vec3 e{0, 0, 0};
+            e[axis] = 1.0;
+            Vec3 t = slide.tangent(v, e);
+            for (const Vec3& b : basis) {
+                const double along = t[0] * b[0] + t[1] * b[1] + t[2] * b[2];
+                for (int d = 0; d < 3; ++d) t[d] -= along * b[d];
+            }
+            const double norm = std::hypot(t[0], t[1], t[2]);
+            if (norm > longest_norm) longest = t, longest_norm = norm;
+        }
+        if (!(longest_norm > 0.0)) break;
+        for (double& x : longest) x /= longest_norm;
+        basis.push_back(longest);
+    }
+    return basis;
+}
+
+// The move (and the linear program's smallest volume) in D directions of `basis`.
+template <int D>
+std::pair<Vec3, double> best_move(const std::vector<std::array<double, 3>>& grad, const std::vector<double>& c,
+                                  const std::vector<Vec3>& basis) {
+    std::vector<std::array<double, D>> a;
+    for (const auto& gv : grad) {
+        std::array<double, D> row{};
+        for (int i = 0; i < D; ++i) row[i] = gv[0] * basis[i][0] + gv[1] * basis[i][1] + gv[2] * basis[i][2];
+        a.push_back(row);
+    }
+    const auto [y, s] = max_min_linear<D>(a, c);
+    Vec3 move{0, 0, 0};
+    for (int i = 0; i < D; ++i)
+        for (int d = 0; d < 3; ++d) move[d] += y[i] * basis[i][d];
+    return {move, s};
+}
+
 }  // namespace
 
-VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale) {
+VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale,
+                               const VertexSlide* slide) {
     VertexUntangle result;
     const int k = mesh.corners();
     const auto elements = mesh.elements_of(v);
@@ -146,34 +190,35 @@ VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId
     result.after = result.before;
     if (!(box > 0.0)) return result;
 
-    // Directions v may move in, scaled by the box: all of space, or the plane of the triangles.
-    std::vector<Vec3> basis = move_basis(mesh.kind(), scale);
+    // Directions v may move in, scaled by the box: all of space, the plane of the triangles, or
+    // a sliding vertex's tangent plane or curve.
+    const bool slides = slide && mesh.slides(v);
+    std::vector<Vec3> basis = slides ? slide_basis(mesh, *slide, v) : move_basis(mesh.kind(), scale);
     for (Vec3& b : basis)
         for (double& x : b) x *= box;
-    auto project = [&](const std::array<double, 3>& gv, const Vec3& b) { return gv[0] * b[0] + gv[1] * b[1] + gv[2] * b[2]; };
-    Vec3 move{0, 0, 0};
-    double best = 0.0;
-    if (basis.size() == 3) {
-        std::vector<std::array<double, 3>> a;
-        for (const auto& gv : grad) a.push_back({project(gv, basis[0]), project(gv, basis[1]), project(gv, basis[2])});
-        const auto [y, s] = max_min_linear<3>(a, c);
-        best = s;
-        for (int i = 0; i < 3; ++i)
-            for (int d = 0; d < 3; ++d) move[d] += y[i] * basis[i][d];
-    } else {
-        std::vector<std::array<double, 2>> a;
-        for (const auto& gv : grad) a.push_back({project(gv, basis[0]), project(gv, basis[1])});
-        const auto [y, s] = max_min_linear<2>(a, c);
-        best = s;
-        for (int i = 0; i < 2; ++i)
-            for (int d = 0; d < 3; ++d) move[d] += y[i] * basis[i][d];
-    }
+    auto [move, best] = basis.size() == 3   ? best_move<3>(grad, c, basis)
+                        : basis.size() == 2 ? best_move<2>(grad, c, basis)
+                        : basis.size() == 1 ? best_move<1>(grad, c, basis)
+                                            : std::pair<Vec3, double>{Vec3{0, 0, 0}, 0.0};
     // Recheck at the new position with the exact volumes; keep it only if every element is valid.
     double after = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < c.size(); ++i)
-        after = std::min(after, c[i] + grad[i][0] * move[0] + grad[i][1] * move[1] + grad[i][2] * move[2]);
-    if (!(best > 0.0) || !(after > 0.0) || !(after > result.before)) return result;
-    for (int d = 0; d < 3; ++d) xyz[3 * static_cast<std::size_t>(v) + d] += move[d];
+    double* at = &xyz[3 * static_cast<std::size_t>(v)];
+    if (slides) {
+        // The volumes are linear in the tangent plane, not on the surface: the projected place
+        // is judged, and stays only if it passes.
+        const Vec3 there = slide->project(v, {p[0] + move[0], p[1] + move[1], p[2] + move[2]});
+        for (int d = 0; d < 3; ++d) at[d] = there[d];
+        for (ElementId e : elements) after = std::min(after, volume->element_value(mesh, xyz, e));
+        if (!(best > 0.0) || !(after > 0.0) || !(after > result.before)) {
+            for (int d = 0; d < 3; ++d) at[d] = p[d];
+            return result;
+        }
+    } else {
+        for (std::size_t i = 0; i < c.size(); ++i)
+            after = std::min(after, c[i] + grad[i][0] * move[0] + grad[i][1] * move[1] + grad[i][2] * move[2]);
+        if (!(best > 0.0) || !(after > 0.0) || !(after > result.before)) return result;
+        for (int d = 0; d < 3; ++d) at[d] += move[d];
+    }
     result.after = after;
     result.moved = true;
     return result;
@@ -286,9 +331,9 @@ std::array<double, D> newton_direction(const std::array<double, 3>& g, const std
 }  // namespace
 
 VertexEnergy::VertexEnergy(const Mesh& mesh, std::span<const double> reference, const MetricScale& scale,
-                           double epsilon)
+                           double epsilon, const VertexSlide* slide)
     : mesh_(mesh), reference_(reference), scale_(scale), metric_(make_untangle_energy(epsilon, kUntangleTheta)),
-      basis_(move_basis(mesh.kind(), scale)) {
+      slide_(slide), basis_(move_basis(mesh.kind(), scale)) {
     scale_.element_reference_volume = {};
 }
 
@@ -329,7 +374,11 @@ bool VertexEnergy::improve(std::span<double> xyz, VertexId v) {
     if (!(length > 0.0)) return false;
     double* p = &xyz[3 * static_cast<std::size_t>(v)];
     const int allowed = inverted(xyz, v);
-    const int dims = static_cast<int>(basis_.size());
+    const bool slides = slide_ && mesh_.slides(v);
+    if (slides) slide_basis_ = slide_basis(mesh_, *slide_, v);
+    const std::vector<std::array<double, 3>>& basis = slides ? slide_basis_ : basis_;
+    const int dims = static_cast<int>(basis.size());
+    if (dims == 0) return false;
     std::array<double, 3> g{};
     std::array<std::array<double, 3>, 3> shifted{};
     double f = energy(xyz, v, &g);
@@ -338,16 +387,18 @@ bool VertexEnergy::improve(std::span<double> xyz, VertexId v) {
     for (int step = 0; step < kNewtonSteps; ++step) {
         const std::array<double, 3> origin = {p[0], p[1], p[2]};
         for (int i = 0; i < dims; ++i) {
-            for (int d = 0; d < 3; ++d) p[d] = origin[d] + kDifference * length * basis_[i][d];
+            for (int d = 0; d < 3; ++d) p[d] = origin[d] + kDifference * length * basis[i][d];
             energy(xyz, v, &shifted[i]);
         }
         for (int d = 0; d < 3; ++d) p[d] = origin[d];
         std::array<double, 3> y{};  // the step, in units of `length` along the basis
         if (dims == 3) {
-            y = newton_direction<3>(g, basis_, length, shifted);
-        } else {
-            const auto y2 = newton_direction<2>(g, basis_, length, shifted);
+            y = newton_direction<3>(g, basis, length, shifted);
+        } else if (dims == 2) {
+            const auto y2 = newton_direction<2>(g, basis, length, shifted);
             y = {y2[0], y2[1], 0.0};
+        } else {
+            y = {newton_direction<1>(g, basis, length, shifted)[0], 0.0, 0.0};
         }
         // A vertex never needs to travel more than a local length in one step.
         const double norm = std::sqrt(y[0] * y[0] + y[1] * y[1] + y[2] * y[2]);
@@ -356,13 +407,17 @@ bool VertexEnergy::improve(std::span<double> xyz, VertexId v) {
             for (double& c : y) c /= norm;
         std::array<double, 3> move{};
         for (int i = 0; i < dims; ++i)
-            for (int d = 0; d < 3; ++d) move[d] += length * y[i] * basis_[i][d];
+            for (int d = 0; d < 3; ++d) move[d] += length * y[i] * basis[i][d];
         const double slope = g[0] * move[0] + g[1] * move[1] + g[2] * move[2];
         if (!(slope < 0.0)) break;
         bool accepted = false;
         double trial = f;
         for (double t = 1.0; t > 1e-9 && !accepted; t *= 0.5) {
             for (int d = 0; d < 3; ++d) p[d] = origin[d] + t * move[d];
+            if (slides) {
+                const Vec3 there = slide_->project(v, {p[0], p[1], p[2]});
+                for (int d = 0; d < 3; ++d) p[d] = there[d];
+            }
             trial = energy(xyz, v, nullptr);
             accepted = trial < f && trial <= f + 1e-4 * t * slope && inverted(xyz, v) <= allowed;
         }

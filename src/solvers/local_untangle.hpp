@@ -16,6 +16,7 @@
 #include "paloverde/mesh/mesh.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/halo.hpp"
+#include "vertex_slide.hpp"
 
 namespace paloverde::detail {
 
@@ -27,8 +28,10 @@ struct VertexUntangle {
 
 // Moves vertex v in xyz only if afterwards every one of its elements has positive volume, so a
 // valid element is never inverted. `scale` gives the plane of triangle meshes and the volume
-// unit (scaled_volume).
-VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale);
+// unit (scaled_volume). A vertex that slides (Mesh::slides, with `slide`) moves in its tangent
+// plane or along its curve, and its new place is projected back onto them before it is judged.
+VertexUntangle untangle_vertex(const Mesh& mesh, std::span<double> xyz, VertexId v, const MetricScale& scale,
+                               const VertexSlide* slide = nullptr);
 
 // A local, scale-free size for each of the first `count` elements: the mean over its corners of
 // the mean absolute volume of each corner's elements (ghost corners take their owners' means).
@@ -58,10 +61,12 @@ double next_epsilon(double epsilon, double energy_start, double energy_end, doub
 // written and only v's elements read: vertices of one color can run this at the same time.
 class VertexEnergy {
 public:
-    VertexEnergy(const Mesh& mesh, std::span<const double> reference, const MetricScale& scale, double epsilon);
+    VertexEnergy(const Mesh& mesh, std::span<const double> reference, const MetricScale& scale, double epsilon,
+                 const VertexSlide* slide = nullptr);
     // Damped Newton steps (the 3x3 Hessian, 2x2 for planar triangles, by forward differences of
     // the analytic gradient) with a backtracking line search. A step is taken only if it lowers
-    // the energy and leaves no more of v's elements inverted than before (decided exactly).
+    // the energy and leaves no more of v's elements inverted than before (decided exactly). A
+    // vertex that slides steps in its tangent plane (or along its curve), each trial projected.
     bool improve(std::span<double> xyz, VertexId v);
 
 private:
@@ -72,7 +77,9 @@ private:
     std::span<const double> reference_;
     MetricScale scale_;
     std::unique_ptr<QualityMetric> metric_;
-    std::vector<std::array<double, 3>> basis_;  // unit directions v may move in
+    const VertexSlide* slide_;
+    std::vector<std::array<double, 3>> basis_;  // unit directions a free vertex may move in
+    std::vector<std::array<double, 3>> slide_basis_;  // scratch: those of the sliding vertex visited
 };
 
 }  // namespace paloverde::detail

@@ -187,8 +187,32 @@ void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
         released_[v] = role == BoundaryRole::Surface ? 2 : 1;
     }
     const DistributedMesh* d = part_.distributed();
-    mesh_.set_surface_normals(d ? surface_.normals_of(mesh_, d->mesh.global_ids()) : surface_.normals_of(mesh_));
+    std::vector<Vec3> normals = d ? surface_.normals_of(mesh_, d->mesh.global_ids()) : surface_.normals_of(mesh_);
+    turn_targets_to(normals);
+    mesh_.set_surface_normals(std::move(normals));
     normals_set_ = true;
+}
+
+void SlidingBoundary::turn_targets_to(std::span<const Vec3> normals) {
+    // A target is taken in its element's own input plane (targets.cpp), so an element the input
+    // turned over would rate valid against it. Where that plane faces against the surface, its
+    // frame is turned to the surface's side (its second and third axes reversed: still a
+    // rotation): the element then rates inverted until a solver turns it back, and after that
+    // against its target's mirror image.
+    const auto roots = mesh_.target_metric_roots();
+    if (!mesh_.has_targets() || roots.empty()) return;
+    std::vector<CornerMap> turned(roots.begin(), roots.end());
+    bool any = false;
+    for (std::size_t e = 0; e < turned.size(); ++e) {
+        CornerMap& r = turned[e];
+        if (r[2][0] * normals[e][0] + r[2][1] * normals[e][1] + r[2][2] * normals[e][2] >= 0.0) continue;
+        for (int row = 1; row < 3; ++row)
+            for (double& c : r[static_cast<std::size_t>(row)]) c = -c;
+        any = true;
+    }
+    if (!any) return;
+    mesh_.set_targets({mesh_.target_maps().begin(), mesh_.target_maps().end()},
+                      {mesh_.target_volumes().begin(), mesh_.target_volumes().end()}, std::move(turned));
 }
 
 SlidingBoundary::~SlidingBoundary() {

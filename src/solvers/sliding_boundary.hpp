@@ -25,6 +25,7 @@
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
 #include "paloverde/solvers/termination.hpp"
+#include "vertex_slide.hpp"
 
 namespace paloverde::detail {
 
@@ -54,7 +55,7 @@ TerminationCriterion fixed_run_budget(const TerminationCriterion& termination);
 std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& termination, Summary& fixed,
                                                    const Reducer& reducer);
 
-class SlidingBoundary {
+class SlidingBoundary final : public VertexSlide {
 public:
     // From the input mesh or a rank's part of it, at its own scale (before any run moves or
     // rescales it). Collective. A surface mesh slides on itself: see
@@ -70,8 +71,8 @@ public:
     void set_scale_exponent(int exponent) { exponent_ = exponent; }
     // At unit scale: the part of a move that stays on v's patch or curve to first order, and the
     // point of v's patch or curve nearest to p.
-    Vec3 tangent(VertexId v, const Vec3& d) const { return surface_.tangent(v, d); }
-    Vec3 project(VertexId v, const Vec3& p) const;
+    Vec3 tangent(VertexId v, const Vec3& d) const override { return surface_.tangent(v, d); }
+    Vec3 project(VertexId v, const Vec3& p) const override;
     // What the runs did to the boundary, from the mesh handed back (at the input's scale), over
     // the whole mesh. Collective.
     BoundaryMotion motion() const;
@@ -82,6 +83,7 @@ public:
 
 private:
     void slide_on_surface(bool open_edges_slide);
+    void turn_targets_to(std::span<const Vec3> normals);  // a surface's targets, to its elements' normals
 
     MeshPart part_;
     Mesh& mesh_;

@@ -10,7 +10,7 @@
 
 namespace paloverde::detail {
 
-class SlidingVertices {
+class SlidingVertices final : public VertexSlide {
 public:
     SlidingVertices(const Workspace& work, const SlidingBoundary& boundary) : boundary_(boundary) {
         const VertexId n = work.mesh().num_vertices();
@@ -45,6 +45,10 @@ public:
         const Vec3 q = boundary_.project(id, {p[0], p[1], p[2]});
         for (int c = 0; c < 3; ++c) p[c] = q[c];
     }
+
+    // The same for one vertex of the workspace that slides, a move or a point apart.
+    Vec3 tangent(VertexId v, const Vec3& d) const override { return boundary_.tangent(caller_[v], d); }
+    Vec3 project(VertexId v, const Vec3& p) const override { return boundary_.project(caller_[v], p); }
 
 private:
     const SlidingBoundary& boundary_;

@@ -7,6 +7,7 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/boundary_surface.hpp"
+#include "support/surface_meshes.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -194,6 +195,31 @@ BOOST_AUTO_TEST_CASE(the_surface_is_the_same_whatever_the_numbering) {
         BOOST_TEST((same.project(w, moved) == surface.project(v, moved)), "vertex " << v);
         BOOST_TEST((same.tangent(w, {1.0, 2.0, 3.0}) == surface.tangent(v, {1.0, 2.0, 3.0})), "vertex " << v);
     }
+}
+
+// A surface mesh's triangles that the input turned over (a vertex slid past its neighbour turns
+// two over): seen, given the surface's normal, against which they are inverted, and no crease
+// of their own. A tetrahedron's faces and a poorer torus's slivers are not turned over.
+BOOST_AUTO_TEST_CASE(a_surface_knows_what_its_input_turned_over) {
+    const pv::Mesh tangled = pv::test::tangled_torus(32, 16);
+    const pv::BoundarySurface surface(tangled);
+    BOOST_TEST(surface.turned_over() == 8u);
+    BOOST_TEST(surface.feature_edges() == 0u);
+    BOOST_TEST(surface.count(pv::BoundaryRole::Surface) == static_cast<std::size_t>(tangled.num_vertices()));
+    int against = 0;
+    for (pv::ElementId e = 0; e < tangled.num_elements(); ++e) {
+        const auto c = tangled.element(e);
+        const pv::Vec3 a = at(tangled, c[0]), b = at(tangled, c[1]), d = at(tangled, c[2]);
+        const pv::Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        const pv::Vec3 own{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        const pv::Vec3 n = surface.element_normals()[static_cast<std::size_t>(e)];
+        against += own[0] * n[0] + own[1] * n[1] + own[2] * n[2] < 0.0;
+    }
+    BOOST_TEST(against == 8);
+    BOOST_TEST(pv::BoundarySurface(pv::test::torus(32, 16, 0.35)).turned_over() == 0u);
+    const pv::Mesh tetrahedron(pv::ElementKind::Triangle, {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1},
+                               {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3});
+    BOOST_TEST(pv::BoundarySurface(tetrahedron).turned_over() == 0u);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

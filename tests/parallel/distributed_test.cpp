@@ -693,16 +693,23 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
 // A surface mesh slides on itself, on every rank the whole surface (gathered, ordered by
 // coordinates; each element's normal found by its corners' global ids): the serial mesh bit for
 // bit, for a torus of triangles, for Mesquite's sphere patch of quadrilaterals, its outline
-// sliding along itself, and for a sphere of triangles on the sphere as its domain.
-BOOST_DATA_TEST_CASE(a_surface_mesh_slides_to_the_serial_mesh, boost::unit_test::data::make({0, 1, 2}), which) {
+// sliding along itself, for a sphere of triangles on the sphere as its domain, and for a tangled
+// torus, untangled sliding (energy, then shape).
+BOOST_DATA_TEST_CASE(a_surface_mesh_slides_to_the_serial_mesh, boost::unit_test::data::make({0, 1, 2, 3}), which) {
     const auto input = which == 0   ? pv::test::torus(32, 16, 0.3)
                        : which == 1 ? pv::test::shared_mesh("mesquite/hexes/sph-10-zsquare.vtk")
-                                    : pv::test::sphere(16, 10, 0.3);
+                       : which == 2 ? pv::test::sphere(16, 10, 0.3)
+                                    : pv::test::tangled_torus(32, 16);
     pv::GlobalSolverOptions options;
     options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
     if (which == 2) options.surface.domain.shape = pv::SurfaceDomain::Shape::Sphere;
     options.termination.max_iterations = 60;
     const auto [serial, slid] = serial_and_distributed(input, options);
+    if (which == 3) {
+        BOOST_TEST(serial.before.inverted == 8);
+        BOOST_TEST(serial.after.inverted == 0);
+        BOOST_TEST(serial.untangle_iterations > 0);
+    }
     BOOST_REQUIRE(slid.boundary.has_value());
     BOOST_TEST(slid.boundary->moved > 0);
     BOOST_TEST(slid.boundary->moved == serial.boundary->moved);

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <numbers>
 #include <random>
@@ -146,10 +147,52 @@ double worst_scaled_jacobian(const pv::QualityReport& report) {
     return -1.0;
 }
 
+// A cube_surface() improved: a face vertex keeps its face's plane, an edge vertex its edge's two
+// coordinates, a corner its place, exactly. Returns the edge vertices that slid along their edge.
+int check_on_the_cube(const pv::Mesh& input, const pv::Mesh& mesh) {
+    int moved_on_edges = 0;
+    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const Vec3 p = point(input, v), q = point(mesh, v);
+        int sides = 0;
+        for (int c = 0; c < 3; ++c)
+            if (p[c] == 0.0 || p[c] == 1.0) {
+                ++sides;
+                BOOST_TEST(q[c] == p[c], "vertex " << v << " left its face");
+            }
+        if (sides == 2 && q != p) ++moved_on_edges;
+        if (sides == 3) BOOST_TEST(q == p, "corner " << v << " moved");
+    }
+    return moved_on_edges;
+}
+
 pv::GlobalSolverOptions one_thread() {
     pv::GlobalSolverOptions options;
     options.threads = 1;
     return options;
+}
+
+// The mesh improved by the named solver ("global" or "local") with its default options, on one
+// thread.
+pv::Summary improve_by(const std::string& solver, pv::Mesh& mesh) {
+    if (solver == "global") return pv::GlobalSolver(one_thread()).improve(mesh);
+    pv::LocalSolverOptions local;
+    local.threads = 1;
+    return pv::LocalSolver(local).improve(mesh);
+}
+
+// A tangled torus `input` (tests/support/surface_meshes.hpp) improved into `mesh`: the solver saw
+// its turned-over elements, untangled them, and kept every vertex on the input's cells.
+void check_untangled_on_the_torus(const pv::Mesh& input, const pv::Mesh& mesh, const pv::Summary& summary) {
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(summary.before.inverted > 0);  // the solvers see what the input turned over
+    BOOST_TEST(summary.after.inverted == 0);
+    BOOST_TEST(summary.untangle_iterations > 0);
+    BOOST_TEST(pv::test::turned_over_on_torus(mesh) == 0);
+    BOOST_TEST(largest_distance(input, mesh) < 1e-9);
+    BOOST_REQUIRE(summary.boundary.has_value());
+    BOOST_TEST(summary.boundary->largest_distance < 1e-9);
+    BOOST_TEST(!mesh.has_surface_normals());
 }
 
 }  // namespace
@@ -182,8 +225,7 @@ BOOST_DATA_TEST_CASE(a_torus_is_mended_on_its_own_surface, boost::unit_test::dat
     BOOST_TEST(!mesh.has_surface_normals());  // the run's own, cleared when it ends
 }
 
-// The cube's creases and corners stay: a face vertex keeps its face's plane, an edge vertex its
-// edge's two coordinates, a corner its place, exactly; the worst triangle rises.
+// The cube's creases and corners stay (check_on_the_cube); the worst triangle rises.
 BOOST_AUTO_TEST_CASE(a_cube_surface_keeps_its_creases_and_corners) {
     constexpr int k = 6;
     const pv::Mesh input = cube_surface(k, 0.4);
@@ -193,21 +235,12 @@ BOOST_AUTO_TEST_CASE(a_cube_surface_keeps_its_creases_and_corners) {
     BOOST_TEST(summary.success());
     BOOST_TEST(turned_over(input, mesh) == 0);
     BOOST_TEST(worst_mean_ratio(mesh) > worst_mean_ratio(input) + 0.1);
-    int moved_on_edges = 0;
-    for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
-        const Vec3 p = point(input, v), q = point(mesh, v);
-        int sides = 0;
-        for (int c = 0; c < 3; ++c)
-            if (p[c] == 0.0 || p[c] == 1.0) {
-                ++sides;
-                BOOST_TEST(q[c] == p[c], "vertex " << v << " left its face");
-            }
-        if (sides == 2 && q != p) ++moved_on_edges;
-    }
-    BOOST_TEST(moved_on_edges > 0);  // the edge vertices slid along the creases
+    BOOST_TEST(check_on_the_cube(input, mesh) > 0);  // the edge vertices slid along the creases
 }
 
 // An open surface (a saddle): its outline is held by the default fixed flags; the rest slides.
+// Its jitter turns one triangle over (seen from above, the saddle being a graph over the plane):
+// it is turned back.
 BOOST_AUTO_TEST_CASE(an_open_surface_keeps_its_outline) {
     constexpr int k = 12;
     std::mt19937 random(5);
@@ -233,7 +266,14 @@ BOOST_AUTO_TEST_CASE(an_open_surface_keeps_its_outline) {
     pv::Mesh mesh = input;
     const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
     BOOST_TEST(summary.success());
-    BOOST_TEST(turned_over(input, mesh) == 0);
+    auto facing_down = [](const pv::Mesh& m) {
+        int count = 0;
+        for (pv::ElementId e = 0; e < m.num_elements(); ++e) count += normal_of(m, e)[2] <= 0.0;
+        return count;
+    };
+    BOOST_TEST(facing_down(input) == 1);
+    BOOST_TEST(summary.before.inverted == 1);
+    BOOST_TEST(facing_down(mesh) == 0);
     BOOST_TEST(largest_distance(input, mesh) < 1e-9);
     BOOST_TEST(worst_mean_ratio(mesh) > worst_mean_ratio(input));
     for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v)
@@ -343,6 +383,115 @@ BOOST_DATA_TEST_CASE(a_graded_cylinder_keeps_its_rows_with_size_and_aspect_kept,
     BOOST_TEST(kept.row_change < 0.12);
     BOOST_TEST(ideal.row_change > 1.0);
     BOOST_TEST(kept.jacobian_after > kept.jacobian_before + 0.1);
+}
+
+// A torus tangled along itself (vertices slid past their neighbours, two triangles turned over
+// at each), smoothed by either solver: the turned-over triangles are rated inverted, untangled
+// with every vertex sliding on the tangled input's triangles, and then improved.
+BOOST_DATA_TEST_CASE(a_tangled_torus_is_untangled_on_its_surface, boost::unit_test::data::make({"global", "local"}),
+                     solver) {
+    const pv::Mesh input = pv::test::tangled_torus(32, 16);
+    BOOST_TEST(pv::test::turned_over_on_torus(input) == 8);
+    pv::Mesh mesh = input;
+    const pv::Summary summary = improve_by(solver, mesh);
+    BOOST_TEST(summary.before.inverted == 8);
+    check_untangled_on_the_torus(input, mesh, summary);
+}
+
+// The same on a torus of quadrilaterals: the two cells at each crossed edge fold, and come back.
+BOOST_DATA_TEST_CASE(a_tangled_torus_of_quadrilaterals_is_untangled, boost::unit_test::data::make({"global", "local"}),
+                     solver) {
+    const pv::Mesh input = pv::test::tangled_torus(32, 16, true);
+    BOOST_REQUIRE(input.has_cells());
+    BOOST_TEST(pv::test::turned_over_on_torus(input) > 0);
+    pv::Mesh mesh = input;
+    check_untangled_on_the_torus(input, mesh, improve_by(solver, mesh));
+}
+
+// With the quadrilaterals' aspect kept (the command line's default on a surface of cells), each
+// target lies in its element's own input plane: a turned-over cell's is turned to the surface's
+// side, so that it too is rated inverted and turned back.
+BOOST_DATA_TEST_CASE(a_tangled_torus_of_quadrilaterals_with_targets_is_untangled, boost::unit_test::data::make({"global", "local"}),
+                     solver) {
+    const pv::Mesh input = pv::test::tangled_torus(32, 16, true);
+    pv::Mesh mesh = input;
+    pv::set_targets(mesh, pv::TargetOptions::from("aspect"));
+    const pv::Summary summary = improve_by(solver, mesh);
+    BOOST_TEST(summary.before.inverted > 0);
+    check_untangled_on_the_torus(input, mesh, summary);
+}
+
+// A vertex inside a face of the cube slid past its neighbour in the face's plane: the tangle is
+// undone in that plane while every crease and corner stays exactly where it was.
+BOOST_DATA_TEST_CASE(a_tangle_beside_creases_leaves_them_in_place, boost::unit_test::data::make({"global", "local"}),
+                     solver) {
+    constexpr int k = 6;
+    pv::Mesh input = cube_surface(k, 0.0);
+    std::vector<double> xyz(input.coordinates().begin(), input.coordinates().end());
+    for (pv::VertexId v = 0; v < input.num_vertices(); ++v) {
+        double* p = &xyz[3 * static_cast<std::size_t>(v)];
+        if (p[0] == 2.0 / k && p[1] == 3.0 / k && p[2] == 1.0) p[0] = 3.5 / k;  // past (3, 3) on the top face
+    }
+    input = pv::Mesh(pv::ElementKind::Triangle, xyz, {input.connectivity().begin(), input.connectivity().end()});
+    auto turned = [](const pv::Mesh& mesh) {  // triangles that face into the cube
+        int count = 0;
+        for (pv::ElementId e = 0; e < mesh.num_elements(); ++e) {
+            const auto c = mesh.element(e);
+            Vec3 centre{0, 0, 0};
+            for (int i = 0; i < 3; ++i)
+                for (int d = 0; d < 3; ++d) centre[d] += point(mesh, c[i])[d] / 3 - 1.0 / 6;
+            const Vec3 n = normal_of(mesh, e);
+            count += n[0] * centre[0] + n[1] * centre[1] + n[2] * centre[2] <= 0.0;
+        }
+        return count;
+    };
+    BOOST_TEST(turned(input) == 2);
+    pv::Mesh mesh = input;
+    const pv::Summary summary = improve_by(solver, mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(summary.success());
+    BOOST_TEST(summary.before.inverted == 2);
+    BOOST_TEST(turned(mesh) == 0);
+    check_on_the_cube(input, mesh);
+}
+
+// A tangle that cannot be undone (its vertices fixed, or no untangling budget) is reported: the
+// run says so, hands back its mesh with the fewest turned over, on the surface, and the command
+// line exits with 1.
+BOOST_AUTO_TEST_CASE(a_tangle_that_cannot_be_undone_is_reported) {
+    const pv::Mesh tangled = pv::test::tangled_torus(32, 16);
+    std::vector<std::uint8_t> fixed(static_cast<std::size_t>(tangled.num_vertices()), 0);
+    for (const auto& [i, j] : pv::test::torus_slides(32, 16))
+        for (int di = -1; di <= 2; ++di)
+            for (int dj = -2; dj <= 2; ++dj) fixed[static_cast<std::size_t>(((i + di + 32) % 32) * 16 + (j + dj + 16) % 16)] = 1;
+    pv::Mesh mesh = tangled;
+    mesh.set_fixed(fixed);
+    const pv::Summary summary = pv::GlobalSolver(one_thread()).improve(mesh);
+    BOOST_TEST_MESSAGE(summary.brief_report());
+    BOOST_TEST(!summary.success());
+    BOOST_TEST((summary.reason == pv::TerminationReason::CannotUntangle));
+    BOOST_TEST(summary.after.inverted == 8);
+    BOOST_TEST(largest_distance(tangled, mesh) < 1e-9);
+
+    pv::GlobalSolverOptions short_of_budget = one_thread();
+    short_of_budget.untangle_termination.max_iterations = 1;
+    pv::Mesh cut_short = tangled;
+    const pv::Summary stopped = pv::GlobalSolver(short_of_budget).improve(cut_short);
+    BOOST_TEST_MESSAGE(stopped.brief_report());
+    BOOST_TEST((stopped.reason == pv::TerminationReason::CannotUntangle));
+    BOOST_TEST(stopped.after.inverted > 0);
+    BOOST_TEST(stopped.after.inverted <= 8);
+    BOOST_TEST(largest_distance(tangled, cut_short) < 1e-9);
+
+    const pv::test::ScratchDir dir("surface_tangle_held");
+    const pv::Field flags{"fixed", 1, std::vector<double>(fixed.begin(), fixed.end())};
+    pv::write_mesh(dir / "held.vtk", tangled, {}, std::span<const pv::Field>(&flags, 1));
+    for (const char* method : {"global", "local"}) {
+        const auto result = pv::test::run_cli("improve " + (dir / "held.vtk").string() + " -o " +
+                                              (dir / "out.vtk").string() + " --method " + method);
+        BOOST_TEST(result.exit_code == 1, result.output);
+        BOOST_TEST(std::filesystem::exists(dir / "out.vtk"));
+    }
 }
 
 // Three triangles on one edge: no surface to slide on. The command line names the file.

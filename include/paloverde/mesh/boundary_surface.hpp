@@ -116,8 +116,13 @@ public:
     // order), the unit normal its quality and orientation are taken about (Mesh::surface_normals):
     // the mean of its corners' normals of the input surface, so that a sliver, whose own normal
     // can face anywhere on a curved surface, is rated in the surface's tangent plane as it is
-    // mended. Its own normal where that mean is not on its side. Empty for other meshes.
+    // mended. Its own normal where that mean is not on its side, unless the input turned it
+    // over: a triangle that faces against the triangles around its corners (more than 120
+    // degrees from them on average) keeps the mean, and so is rated inverted until a solver turns
+    // it back. Empty for other meshes.
     std::span<const Vec3> element_normals() const { return element_normals_; }
+    // A surface mesh's triangles that the input turned over (above).
+    std::size_t turned_over() const { return turned_over_; }
     // The same for the elements of `mesh`, the surface mesh this surface was built from: a
     // triangle mesh's element_normals(); in a mesh of triangle and quadrilateral cells, each
     // corner element takes the mean normal of its cell's triangles (Mesh::surface_normals).
@@ -152,7 +157,7 @@ private:
     // Surface meshes: each facet's corners by id, sorted, with its place in BoundaryFacets::facets;
     // sorted, so that a caller's element finds its facets (normals_of).
     std::vector<std::pair<std::array<GlobalId, 3>, std::size_t>> facet_keys_;
-    std::size_t face_count_ = 0, feature_count_ = 0;
+    std::size_t face_count_ = 0, feature_count_ = 0, turned_over_ = 0;
     double diagonal_ = 0.0;
     std::unique_ptr<Trees> trees_;
 };
