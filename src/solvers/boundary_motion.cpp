@@ -9,6 +9,7 @@
 #include "paloverde/assess/quality_assessor.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
+#include "checkpointer.hpp"
 #include "run_support.hpp"
 
 namespace paloverde::detail {
@@ -177,6 +178,33 @@ void add_work(Summary& total, const Summary& run) {
     total.seconds += run.seconds;
 }
 
+// The first run: from the interior carried along with the boundary from the reference when that
+// inverts fewer elements than the interior where it was given.
+Summary run_first(MeshPart part, const std::vector<double>& given, const std::vector<double>& reference,
+                  const std::vector<std::uint8_t>& driven, double max_seconds, const MotionRun& solve) {
+    std::vector<double> carried = given;
+    carry_free_vertices(part, driven, reference, carried);
+    const QualityAssessor count({"aspect_ratio"});
+    const long inverted_given = count.assess(part).inverted;
+    std::copy(carried.begin(), carried.end(), part.mesh().coordinates().begin());
+    if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), part.mesh().coordinates().begin());
+    return solve(max_seconds);
+}
+
+// The worst quality in `metric` of the mesh at `at`, the part's coordinates left as they are. A
+// run is good enough when it keeps at least half the worst quality of where it started from (the
+// reference, then the last step): a run that loses more has left elements pressed against the
+// moved boundary, which smaller steps avoid.
+double worst_at(MeshPart part, const std::string& metric, std::span<const double> at) {
+    const auto xyz = part.mesh().coordinates();
+    const std::vector<double> now(xyz.begin(), xyz.end());
+    std::copy(at.begin(), at.end(), xyz.begin());
+    const QualityReport r = QualityAssessor({metric}).assess(part);
+    std::copy(now.begin(), now.end(), xyz.begin());
+    const MetricReport& m = r.metrics.front();
+    return m.movable.count > 0 ? m.movable.min : m.all.min;
+}
+
 std::string percent(double fraction) {
     std::ostringstream out;
     out << std::round(1000.0 * fraction) / 10.0 << "%";
@@ -200,15 +228,9 @@ bool has_boundary_motion(MeshPart part) {
     return part.reducer().max(moved) > 0.0;
 }
 
-void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint) {
-    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
-        throw OptionError("checkpoints are not kept for a mesh whose boundary moved from its reference (morphing): "
-                          "its run may take several steps, and a checkpoint holds one run; run it without checkpoint.file "
-                          "and checkpoint.resume");
-}
-
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve) {
-    const auto start = Clock::now();
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
+                               const MotionCheckpoints& checkpoints, const MotionRun& solve) {
+    auto start = Clock::now();
     // What is left of max_seconds (> 0), or 0 when spent or when there is no limit.
     auto seconds_left = [&] { return max_seconds > 0.0 ? std::max(0.0, max_seconds - part.reducer().max(seconds_since(start))) : 0.0; };
     Mesh& mesh = part.mesh();
@@ -217,41 +239,53 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     const std::vector<double> given(xyz().begin(), xyz().end());
     const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
     const std::vector<std::uint8_t> driven = driven_vertices(mesh);
-    // The interior carried along with the boundary from the reference: the first run starts from
-    // there if that inverts fewer elements than the interior where it was given.
-    {
-        std::vector<double> carried = given;
-        carry_free_vertices(part, driven, reference, carried);
-        const QualityAssessor count({"aspect_ratio"});
-        const long inverted_given = count.assess(part).inverted;
-        std::copy(carried.begin(), carried.end(), xyz().begin());
-        if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz().begin());
-    }
-    Summary total = solve(max_seconds);
-    if (total.reason == TerminationReason::Interrupted) return total;
-    // A run is good enough when it keeps at least half the worst quality of where it started
-    // from (the reference, then the last step): a run that loses more has left elements pressed
-    // against the moved boundary, which smaller steps avoid.
-    auto worst_at = [&](std::span<const double> at) {
-        const std::vector<double> now(xyz().begin(), xyz().end());
-        std::copy(at.begin(), at.end(), xyz().begin());
-        const QualityReport r = QualityAssessor({total.quality_metric}).assess(part);
-        std::copy(now.begin(), now.end(), xyz().begin());
-        const MetricReport& m = r.metrics.front();
-        return m.movable.count > 0 ? m.movable.min : m.all.min;
-    };
-    double floor = 0.5 * worst_at(reference);
-    if (total.valid() && total.worst_after >= floor) return total;
-
-    // The first run's result: kept if the steps do no better.
-    const std::vector<double> first(xyz().begin(), xyz().end());
-    const Summary first_run = total;
-    std::vector<double> valid = reference;  // the furthest accepted step's mesh; the reference at fraction 0
-    double done = 0.0, step = 0.5;
+    OptionsText step_option;
+    step_option("smallest_motion_step", smallest_fraction);
+    Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + step_option.text(), part,
+                              CheckpointKind::Motion);
+    Summary total, first_run;           // every run's work; the first run's
+    std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
+    double done = 0.0, step = 0.5, floor = 0.0;
     int steps = 0;
+    if (checkpointer.resumes()) {
+        const SolverState state = checkpointer.resume(total);
+        start -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(state.elapsed));
+        first_run = restored_outcome(state, "first_run");
+        // Every run's work on top of the first run's outcome (the Summary's before is the first run's).
+        Summary work = std::move(total);
+        total = first_run;
+        total.iterations = work.iterations;
+        total.untangle_iterations = work.untangle_iterations;
+        total.quality_passes = work.quality_passes;
+        total.gradient_passes = work.gradient_passes;
+        total.history = std::move(work.history);
+        total.seconds = state.number("seconds");
+        first = state.vertex_field("first", given.size() / 3);
+        valid = state.vertex_field("valid", given.size() / 3);
+        done = state.number("done");
+        step = state.number("step");
+        floor = state.number("floor");
+        steps = static_cast<int>(state.number("steps"));
+    } else {
+        total = run_first(part, given, reference, driven, max_seconds, solve);
+        if (total.reason == TerminationReason::Interrupted) return total;
+        floor = 0.5 * worst_at(part, total.quality_metric, reference);
+        if (total.valid() && total.worst_after >= floor) return total;
+        first.assign(xyz().begin(), xyz().end());
+        first_run = total;
+        valid = reference;  // fraction 0
+    }
     Summary last;
     bool out_of_time = false;
     while (done < 1.0 && step >= smallest_fraction) {
+        if (checkpointer.writes()) {
+            // Where the steps stand before the next one, which starts from `valid`.
+            SolverState state;
+            state.numbers = {{"done", done}, {"step", step}, {"floor", floor}, {"steps", steps}, {"seconds", total.seconds}};
+            state.vertex_fields = {{"first", first}, {"valid", valid}};
+            store_outcome(state, "first_run", first_run);
+            checkpointer.save(total, state, seconds_since(start));
+        }
         const double seconds = seconds_left();
         if (max_seconds > 0.0 && seconds == 0.0) {
             out_of_time = true;
@@ -276,8 +310,9 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         }
     }
     std::ostringstream why;
+    const bool interrupted = last.reason == TerminationReason::Interrupted;
     const bool first_better = first_run.valid() && (done < 1.0 || first_run.worst_after >= last.worst_after);
-    if (last.reason == TerminationReason::Interrupted || out_of_time) {
+    if (interrupted || out_of_time) {
         // A step's mesh has its boundary short of where it was given: the first run's has not.
         std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
@@ -311,7 +346,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             << " of the motion beyond it left inverted elements; " << last.after.inverted << " remain";
     }
     const bool followed = first_better || done == 1.0;
-    total.reason = last.reason == TerminationReason::Interrupted ? TerminationReason::Interrupted
+    total.reason = interrupted ? TerminationReason::Interrupted
                    : out_of_time                                  ? TerminationReason::TimeLimit
                    : followed                                     ? last.reason
                                                                   : TerminationReason::CannotUntangle;

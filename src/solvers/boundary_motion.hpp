@@ -8,6 +8,7 @@
 // halved when a fraction fails, doubled after one that is kept (docs/morphing.md).
 #include <algorithm>
 #include <functional>
+#include <string>
 
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
@@ -20,8 +21,17 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
-// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own).
+// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own). It keeps
+// no checkpoints of its own: the motion's are between the runs.
 using MotionRun = std::function<Summary(double seconds)>;
+
+// The checkpoints of a run in steps: the solver's settings, its name and its options as text
+// (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).
+struct MotionCheckpoints {
+    CheckpointOptions options;
+    std::string solver;
+    std::string options_text;
+};
 
 // Runs `solve` (one whole run of a solver on the part; from the interior carried along when that
 // inverts fewer elements than the interior as given) and, if it leaves inverted elements or less
@@ -33,8 +43,14 @@ using MotionRun = std::function<Summary(double seconds)>;
 // valid step, reason CannotUntangle and a message that says how far the motion was followed.
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
-// TimeLimit. One Summary of every run: before is the mesh as given. Collective.
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve);
+// TimeLimit. One Summary of every run: before is the mesh as given.
+// With a checkpoint file, the state is written before every step (what the first run left, the
+// last accepted step's mesh, the fraction reached, the step size, the Summary so far), whatever
+// every_iterations and every_seconds say; with resume, the run goes on from there and ends as the
+// uninterrupted run, bit for bit. A stop during a step's run leaves the checkpoint of its start;
+// one during the first run, none. Collective.
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
+                               const MotionCheckpoints& checkpoints, const MotionRun& solve);
 
 // A solver's options with its time limits (shape and untangling) at most `seconds`, > 0.
 template <class Options>
@@ -43,9 +59,5 @@ Options within_seconds(Options options, double seconds) {
         t->max_seconds = t->max_seconds > 0.0 ? std::min(t->max_seconds, seconds) : seconds;
     return options;
 }
-
-// Throws OptionError for checkpoints on a part that carries a motion: a run in steps is several
-// solver runs, and a checkpoint holds one.
-void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint);
 
 }  // namespace paloverde::detail
