@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
+#include <optional>
 #include <sstream>
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
 #include "checkpointer.hpp"
 #include "run_support.hpp"
 
@@ -181,15 +184,54 @@ void add_work(Summary& total, const Summary& run) {
 // The first run: from the interior carried along with the boundary from the reference when that
 // inverts fewer elements than the interior where it was given.
 Summary run_first(MeshPart part, const std::vector<double>& given, const std::vector<double>& reference,
-                  const std::vector<std::uint8_t>& driven, double max_seconds, const MotionRun& solve) {
+                  const std::vector<std::uint8_t>& driven, const std::function<Summary()>& solve) {
     std::vector<double> carried = given;
     carry_free_vertices(part, driven, reference, carried);
     const QualityAssessor count({"aspect_ratio"});
     const long inverted_given = count.assess(part).inverted;
     std::copy(carried.begin(), carried.end(), part.mesh().coordinates().begin());
     if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), part.mesh().coordinates().begin());
-    return solve(max_seconds);
+    return solve();
 }
+
+// The checkpoints of the motion's runs: FILE.run beside the motion's FILE, for the run under way
+// (the first run, or a step's). A run's checkpoint is forgotten (removed) before the motion's
+// next checkpoint is written, so one found beside the motion's belongs to the run it names.
+class RunCheckpoints {
+public:
+    RunCheckpoints(MeshPart part, const CheckpointOptions& motion)
+        : motion_(motion), root_(!part.distributed() || part.distributed()->rank == 0) {
+        if (!motion.resume.empty()) {
+            // Rank 0's file system decides (it reads the file).
+            const bool found = root_ && std::filesystem::exists(motion.resume + kSuffix);
+            resumable_ = part.reducer().max(found ? 1.0 : 0.0) > 0.0;
+            std::error_code ignored;
+            const bool same = !motion.file.empty() && std::filesystem::weakly_canonical(motion.file, ignored) ==
+                                                          std::filesystem::weakly_canonical(motion.resume, ignored);
+            // Every rank must decide alike whether to write (collective).
+            same_file_ = part.reducer().max(same ? 1.0 : 0.0) > 0.0;
+        }
+    }
+    // The motion's checkpoint is written to the file it was resumed from.
+    bool writes_where_it_resumes() const { return same_file_; }
+    // The options of a run: its file beside the motion's; resuming from the one beside the
+    // motion's resumed checkpoint, when `resume` and there is one.
+    CheckpointOptions options(bool resume) const {
+        CheckpointOptions run = motion_;
+        run.file = motion_.file.empty() ? "" : motion_.file + kSuffix;
+        run.resume = resume && resumable_ ? motion_.resume + kSuffix : "";
+        return run;
+    }
+    void forget() const {
+        std::error_code ignored;
+        if (root_ && !motion_.file.empty()) std::filesystem::remove(motion_.file + kSuffix, ignored);
+    }
+
+private:
+    static constexpr const char* kSuffix = ".run";
+    CheckpointOptions motion_;
+    bool root_, resumable_ = false, same_file_ = false;
+};
 
 // The worst quality in `metric` of the mesh at `at`, the part's coordinates left as they are. A
 // run is good enough when it keeps at least half the worst quality of where it started from (the
@@ -243,13 +285,29 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     step_option("smallest_motion_step", smallest_fraction);
     Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + step_option.text(), part,
                               CheckpointKind::Motion);
+    // Each run's own checkpoints go beside the motion's, which says what run that is.
+    const RunCheckpoints runs(part, checkpoints.options);
+    // The run the motion's checkpoint was written before, resumed from its own checkpoint if it wrote one.
+    bool resume_run = checkpointer.resumes();
+    auto run = [&](double seconds) {
+        const Summary summary = solve(seconds, runs.options(resume_run));
+        resume_run = false;
+        return summary;
+    };
+    // Whether to write the motion's checkpoint before the next run: not where a resumed run reads
+    // it from, when that run's own checkpoint is beside it and still to be read.
+    auto writes_now = [&] { return checkpointer.writes() && !(resume_run && runs.writes_where_it_resumes()); };
     Summary total, first_run;           // every run's work; the first run's
     std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
     double done = 0.0, step = 0.5, floor = 0.0;
     int steps = 0;
+    std::optional<SolverState> resumed;
     if (checkpointer.resumes()) {
-        const SolverState state = checkpointer.resume(total);
-        start -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(state.elapsed));
+        resumed = checkpointer.resume(total);
+        start -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(resumed->elapsed));
+    }
+    if (resumed && resumed->number("first_run_done") != 0.0) {
+        const SolverState& state = *resumed;
         first_run = restored_outcome(state, "first_run");
         // Every run's work on top of the first run's outcome (the Summary's before is the first run's).
         Summary work = std::move(total);
@@ -267,7 +325,13 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         floor = state.number("floor");
         steps = static_cast<int>(state.number("steps"));
     } else {
-        total = run_first(part, given, reference, driven, max_seconds, solve);
+        if (writes_now()) {
+            runs.forget();
+            SolverState state;
+            state.numbers = {{"first_run_done", 0.0}};
+            checkpointer.save(total, state, seconds_since(start));
+        }
+        total = run_first(part, given, reference, driven, [&] { return run(max_seconds); });
         if (total.reason == TerminationReason::Interrupted) return total;
         floor = 0.5 * worst_at(part, total.quality_metric, reference);
         if (total.valid() && total.worst_after >= floor) return total;
@@ -278,10 +342,12 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     Summary last;
     bool out_of_time = false;
     while (done < 1.0 && step >= smallest_fraction) {
-        if (checkpointer.writes()) {
-            // Where the steps stand before the next one, which starts from `valid`.
+        // Where the steps stand before the next one, which starts from `valid`.
+        if (writes_now()) {
+            runs.forget();
             SolverState state;
-            state.numbers = {{"done", done}, {"step", step}, {"floor", floor}, {"steps", steps}, {"seconds", total.seconds}};
+            state.numbers = {{"first_run_done", 1.0}, {"done", done}, {"step", step}, {"floor", floor}, {"steps", steps},
+                             {"seconds", total.seconds}};
             state.vertex_fields = {{"first", first}, {"valid", valid}};
             store_outcome(state, "first_run", first_run);
             checkpointer.save(total, state, seconds_since(start));
@@ -294,7 +360,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         const double next = std::min(1.0, done + step);
         place(xyz(), valid, reference, given, driven, next);
         carry_free_vertices(part, driven, valid, xyz());
-        last = solve(seconds);
+        last = run(seconds);
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
         // At the smallest step, any valid result goes on.
@@ -334,7 +400,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         if (done > 0.0 && (max_seconds == 0.0 || seconds > 0.0)) {
             place(xyz(), valid, reference, given, driven, 1.0);
             carry_free_vertices(part, driven, valid, xyz());
-            last = solve(seconds);
+            last = run(seconds);
             add_work(total, last);
         }
         if (done == 0.0 || last.after.inverted >= first_run.after.inverted) {

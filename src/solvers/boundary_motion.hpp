@@ -21,9 +21,9 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
-// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own). It keeps
-// no checkpoints of its own: the motion's are between the runs.
-using MotionRun = std::function<Summary(double seconds)>;
+// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own), with
+// `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its own).
+using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint)>;
 
 // The checkpoints of a run in steps: the solver's settings, its name and its options as text
 // (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).
@@ -44,11 +44,12 @@ struct MotionCheckpoints {
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.
-// With a checkpoint file, the state is written before every step (what the first run left, the
-// last accepted step's mesh, the fraction reached, the step size, the Summary so far), whatever
-// every_iterations and every_seconds say; with resume, the run goes on from there and ends as the
-// uninterrupted run, bit for bit. A stop during a step's run leaves the checkpoint of its start;
-// one during the first run, none. Collective.
+// With a checkpoint file FILE, the motion's state is written there before the first run and before
+// every step (what the first run left, the last accepted step's mesh, the fraction reached, the
+// step size, the Summary so far), and the run under way writes its own to FILE.run as a single
+// run does (every_iterations, every_seconds, at a stop). With resume, the motion goes on from its
+// checkpoint, the run it was written before from that run's own if there is one, and it ends as
+// the uninterrupted run, bit for bit. Collective.
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
                                const MotionCheckpoints& checkpoints, const MotionRun& solve);
 

@@ -1,7 +1,8 @@
-// Checkpoints of a run that follows a moved boundary in steps (solvers/boundary_motion.hpp): one
-// is written before every step, and a run resumed from any of them (or from the one left when a
-// step was stopped) ends bit for bit as the uninterrupted run; a checkpoint of another motion,
-// other options or the other kind of run is refused.
+// Checkpoints of a run that follows a moved boundary in steps (solvers/boundary_motion.hpp): the
+// motion's, before the first run and every step, and each run's own beside it (FILE.run). A run
+// resumed from any of them (or from those left when a step was stopped) ends bit for bit as the
+// uninterrupted run; a checkpoint of another motion, other options or the other kind of run is
+// refused.
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 #include <string>
@@ -50,26 +51,36 @@ void check_same_end(const Outcome& a, const Outcome& b) {
     BOOST_TEST(a.summary.after.to_json() == b.summary.after.to_json());
 }
 
-// An observer that copies the checkpoint each time it changed: one copy per step begun.
-struct StepCopies {
+fs::path run_file(const fs::path& motion) { return motion.string() + ".run"; }
+
+// An observer that copies the motion's checkpoint and its run's each time either changed, each
+// pair in a folder of its own; `steps` counts the motion's checkpoints.
+struct CheckpointCopies {
     fs::path file, dir;
     std::string last;
-    std::vector<fs::path> copies;
+    std::vector<fs::path> copies;  // the motion's checkpoint in each folder
+    int steps = 0;
 
     pv::IterationObserver observer() {
         return [this](const pv::IterationRecord&) {
             if (!fs::exists(file)) return;
-            std::string bytes = pv::test::read_text(file);
+            const std::string motion = pv::test::read_text(file);
+            const std::string bytes = motion + (fs::exists(run_file(file)) ? pv::test::read_text(run_file(file)) : "");
             if (bytes == last) return;
-            last = std::move(bytes);
-            copies.push_back(dir / ("step" + std::to_string(copies.size()) + ".ckpt"));
+            steps += last.substr(0, motion.size()) != motion;
+            last = bytes;
+            const fs::path folder = dir / ("copy" + std::to_string(copies.size()));
+            fs::create_directory(folder);
+            copies.push_back(folder / "motion.ckpt");
             fs::copy_file(file, copies.back());
+            if (fs::exists(run_file(file))) fs::copy_file(run_file(file), run_file(copies.back()));
         };
     }
 };
 
+// `options` with checkpoints of its runs every `every` iterations: resumed from every pair copied.
 template <class Solver, class Options>
-void check_resumed_from_every_step(const std::string& name, const Options& options) {
+void check_resumed_from_every_checkpoint(const std::string& name, const Options& options, int every) {
     const StopRequestCleared cleared;
     const pv::test::ScratchDir dir("morph_checkpoint_" + name);
     const pv::Mesh input = stepped_motion();
@@ -77,14 +88,16 @@ void check_resumed_from_every_step(const std::string& name, const Options& optio
     BOOST_TEST_INFO(uninterrupted.summary.message);
     BOOST_TEST_REQUIRE(uninterrupted.summary.message.find("followed in") != std::string::npos);
 
-    StepCopies copies{dir / "motion.ckpt", dir.path(), {}, {}};
+    CheckpointCopies copies{dir / "motion.ckpt", dir.path(), {}, {}, 0};
     auto writing = options;
     writing.checkpoint.file = copies.file.string();
+    writing.checkpoint.every_iterations = every;
     // Writing checkpoints changes nothing.
     check_same_end(run<Solver>(input, writing, copies.observer()), uninterrupted);
-    BOOST_TEST_REQUIRE(copies.copies.size() >= 3);
+    BOOST_TEST_REQUIRE(copies.steps >= 4);  // before the first run and 3 steps or more
+    BOOST_TEST_REQUIRE(copies.copies.size() > static_cast<std::size_t>(copies.steps));
     for (std::size_t i = 0; i < copies.copies.size(); ++i) {
-        BOOST_TEST_CONTEXT(name << " resumed before step " << i + 1) {
+        BOOST_TEST_CONTEXT(name << " resumed from copy " << i << (fs::exists(run_file(copies.copies[i])) ? ", in a run" : "")) {
             auto resuming = options;
             resuming.checkpoint.resume = copies.copies[i].string();
             check_same_end(run<Solver>(input, resuming), uninterrupted);
@@ -108,41 +121,52 @@ void check_refused(const pv::Mesh& input, Options options, const fs::path& file,
 
 BOOST_AUTO_TEST_SUITE(morph_checkpoint)
 
-BOOST_AUTO_TEST_CASE(a_global_run_in_steps_resumed_before_any_step_ends_as_the_uninterrupted_run) {
-    check_resumed_from_every_step<pv::GlobalSolver>("global", global_options());
+BOOST_AUTO_TEST_CASE(a_global_run_in_steps_resumed_from_any_checkpoint_ends_as_the_uninterrupted_run) {
+    check_resumed_from_every_checkpoint<pv::GlobalSolver>("global", global_options(), 12);
 }
 
-BOOST_AUTO_TEST_CASE(a_local_run_in_steps_resumed_before_any_step_ends_as_the_uninterrupted_run) {
-    check_resumed_from_every_step<pv::LocalSolver>("local", local_options());
+BOOST_AUTO_TEST_CASE(a_local_run_in_steps_resumed_from_any_checkpoint_ends_as_the_uninterrupted_run) {
+    check_resumed_from_every_checkpoint<pv::LocalSolver>("local", local_options(), 4);
 }
 
-// Stopped (as Ctrl-C would) during a step: the checkpoint left is of that step's start.
-BOOST_AUTO_TEST_CASE(a_run_stopped_during_a_step_resumes_from_its_start) {
+// Stopped (as Ctrl-C would) in the first run and during steps: the step's run wrote its own
+// checkpoint at the stop, and the resumed run goes on from there.
+BOOST_AUTO_TEST_CASE(a_run_stopped_during_a_step_resumes_where_it_stopped) {
     const StopRequestCleared cleared;
     const pv::test::ScratchDir dir("morph_checkpoint_stop");
     const pv::Mesh input = stepped_motion();
     const auto options = global_options();
-    const Outcome uninterrupted = run<pv::GlobalSolver>(input, options);
-    for (const std::size_t step : {1, 2}) {
-        BOOST_TEST_CONTEXT("stopped in step " << step) {
+    int all_records = 0;
+    const Outcome uninterrupted = run<pv::GlobalSolver>(input, options, [&](const pv::IterationRecord&) { ++all_records; });
+    for (const int step : {0, 1, 2}) {
+        BOOST_TEST_CONTEXT("stopped in " << (step == 0 ? "the first run" : "step " + std::to_string(step))) {
             pv::clear_stop_request();
-            const fs::path copies_dir = dir / ("stop" + std::to_string(step));
-            fs::create_directory(copies_dir);
-            StepCopies copies{copies_dir / "motion.ckpt", copies_dir, {}, {}};
+            const fs::path folder = dir / ("stop" + std::to_string(step));
+            fs::create_directory(folder);
+            CheckpointCopies copies{folder / "motion.ckpt", folder, {}, {}, 0};
             auto writing = options;
             writing.checkpoint.file = copies.file.string();
             const auto copy = copies.observer();
-            int records = 0;
-            // Three records after the step's checkpoint (a step that fails sooner: in the next one).
+            int records = 0, in_step = 0;
+            // Three records after the motion's checkpoint before that step (a step that fails
+            // sooner: in the next one).
             const Outcome stopped = run<pv::GlobalSolver>(input, writing, [&](const pv::IterationRecord& r) {
+                ++records;
                 copy(r);
-                if (copies.copies.size() >= step && ++records == 3) pv::request_stop();
+                if (copies.steps > step && ++in_step == 3) pv::request_stop();
             });
             BOOST_TEST(to_string(stopped.summary.reason) == "interrupted");
+            BOOST_TEST_REQUIRE(fs::exists(run_file(copies.file)));
             pv::clear_stop_request();
             auto resuming = options;
             resuming.checkpoint.resume = copies.file.string();
-            check_same_end(run<pv::GlobalSolver>(input, resuming), uninterrupted);
+            // Writing on to the same file, or to another one.
+            resuming.checkpoint.file = step == 1 ? (folder / "again.ckpt").string() : copies.file.string();
+            int told = 0;
+            check_same_end(run<pv::GlobalSolver>(input, resuming, [&](const pv::IterationRecord&) { ++told; }), uninterrupted);
+            // Told of what came after the stop, not of the step's first records again.
+            BOOST_TEST(told < all_records - records + 3);
+            BOOST_TEST(fs::exists(resuming.checkpoint.file));
         }
     }
 }

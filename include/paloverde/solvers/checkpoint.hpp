@@ -12,7 +12,8 @@
 // rank 0 holding every vertex by global id; it resumes on the same number of ranks.
 //
 // A run that follows a moved boundary in steps (Mesh::reference_coordinates, docs/morphing.md)
-// writes one before each step instead, and resumes at that step's start, to the same end.
+// writes the motion's state to `file` before each of its runs, and the run under way writes its
+// own to `file` + ".run"; resuming goes on from both, to the same end.
 //
 // A checkpoint records fingerprints of the mesh (connectivity, fixed flags, input coordinates)
 // and of the solver's options (all but `threads`, time limits and these checkpoint settings):
