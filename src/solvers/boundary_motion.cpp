@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
+#include <optional>
 #include <sstream>
 #include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
+#include "paloverde/parallel/distributed_mesh.hpp"
+#include "checkpointer.hpp"
 #include "run_support.hpp"
 
 namespace paloverde::detail {
@@ -177,6 +181,72 @@ void add_work(Summary& total, const Summary& run) {
     total.seconds += run.seconds;
 }
 
+// The first run: from the interior carried along with the boundary from the reference when that
+// inverts fewer elements than the interior where it was given.
+Summary run_first(MeshPart part, const std::vector<double>& given, const std::vector<double>& reference,
+                  const std::vector<std::uint8_t>& driven, const std::function<Summary()>& solve) {
+    std::vector<double> carried = given;
+    carry_free_vertices(part, driven, reference, carried);
+    const QualityAssessor count({"aspect_ratio"});
+    const long inverted_given = count.assess(part).inverted;
+    std::copy(carried.begin(), carried.end(), part.mesh().coordinates().begin());
+    if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), part.mesh().coordinates().begin());
+    return solve();
+}
+
+// The checkpoints of the motion's runs: FILE.run beside the motion's FILE, for the run under way
+// (the first run, or a step's). A run's checkpoint is forgotten (removed) before the motion's
+// next checkpoint is written, so one found beside the motion's belongs to the run it names.
+class RunCheckpoints {
+public:
+    RunCheckpoints(MeshPart part, const CheckpointOptions& motion)
+        : motion_(motion), root_(!part.distributed() || part.distributed()->rank == 0) {
+        if (!motion.resume.empty()) {
+            // Rank 0's file system decides (it reads the file).
+            const bool found = root_ && std::filesystem::exists(motion.resume + kSuffix);
+            resumable_ = part.reducer().max(found ? 1.0 : 0.0) > 0.0;
+            std::error_code ignored;
+            const bool same = !motion.file.empty() && std::filesystem::weakly_canonical(motion.file, ignored) ==
+                                                          std::filesystem::weakly_canonical(motion.resume, ignored);
+            // Every rank must decide alike whether to write (collective).
+            same_file_ = part.reducer().max(same ? 1.0 : 0.0) > 0.0;
+        }
+    }
+    // The motion's checkpoint is written to the file it was resumed from.
+    bool writes_where_it_resumes() const { return same_file_; }
+    // The options of a run: its file beside the motion's; resuming from the one beside the
+    // motion's resumed checkpoint, when `resume` and there is one.
+    CheckpointOptions options(bool resume) const {
+        CheckpointOptions run = motion_;
+        run.file = motion_.file.empty() ? "" : motion_.file + kSuffix;
+        run.resume = resume && resumable_ ? motion_.resume + kSuffix : "";
+        return run;
+    }
+    void forget() const {
+        std::error_code ignored;
+        if (root_ && !motion_.file.empty()) std::filesystem::remove(motion_.file + kSuffix, ignored);
+    }
+
+private:
+    static constexpr const char* kSuffix = ".run";
+    CheckpointOptions motion_;
+    bool root_, resumable_ = false, same_file_ = false;
+};
+
+// The worst quality in `metric` of the mesh at `at`, the part's coordinates left as they are. A
+// run is good enough when it keeps at least half the worst quality of where it started from (the
+// reference, then the last step): a run that loses more has left elements pressed against the
+// moved boundary, which smaller steps avoid.
+double worst_at(MeshPart part, const std::string& metric, std::span<const double> at) {
+    const auto xyz = part.mesh().coordinates();
+    const std::vector<double> now(xyz.begin(), xyz.end());
+    std::copy(at.begin(), at.end(), xyz.begin());
+    const QualityReport r = QualityAssessor({metric}).assess(part);
+    std::copy(now.begin(), now.end(), xyz.begin());
+    const MetricReport& m = r.metrics.front();
+    return m.movable.count > 0 ? m.movable.min : m.all.min;
+}
+
 std::string percent(double fraction) {
     std::ostringstream out;
     out << std::round(1000.0 * fraction) / 10.0 << "%";
@@ -200,15 +270,9 @@ bool has_boundary_motion(MeshPart part) {
     return part.reducer().max(moved) > 0.0;
 }
 
-void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint) {
-    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
-        throw OptionError("checkpoints are not kept for a mesh whose boundary moved from its reference (morphing): "
-                          "its run may take several steps, and a checkpoint holds one run; run it without checkpoint.file "
-                          "and checkpoint.resume");
-}
-
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve) {
-    const auto start = Clock::now();
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
+                               const MotionCheckpoints& checkpoints, const MotionRun& solve) {
+    auto start = Clock::now();
     // What is left of max_seconds (> 0), or 0 when spent or when there is no limit.
     auto seconds_left = [&] { return max_seconds > 0.0 ? std::max(0.0, max_seconds - part.reducer().max(seconds_since(start))) : 0.0; };
     Mesh& mesh = part.mesh();
@@ -217,41 +281,77 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     const std::vector<double> given(xyz().begin(), xyz().end());
     const std::vector<double> reference(mesh.reference_coordinates().begin(), mesh.reference_coordinates().end());
     const std::vector<std::uint8_t> driven = driven_vertices(mesh);
-    // The interior carried along with the boundary from the reference: the first run starts from
-    // there if that inverts fewer elements than the interior where it was given.
-    {
-        std::vector<double> carried = given;
-        carry_free_vertices(part, driven, reference, carried);
-        const QualityAssessor count({"aspect_ratio"});
-        const long inverted_given = count.assess(part).inverted;
-        std::copy(carried.begin(), carried.end(), xyz().begin());
-        if (count.assess(part).inverted >= inverted_given) std::copy(given.begin(), given.end(), xyz().begin());
-    }
-    Summary total = solve(max_seconds);
-    if (total.reason == TerminationReason::Interrupted) return total;
-    // A run is good enough when it keeps at least half the worst quality of where it started
-    // from (the reference, then the last step): a run that loses more has left elements pressed
-    // against the moved boundary, which smaller steps avoid.
-    auto worst_at = [&](std::span<const double> at) {
-        const std::vector<double> now(xyz().begin(), xyz().end());
-        std::copy(at.begin(), at.end(), xyz().begin());
-        const QualityReport r = QualityAssessor({total.quality_metric}).assess(part);
-        std::copy(now.begin(), now.end(), xyz().begin());
-        const MetricReport& m = r.metrics.front();
-        return m.movable.count > 0 ? m.movable.min : m.all.min;
+    OptionsText step_option;
+    step_option("smallest_motion_step", smallest_fraction);
+    Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + step_option.text(), part,
+                              CheckpointKind::Motion);
+    // Each run's own checkpoints go beside the motion's, which says what run that is.
+    const RunCheckpoints runs(part, checkpoints.options);
+    // The run the motion's checkpoint was written before, resumed from its own checkpoint if it wrote one.
+    bool resume_run = checkpointer.resumes();
+    auto run = [&](double seconds) {
+        const Summary summary = solve(seconds, runs.options(resume_run));
+        resume_run = false;
+        return summary;
     };
-    double floor = 0.5 * worst_at(reference);
-    if (total.valid() && total.worst_after >= floor) return total;
-
-    // The first run's result: kept if the steps do no better.
-    const std::vector<double> first(xyz().begin(), xyz().end());
-    const Summary first_run = total;
-    std::vector<double> valid = reference;  // the furthest accepted step's mesh; the reference at fraction 0
-    double done = 0.0, step = 0.5;
+    // Whether to write the motion's checkpoint before the next run: not where a resumed run reads
+    // it from, when that run's own checkpoint is beside it and still to be read.
+    auto writes_now = [&] { return checkpointer.writes() && !(resume_run && runs.writes_where_it_resumes()); };
+    Summary total, first_run;           // every run's work; the first run's
+    std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
+    double done = 0.0, step = 0.5, floor = 0.0;
     int steps = 0;
+    std::optional<SolverState> resumed;
+    if (checkpointer.resumes()) {
+        resumed = checkpointer.resume(total);
+        start -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(resumed->elapsed));
+    }
+    if (resumed && resumed->number("first_run_done") != 0.0) {
+        const SolverState& state = *resumed;
+        first_run = restored_outcome(state, "first_run");
+        // Every run's work on top of the first run's outcome (the Summary's before is the first run's).
+        Summary work = std::move(total);
+        total = first_run;
+        total.iterations = work.iterations;
+        total.untangle_iterations = work.untangle_iterations;
+        total.quality_passes = work.quality_passes;
+        total.gradient_passes = work.gradient_passes;
+        total.history = std::move(work.history);
+        total.seconds = state.number("seconds");
+        first = state.vertex_field("first", given.size() / 3);
+        valid = state.vertex_field("valid", given.size() / 3);
+        done = state.number("done");
+        step = state.number("step");
+        floor = state.number("floor");
+        steps = static_cast<int>(state.number("steps"));
+    } else {
+        if (writes_now()) {
+            runs.forget();
+            SolverState state;
+            state.numbers = {{"first_run_done", 0.0}};
+            checkpointer.save(total, state, seconds_since(start));
+        }
+        total = run_first(part, given, reference, driven, [&] { return run(max_seconds); });
+        if (total.reason == TerminationReason::Interrupted) return total;
+        floor = 0.5 * worst_at(part, total.quality_metric, reference);
+        if (total.valid() && total.worst_after >= floor) return total;
+        first.assign(xyz().begin(), xyz().end());
+        first_run = total;
+        valid = reference;  // fraction 0
+    }
     Summary last;
     bool out_of_time = false;
     while (done < 1.0 && step >= smallest_fraction) {
+        // Where the steps stand before the next one, which starts from `valid`.
+        if (writes_now()) {
+            runs.forget();
+            SolverState state;
+            state.numbers = {{"first_run_done", 1.0}, {"done", done}, {"step", step}, {"floor", floor}, {"steps", steps},
+                             {"seconds", total.seconds}};
+            state.vertex_fields = {{"first", first}, {"valid", valid}};
+            store_outcome(state, "first_run", first_run);
+            checkpointer.save(total, state, seconds_since(start));
+        }
         const double seconds = seconds_left();
         if (max_seconds > 0.0 && seconds == 0.0) {
             out_of_time = true;
@@ -260,7 +360,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         const double next = std::min(1.0, done + step);
         place(xyz(), valid, reference, given, driven, next);
         carry_free_vertices(part, driven, valid, xyz());
-        last = solve(seconds);
+        last = run(seconds);
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
         // At the smallest step, any valid result goes on.
@@ -276,8 +376,9 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         }
     }
     std::ostringstream why;
+    const bool interrupted = last.reason == TerminationReason::Interrupted;
     const bool first_better = first_run.valid() && (done < 1.0 || first_run.worst_after >= last.worst_after);
-    if (last.reason == TerminationReason::Interrupted || out_of_time) {
+    if (interrupted || out_of_time) {
         // A step's mesh has its boundary short of where it was given: the first run's has not.
         std::copy(first.begin(), first.end(), xyz().begin());
         last = first_run;
@@ -299,7 +400,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         if (done > 0.0 && (max_seconds == 0.0 || seconds > 0.0)) {
             place(xyz(), valid, reference, given, driven, 1.0);
             carry_free_vertices(part, driven, valid, xyz());
-            last = solve(seconds);
+            last = run(seconds);
             add_work(total, last);
         }
         if (done == 0.0 || last.after.inverted >= first_run.after.inverted) {
@@ -311,7 +412,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             << " of the motion beyond it left inverted elements; " << last.after.inverted << " remain";
     }
     const bool followed = first_better || done == 1.0;
-    total.reason = last.reason == TerminationReason::Interrupted ? TerminationReason::Interrupted
+    total.reason = interrupted ? TerminationReason::Interrupted
                    : out_of_time                                  ? TerminationReason::TimeLimit
                    : followed                                     ? last.reason
                                                                   : TerminationReason::CannotUntangle;

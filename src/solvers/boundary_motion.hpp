@@ -8,6 +8,7 @@
 // halved when a fraction fails, doubled after one that is kept (docs/morphing.md).
 #include <algorithm>
 #include <functional>
+#include <string>
 
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
@@ -20,8 +21,17 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
-// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own).
-using MotionRun = std::function<Summary(double seconds)>;
+// One whole run of a solver on the part, its time limit `seconds` (0: the solver's own), with
+// `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its own).
+using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint)>;
+
+// The checkpoints of a run in steps: the solver's settings, its name and its options as text
+// (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).
+struct MotionCheckpoints {
+    CheckpointOptions options;
+    std::string solver;
+    std::string options_text;
+};
 
 // Runs `solve` (one whole run of a solver on the part; from the interior carried along when that
 // inverts fewer elements than the interior as given) and, if it leaves inverted elements or less
@@ -33,8 +43,15 @@ using MotionRun = std::function<Summary(double seconds)>;
 // valid step, reason CannotUntangle and a message that says how far the motion was followed.
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
-// TimeLimit. One Summary of every run: before is the mesh as given. Collective.
-Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds, const MotionRun& solve);
+// TimeLimit. One Summary of every run: before is the mesh as given.
+// With a checkpoint file FILE, the motion's state is written there before the first run and before
+// every step (what the first run left, the last accepted step's mesh, the fraction reached, the
+// step size, the Summary so far), and the run under way writes its own to FILE.run as a single
+// run does (every_iterations, every_seconds, at a stop). With resume, the motion goes on from its
+// checkpoint, the run it was written before from that run's own if there is one, and it ends as
+// the uninterrupted run, bit for bit. Collective.
+Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
+                               const MotionCheckpoints& checkpoints, const MotionRun& solve);
 
 // A solver's options with its time limits (shape and untangling) at most `seconds`, > 0.
 template <class Options>
@@ -43,9 +60,5 @@ Options within_seconds(Options options, double seconds) {
         t->max_seconds = t->max_seconds > 0.0 ? std::min(t->max_seconds, seconds) : seconds;
     return options;
 }
-
-// Throws OptionError for checkpoints on a part that carries a motion: a run in steps is several
-// solver runs, and a checkpoint holds one.
-void refuse_checkpoints_of_motion(const CheckpointOptions& checkpoint);
 
 }  // namespace paloverde::detail

@@ -34,6 +34,10 @@ namespace {
 constexpr char kMagic[8] = {'P', 'A', 'L', 'O', 'V', 'C', 'K', 'P'};
 constexpr std::uint64_t kVersion = 1;
 constexpr std::size_t kHeaderBytes = 32;
+// After the solver's name, in a motion's checkpoint.
+constexpr std::string_view kMotionMark = "/motion";
+// Before a text's name, in the lists that hold texts.
+constexpr std::string_view kTextPrefix = "text:";
 
 std::uint64_t fnv1a(std::string_view bytes) {
     std::uint64_t h = 14695981039346656037ull;
@@ -208,6 +212,137 @@ const std::vector<double>& SolverState::vertex_field(const std::string& name, st
     return it->second;
 }
 
+const std::string& SolverState::text(const std::string& name) const {
+    const auto it = texts.find(name);
+    if (it == texts.end()) throw FileError(source, 0, "the checkpoint has no text '" + name + "' (written by another version?)");
+    return it->second;
+}
+
+namespace {
+
+using Named = std::initializer_list<std::pair<const char*, double>>;
+
+void store_statistics(SolverState& state, const std::string& prefix, const QualityStatistics& s) {
+    for (const auto& [name, value] : Named{{"count", static_cast<double>(s.count)}, {"min", s.min}, {"max", s.max},
+                                           {"mean", s.mean}, {"rms", s.rms}, {"worst_element", static_cast<double>(s.worst_element)}})
+        state.numbers[prefix + "." + name] = value;
+    state.lists[prefix + ".histogram"].assign(s.histogram.begin(), s.histogram.end());
+}
+
+QualityStatistics restored_statistics(const SolverState& state, const std::string& prefix) {
+    QualityStatistics s;
+    s.count = static_cast<ElementId>(state.number(prefix + ".count"));
+    s.min = state.number(prefix + ".min");
+    s.max = state.number(prefix + ".max");
+    s.mean = state.number(prefix + ".mean");
+    s.rms = state.number(prefix + ".rms");
+    s.worst_element = static_cast<ElementId>(state.number(prefix + ".worst_element"));
+    for (double n : state.list(prefix + ".histogram")) s.histogram.push_back(static_cast<ElementId>(n));
+    return s;
+}
+
+// The report's counts, its metrics and its cell types, each entry numbered in its order.
+void store_report(SolverState& state, const std::string& prefix, const QualityReport& report) {
+    for (const auto& [name, value] : Named{{"vertices", static_cast<double>(report.vertices)},
+                                      {"free_vertices", static_cast<double>(report.free_vertices)},
+                                      {"elements", static_cast<double>(report.elements)},
+                                      {"frozen_elements", static_cast<double>(report.frozen_elements)},
+                                      {"inverted", static_cast<double>(report.inverted)},
+                                      {"inverted_frozen", static_cast<double>(report.inverted_frozen)},
+                                      {"degenerate", static_cast<double>(report.degenerate)},
+                                      {"metrics", static_cast<double>(report.metrics.size())},
+                                      {"types", static_cast<double>(report.by_type.size())}})
+        state.numbers[prefix + "." + name] = value;
+    for (std::size_t i = 0; i < report.metrics.size(); ++i) {
+        const MetricReport& m = report.metrics[i];
+        const std::string at = prefix + ".metric" + std::to_string(i);
+        state.texts[at] = m.name;
+        store_statistics(state, at + ".all", m.all);
+        store_statistics(state, at + ".movable", m.movable);
+        store_statistics(state, at + ".frozen", m.frozen);
+    }
+    for (std::size_t i = 0; i < report.by_type.size(); ++i) {
+        const QualityReport::TypeReport& t = report.by_type[i];
+        const std::string at = prefix + ".type" + std::to_string(i);
+        state.texts[at] = t.type;
+        state.numbers[at + ".count"] = static_cast<double>(t.count);
+        state.numbers[at + ".inverted"] = static_cast<double>(t.inverted);
+        state.numbers[at + ".worst"] = static_cast<double>(t.worst.size());
+        for (std::size_t j = 0; j < t.worst.size(); ++j) {
+            state.texts[at + ".worst" + std::to_string(j)] = t.worst[j].first;
+            state.numbers[at + ".worst" + std::to_string(j)] = t.worst[j].second;
+        }
+    }
+}
+
+// A count stored as a number, checked before it sizes anything.
+std::size_t restored_count(const SolverState& state, const std::string& name) {
+    const double n = state.number(name);
+    if (!(n >= 0.0 && n <= 1e6 && n == std::floor(n))) throw FileError(state.source, 0, "corrupt checkpoint: a bad count '" + name + "'");
+    return static_cast<std::size_t>(n);
+}
+
+QualityReport restored_report(const SolverState& state, const std::string& prefix) {
+    QualityReport report;
+    report.vertices = static_cast<VertexId>(state.number(prefix + ".vertices"));
+    report.free_vertices = static_cast<VertexId>(state.number(prefix + ".free_vertices"));
+    report.elements = static_cast<ElementId>(state.number(prefix + ".elements"));
+    report.frozen_elements = static_cast<ElementId>(state.number(prefix + ".frozen_elements"));
+    report.inverted = static_cast<ElementId>(state.number(prefix + ".inverted"));
+    report.inverted_frozen = static_cast<ElementId>(state.number(prefix + ".inverted_frozen"));
+    report.degenerate = static_cast<ElementId>(state.number(prefix + ".degenerate"));
+    report.metrics.resize(restored_count(state, prefix + ".metrics"));
+    for (std::size_t i = 0; i < report.metrics.size(); ++i) {
+        MetricReport& m = report.metrics[i];
+        const std::string at = prefix + ".metric" + std::to_string(i);
+        m.name = state.text(at);
+        m.all = restored_statistics(state, at + ".all");
+        m.movable = restored_statistics(state, at + ".movable");
+        m.frozen = restored_statistics(state, at + ".frozen");
+    }
+    report.by_type.resize(restored_count(state, prefix + ".types"));
+    for (std::size_t i = 0; i < report.by_type.size(); ++i) {
+        QualityReport::TypeReport& t = report.by_type[i];
+        const std::string at = prefix + ".type" + std::to_string(i);
+        t.type = state.text(at);
+        t.count = static_cast<ElementId>(state.number(at + ".count"));
+        t.inverted = static_cast<ElementId>(state.number(at + ".inverted"));
+        t.worst.resize(restored_count(state, at + ".worst"));
+        for (std::size_t j = 0; j < t.worst.size(); ++j)
+            t.worst[j] = {state.text(at + ".worst" + std::to_string(j)), state.number(at + ".worst" + std::to_string(j))};
+    }
+    return report;
+}
+
+}  // namespace
+
+void store_outcome(SolverState& state, const std::string& prefix, const Summary& summary) {
+    state.texts[prefix + ".solver"] = summary.solver;
+    state.texts[prefix + ".message"] = summary.message;
+    state.texts[prefix + ".quality_metric"] = summary.quality_metric;
+    state.numbers[prefix + ".reason"] = static_cast<double>(summary.reason);
+    state.numbers[prefix + ".worst_before"] = summary.worst_before;
+    state.numbers[prefix + ".worst_after"] = summary.worst_after;
+    store_report(state, prefix + ".before", summary.before);
+    store_report(state, prefix + ".after", summary.after);
+}
+
+Summary restored_outcome(const SolverState& state, const std::string& prefix) {
+    Summary summary;
+    summary.solver = state.text(prefix + ".solver");
+    summary.message = state.text(prefix + ".message");
+    summary.quality_metric = state.text(prefix + ".quality_metric");
+    const double reason = state.number(prefix + ".reason");
+    if (!(reason >= 0.0 && reason <= static_cast<double>(TerminationReason::NumericalFailure) && reason == std::floor(reason)))
+        throw FileError(state.source, 0, "corrupt checkpoint: no termination reason is numbered " + std::to_string(reason));
+    summary.reason = static_cast<TerminationReason>(static_cast<int>(reason));
+    summary.worst_before = state.number(prefix + ".worst_before");
+    summary.worst_after = state.number(prefix + ".worst_after");
+    summary.before = restored_report(state, prefix + ".before");
+    summary.after = restored_report(state, prefix + ".after");
+    return summary;
+}
+
 OptionsText& OptionsText::operator()(const char* key, double value) {
     // Hexadecimal floating point: every bit counts.
     char buffer[64];
@@ -232,8 +367,8 @@ OptionsText& OptionsText::operator()(const char* key, const TerminationCriterion
 }
 
 Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
-                           MeshPart whole_or_part)
-    : options_(options), solver_(std::move(solver)), reducer_(&whole_or_part.reducer()),
+                           MeshPart whole_or_part, CheckpointKind kind)
+    : options_(options), solver_(std::move(solver)), kind_(kind), reducer_(&whole_or_part.reducer()),
       part_(whole_or_part.distributed()), saved_at_(Clock::now()) {
     options_.validate();
     if (!writes() && !resumes()) return;
@@ -276,10 +411,14 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
         sums[0] += h;
     }
     const auto xyz = mesh.coordinates();
+    // A motion goes from the reference to the coordinates: both are its input.
+    const auto reference = kind_ == CheckpointKind::Motion ? mesh.reference_coordinates() : std::span<const double>{};
     for (VertexId v = 0; v < n; ++v) {
         if (!owned_[v]) continue;
         std::uint64_t h = mix(static_cast<std::uint64_t>(keys_[v]), mesh.fixed()[v]);
         for (int c = 0; c < 3; ++c) h = mix(h, std::bit_cast<std::uint64_t>(xyz[3 * static_cast<std::size_t>(v) + c]));
+        if (!reference.empty())
+            for (int c = 0; c < 3; ++c) h = mix(h, std::bit_cast<std::uint64_t>(reference[3 * static_cast<std::size_t>(v) + c]));
         sums[1] += h;
     }
     if (part) MPI_Allreduce(MPI_IN_PLACE, sums.data(), 2, MPI_UINT64_T, MPI_SUM, part->comm);
@@ -326,7 +465,7 @@ std::vector<double> Checkpointer::gather(const std::vector<double>& field) const
 }
 
 void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const {
-    w.text(solver_);
+    w.text(kind_ == CheckpointKind::Motion ? solver_ + std::string(kMotionMark) : solver_);
     w.u64(mesh_hash_);
     w.u64(options_hash_);
     w.u64(static_cast<std::uint64_t>(ranks_));
@@ -343,11 +482,16 @@ void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const Sol
         w.text(name);
         w.f64(value);
     }
-    w.u64(state.lists.size());
+    w.u64(state.lists.size() + state.texts.size());
     for (const auto& [name, values] : state.lists) {
         w.text(name);
         w.u64(values.size());
         w.f64s(values);
+    }
+    for (const auto& [name, text] : state.texts) {
+        w.text(std::string(kTextPrefix) + name);
+        w.u64(text.size());
+        for (unsigned char c : text) w.f64(c);
     }
 }
 
@@ -379,6 +523,12 @@ void Checkpointer::save(const Summary& summary, const SolverState& state, double
 }
 
 SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
+    SolverState state = resume(summary);
+    run.add_elapsed(state.elapsed);
+    return state;
+}
+
+SolverState Checkpointer::resume(Summary& summary) {
     const std::string& path = options_.resume;
     std::string content;
     on_root(part_, [&] { content = read_checked(path); });
@@ -393,9 +543,19 @@ SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
     }
     // Every rank parses the same bytes, so every rank fails alike.
     Reader r(content, path);
-    const std::string solver = r.text();
+    std::string solver = r.text();
+    const bool of_motion = solver.ends_with(kMotionMark);
+    if (of_motion) solver.resize(solver.size() - kMotionMark.size());
     if (solver != solver_)
         throw FileError(path, 0, "this checkpoint was written by the " + solver + " solver, not the " + solver_ + " solver");
+    if (of_motion && kind_ != CheckpointKind::Motion)
+        throw FileError(path, 0, "this checkpoint is of a run that followed a moved boundary in steps (morphing), and "
+                                 "this run has no motion to follow: resume it on the moved mesh with its reference, as "
+                                 "the checkpointed run was given");
+    if (!of_motion && kind_ == CheckpointKind::Motion)
+        throw FileError(path, 0, "this checkpoint is of a single solver run, and this run follows a moved boundary in "
+                                 "steps (morphing), whose checkpoints are of their own kind: resume a single run on the "
+                                 "mesh it was written for, or start this one afresh");
     const std::uint64_t mesh_hash = r.u64(), options_hash = r.u64(), ranks = r.u64(), vertices = r.u64();
     if (ranks != static_cast<std::uint64_t>(ranks_))
         throw FileError(path, 0, "this checkpoint was written by a run on " + std::to_string(ranks) +
@@ -424,7 +584,16 @@ SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
     }
     for (std::size_t i = 0, n = r.count(16, "lists"); i < n; ++i) {
         std::string name = r.text();
-        state.lists[name] = r.f64s(r.count(8, "list entries"));
+        std::vector<double> values = r.f64s(r.count(8, "list entries"));
+        if (!name.starts_with(kTextPrefix)) {
+            state.lists[name] = std::move(values);
+            continue;
+        }
+        std::string& text = state.texts[name.substr(kTextPrefix.size())];
+        for (double c : values) {
+            if (!(c >= 0.0 && c <= 255.0 && c == std::floor(c))) r.fail("a text holds something that is not a character");
+            text.push_back(static_cast<char>(static_cast<unsigned char>(c)));
+        }
     }
     const std::size_t local = keys_.size();
     for (std::size_t i = 0, n = r.count(8 + 24 * vertices_, "vertex fields"); i < n; ++i) {
@@ -442,7 +611,7 @@ SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
     summary.quality_passes = restored.quality_passes;
     summary.gradient_passes = restored.gradient_passes;
     summary.history = std::move(restored.history);
-    run.add_elapsed(elapsed);
+    state.elapsed = elapsed;
     saved_iterations_ = summary.iterations;
     saved_at_ = Clock::now();
     return state;

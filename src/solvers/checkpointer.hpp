@@ -7,10 +7,12 @@
 //   bytes 16-23  length of the content in bytes
 //   bytes 24-31  64-bit FNV-1a hash of the content (a checksum)
 // All numbers are little-endian 64-bit (integers unsigned or two's complement, doubles IEEE).
-// The content: the solver's name, the fingerprints of the mesh and of the options, the number of
-// ranks and of vertices, the elapsed seconds, the Summary's counters and history, then the
-// solver's state by name: numbers, lists, and vertex fields of 3 doubles per vertex indexed by
-// the vertex's key (global id in a distributed run, the solver's own numbering serially).
+// The content: the solver's name (with "/motion" after it for a run that follows a moved boundary
+// in steps), the fingerprints of the mesh and of the options, the number of ranks and of
+// vertices, the elapsed seconds, the Summary's counters and history, then the solver's state by
+// name: numbers, lists (texts among them, as lists of character codes named "text:" and the
+// text's name), and vertex fields of 3 doubles per vertex indexed by the vertex's key (global id
+// in a distributed run, the solver's own numbering serially).
 #include <cstdint>
 #include <map>
 #include <span>
@@ -39,13 +41,26 @@ struct SolverState {
     std::map<std::string, double> numbers;
     std::map<std::string, std::vector<double>> lists;
     std::map<std::string, std::vector<double>> vertex_fields;
-    std::string source;  // the file it was read from, for messages
+    std::map<std::string, std::string> texts;
+    std::string source;    // the file it was read from, for messages
+    double elapsed = 0.0;  // the run's seconds when it was written
 
     // Each throws a FileError naming the file when the entry is missing or has the wrong size.
     double number(const std::string& name) const;
     const std::vector<double>& list(const std::string& name) const;
     const std::vector<double>& vertex_field(const std::string& name, std::size_t local_vertices) const;
+    const std::string& text(const std::string& name) const;
 };
+
+// A Summary's outcome (solver, metric, reason, message, the reports and worst qualities before
+// and after; not its counters, history or boundary) as entries of `state` named after `prefix`,
+// and back: what a run in steps keeps of its first run.
+void store_outcome(SolverState& state, const std::string& prefix, const Summary& summary);
+Summary restored_outcome(const SolverState& state, const std::string& prefix);
+
+// A single solver run, or a run that follows a moved boundary in steps (boundary_motion.hpp):
+// each resumes only its own kind.
+enum class CheckpointKind { SingleRun, Motion };
 
 // Options of one solver as text (every field that changes the result), for the fingerprint.
 class OptionsText {
@@ -65,8 +80,10 @@ class Checkpointer {
 public:
     // `part`: the solver's part at the start of the run (serially the whole mesh; a distributed
     // part's vertices are identified by their global ids). Collective on a distributed part when
-    // checkpoints are written or read.
-    Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text, MeshPart part);
+    // checkpoints are written or read. A motion's fingerprint of the mesh includes its reference
+    // coordinates.
+    Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text, MeshPart part,
+                 CheckpointKind kind = CheckpointKind::SingleRun);
 
     bool writes() const { return !options_.file.empty(); }
     bool resumes() const { return !options_.resume.empty(); }
@@ -75,6 +92,8 @@ public:
     // summary's counters and history and the clock (elapsed seconds), and returns the state.
     // Throws FileError for a missing, corrupt or mismatched file (on every rank).
     SolverState resume(Summary& summary, SolverRun& run);
+    // The same without a SolverRun: the elapsed seconds are the state's.
+    SolverState resume(Summary& summary);
 
     // Whether a checkpoint is due after `iterations` (the same answer on every rank).
     bool due(int iterations);
@@ -88,6 +107,7 @@ private:
 
     CheckpointOptions options_;
     std::string solver_;
+    CheckpointKind kind_;
     std::uint64_t mesh_hash_ = 0, options_hash_ = 0;
     const Reducer* reducer_;
     const DistributedMesh* part_;  // nullptr serially

@@ -166,12 +166,13 @@ Summary GlobalSolver::improve(MeshPart part) {
     detail::ThreadScope threads(options_.threads);
     detail::check_domain(part, options_.surface.domain, options_.boundary == GlobalSolverOptions::Boundary::Slide);
     if (options_.untangle && detail::has_boundary_motion(part)) {
-        detail::refuse_checkpoints_of_motion(options_.checkpoint);
         // The time limit bounds the steps together: each run gets what is left of it.
         return detail::follow_boundary_motion(part, options_.smallest_motion_step, options_.termination.max_seconds,
-                                              [&](double seconds) {
-                                                  if (seconds == 0.0) return run_once(part);
-                                                  GlobalSolver within(detail::within_seconds(options_, seconds));
+                                              {options_.checkpoint, "global", options_text(options_)},
+                                              [&](double seconds, const CheckpointOptions& checkpoint) {
+                                                  GlobalSolverOptions each = options_;
+                                                  each.checkpoint = checkpoint;
+                                                  GlobalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(part);
                                               });

@@ -200,12 +200,14 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
     detail::ThreadScope threads(options_.threads);
     detail::check_domain(whole_or_part, options_.surface.domain, options_.boundary == LocalSolverOptions::Boundary::Slide);
     if (options_.untangle && detail::has_boundary_motion(whole_or_part)) {
-        detail::refuse_checkpoints_of_motion(options_.checkpoint);
         // The time limit bounds the steps together: each run gets what is left of it.
         return detail::follow_boundary_motion(whole_or_part, options_.smallest_motion_step,
-                                              options_.termination.max_seconds, [&](double seconds) {
-                                                  if (seconds == 0.0) return run_once(whole_or_part);
-                                                  LocalSolver within(detail::within_seconds(options_, seconds));
+                                              options_.termination.max_seconds,
+                                              {options_.checkpoint, std::string(name()), options_text(options_)},
+                                              [&](double seconds, const CheckpointOptions& checkpoint) {
+                                                  LocalSolverOptions each = options_;
+                                                  each.checkpoint = checkpoint;
+                                                  LocalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(whole_or_part);
                                               });

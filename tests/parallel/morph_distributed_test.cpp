@@ -6,10 +6,16 @@
 #include <boost/test/data/test_case.hpp>
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/solvers/global_solver.hpp"
+#include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/solvers/stop.hpp"
 #include "paloverde/assess/quality_assessor.hpp"
 #include "distributed_checks.hpp"
 #include "support/cell_meshes.hpp"
@@ -80,6 +86,70 @@ BOOST_DATA_TEST_CASE(the_parts_follow_the_motion_as_the_whole_mesh_does, bdata::
     BOOST_TEST(summary.worst_after == serial_summary.worst_after);
     BOOST_TEST(summary.after.inverted == serial_summary.after.inverted);
     check_same_mesh(part, input, serial);
+}
+
+// The motion in steps of kCases, stopped in a step (three records after the second checkpoint):
+// the last checkpoint rank 0 wrote resumes on as many ranks to the uninterrupted run's mesh, bit
+// for bit (for the global solver that is the serial mesh, as above).
+BOOST_AUTO_TEST_CASE(a_motion_stopped_in_a_step_resumes_on_the_parts_as_if_never_stopped) {
+    const pv::Mesh input = pv::test::turned_ring(500.0);
+    for (const bool global : {true, false}) {
+        BOOST_TEST_CONTEXT((global ? "global" : "local")) {
+            // Budgets on which one run does not untangle the motion.
+            auto improve = [&](pv::MeshPart part, const pv::CheckpointOptions& checkpoint, pv::IterationObserver observer) {
+                auto with = [&]<class Solver>(auto options, int untangle_iterations) {
+                    options.untangle_termination.max_iterations = untangle_iterations;
+                    options.termination.max_iterations = 10;
+                    options.checkpoint = checkpoint;
+                    Solver solver(options);
+                    solver.set_observer(std::move(observer));
+                    return solver.improve(part);
+                };
+                return global ? with.template operator()<pv::GlobalSolver>(pv::GlobalSolverOptions{}, 5)
+                              : with.template operator()<pv::LocalSolver>(pv::LocalSolverOptions{}, 1);
+            };
+            // The uninterrupted run on as many ranks (the local smoother's coloring depends on the split).
+            auto uninterrupted_part = pv::test::scatter(input);
+            const pv::Summary uninterrupted = improve(pv::MeshPart(uninterrupted_part), {}, {});
+            BOOST_TEST_REQUIRE(uninterrupted.message.find("followed in") != std::string::npos);
+            pv::Mesh expected = input;
+            uninterrupted_part.gather_coordinates(rank() == 0 ? &expected : nullptr);
+
+            const std::filesystem::path file = pv::test::scratch(std::string("morph_") + (global ? "global" : "local") + ".ckpt");
+            if (rank() == 0) std::filesystem::remove(file);
+            pv::CheckpointOptions writing;
+            writing.file = file.string();
+            // Rank 0 watches the file: a stop requested on one rank stops them all at once.
+            std::string last;
+            int written = 0, records = 0;
+            auto watch = [&](const pv::IterationRecord&) {
+                if (rank() != 0 || !std::filesystem::exists(file)) return;
+                std::ifstream in(file, std::ios::binary);
+                std::stringstream bytes;
+                bytes << in.rdbuf();
+                if (bytes.str() != last) last = bytes.str(), ++written;
+                if (written >= 2 && ++records == 3) pv::request_stop();
+            };
+            pv::clear_stop_request();
+            auto stopped_part = pv::test::scatter(input);
+            const pv::Summary stopped = improve(pv::MeshPart(stopped_part), writing, watch);
+            pv::clear_stop_request();
+            BOOST_TEST_REQUIRE(to_string(stopped.reason) == "interrupted");
+
+            pv::CheckpointOptions resuming;
+            resuming.resume = file.string();
+            auto part = pv::test::scatter(input);
+            const pv::Summary resumed = improve(pv::MeshPart(part), resuming, {});
+            BOOST_TEST(resumed.message == uninterrupted.message);
+            BOOST_TEST(resumed.iterations == uninterrupted.iterations);
+            BOOST_TEST(resumed.quality_passes == uninterrupted.quality_passes);
+            BOOST_TEST(resumed.history.size() == uninterrupted.history.size());
+            BOOST_TEST(resumed.worst_after == uninterrupted.worst_after);
+            check_same_mesh(part, input, expected);
+            MPI_Barrier(MPI_COMM_WORLD);
+            if (rank() == 0) std::filesystem::remove(file), std::filesystem::remove(file.string() + ".run");
+        }
+    }
 }
 
 BOOST_AUTO_TEST_CASE(a_parts_targets_from_its_reference_coordinates_are_the_serial_ones) {

@@ -15,23 +15,11 @@
 
 namespace pv = paloverde;
 namespace fs = std::filesystem;
+using pv::test::Outcome;
+using pv::test::run;
 using pv::test::StopRequestCleared;
 
 namespace {
-
-struct Outcome {
-    pv::Mesh mesh;
-    pv::Summary summary;
-};
-
-template <class Solver, class Options>
-Outcome run(const pv::Mesh& input, const Options& options, pv::IterationObserver observer = {}) {
-    Outcome out{input, {}};
-    Solver solver(options);
-    if (observer) solver.set_observer(std::move(observer));
-    out.summary = solver.improve(out.mesh);
-    return out;
-}
 
 // An observer that copies the checkpoint file as it stood at chosen iterations, keyed by the
 // iteration of the record and its phase.

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/stop.hpp"
 #include "paloverde/solvers/summary.hpp"
 #include "support/solver_checks.hpp"
@@ -20,6 +21,21 @@ struct StopRequestCleared {
     StopRequestCleared() { clear_stop_request(); }
     ~StopRequestCleared() { clear_stop_request(); }
 };
+
+// A solver's run on a copy of `input`: the mesh it hands back and its summary.
+struct Outcome {
+    Mesh mesh;
+    Summary summary;
+};
+
+template <class Solver, class Options>
+Outcome run(const Mesh& input, const Options& options, IterationObserver observer = {}) {
+    Outcome out{input, {}};
+    Solver solver(options);
+    if (observer) solver.set_observer(std::move(observer));
+    out.summary = solver.improve(out.mesh);
+    return out;
+}
 
 // Bit for bit the same coordinates.
 inline bool same_coordinates(const Mesh& a, const Mesh& b) {

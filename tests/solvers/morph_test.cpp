@@ -184,11 +184,6 @@ BOOST_AUTO_TEST_CASE(bad_reference_coordinates_and_steps_are_refused) {
     pv::LocalSolverOptions local;
     local.smallest_motion_step = 1.5;
     BOOST_CHECK_THROW(pv::LocalSolver{local}, pv::OptionError);
-    // A run in steps is several runs: one checkpoint cannot hold it.
-    pv::Mesh moved = turned_ring(30.0);
-    global = {};
-    global.checkpoint.file = "never_written.ckpt";
-    BOOST_CHECK_THROW(pv::GlobalSolver(global).improve(moved), pv::OptionError);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

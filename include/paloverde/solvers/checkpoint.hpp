@@ -11,6 +11,10 @@
 // while writing leaves the previous checkpoint intact. A distributed run writes one file from
 // rank 0 holding every vertex by global id; it resumes on the same number of ranks.
 //
+// A run that follows a moved boundary in steps (Mesh::reference_coordinates, docs/morphing.md)
+// writes the motion's state to `file` before each of its runs, and the run under way writes its
+// own to `file` + ".run"; resuming goes on from both, to the same end.
+//
 // A checkpoint records fingerprints of the mesh (connectivity, fixed flags, input coordinates)
 // and of the solver's options (all but `threads`, time limits and these checkpoint settings):
 // resuming on another mesh or with other options is refused with a FileError that says which.
