@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Targets on a surface: the graded Gmsh cylinder of quadrilaterals (examples/surfaces/graded_cylinder.geo),
-made poorer along itself, improved by `paloverde improve` without targets (`--keep none`), with the
-default (`keep: auto`: a surface of quadrilaterals keeps its aspect) and with size and aspect kept.
+made poorer along itself, improved by `paloverde improve` without targets (`--keep none`, what
+`keep: auto` does on a surface), with the aspect kept and with size and aspect kept.
 
 Poorer: every vertex off the two rims moved along the cylinder, around it and along its axis, by
 random steps of up to `--shift` of its shortest edge (as examples/surface_study.py makes its
@@ -101,9 +101,9 @@ def study(args, work):
                 "distance": distance, "seconds": seconds}
 
     out = [measure("unperturbed", "", points, "", "", ""), measure("poorer", "", poor, "", "", "")]
-    for label, flags in [("--keep none (ideal targets)", ["--keep", "none"]), ("default (keep: auto = aspect)", []),
+    for label, flags in [("--keep none (ideal targets)", ["--keep", "none"]), ("--keep aspect", ["--keep", "aspect"]),
                          ("--keep size,aspect", ["--keep", "size,aspect"]),
-                         ("default, local smoother", ["--method", "local"]),
+                         ("--keep aspect, local smoother", ["--keep", "aspect", "--method", "local"]),
                          ("--keep size,aspect, local smoother", ["--keep", "size,aspect", "--method", "local"])]:
         result_vtk = os.path.join(work, "out.vtk")
         command = [args.paloverde, "improve", poor_vtk, "-o", result_vtk, "--threads", "1"] + flags

@@ -88,7 +88,7 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
                     "targets.keep: what each element keeps of the input, any of size, orientation, aspect, skew (comma "
                     "separated) or all; the rest is made ideal. none: every element is pulled toward the regular "
                     "element; auto (the default): a mesh with cells keeps its aspect, one of tetrahedra or triangles "
-                    "nothing (docs/targets.md)")
+                    "and a surface mesh nothing (docs/targets.md)")
         ->type_name("FACTORS");
     cmd->add_option("--size-field", o->size_field,
                     "targets.size_field: a point field of the input, one value per vertex, the edge length wanted there; "

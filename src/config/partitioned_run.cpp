@@ -259,7 +259,10 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     // Each part's targets from its own elements, the ideal size the whole mesh's, and from its own
     // reference coordinates (scattered with the whole mesh's; RunSpec::check_runnable refuses a
     // reference for pieces).
-    set_targets(MeshPart(part), spec.targets.options(part.mesh.has_cells(), !spec.input.displacement.empty()));
+    // keep: auto keeps nothing of a surface's cells (as set_run_targets).
+    const bool surface = part.reducer().max(is_surface_mesh(part.mesh) ? 1.0 : 0.0) > 0.0;
+    set_targets(MeshPart(part),
+                spec.targets.options(part.mesh.has_cells() && !surface, !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
     int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;
     MPI_Bcast(&kept, 1, MPI_INT, 0, comm);

@@ -11,6 +11,7 @@
 #include "config/plot.hpp"
 #include "config/registry_internal.hpp"
 #include "paloverde/io/atomic_file.hpp"
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/solvers/stop.hpp"
 #include "solvers/run_support.hpp"
 
@@ -69,8 +70,10 @@ std::string origin(const RunSpec& spec, const std::string& key) {
 
 void set_run_targets(const RunSpec& spec, Mesh& mesh, ReadOptions read, bool flipped, const std::string& name,
                      const Mesh* reference) {
-    // keep: auto keeps the aspect of cells, in a plane, in space or on a surface.
-    const TargetOptions targets = spec.targets.options(mesh.has_cells(), reference != nullptr);
+    // keep: auto keeps the aspect of cells in a plane or in space, not of a surface's
+    // quadrilaterals: recombined on a curved surface, their stretch is more often noise than
+    // intent (docs/surfaces.md, "Targets on surfaces"); --keep aspect asks for it.
+    const TargetOptions targets = spec.targets.options(mesh.has_cells() && !is_surface_mesh(mesh), reference != nullptr);
     const std::string& path = spec.targets.reference;
     std::optional<MeshFile> file;
     if (!path.empty()) {
