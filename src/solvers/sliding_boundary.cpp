@@ -84,6 +84,12 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
     return std::nullopt;
 }
 
+std::vector<Vec3> input_surface_normals(const MeshPart& part) {
+    const DistributedMesh* d = part.distributed();
+    const BoundarySurface surface = surface_of(part, SurfaceOptions{});
+    return d ? surface.normals_of(part.mesh(), d->mesh.global_ids()) : surface.normals_of(part.mesh());
+}
+
 bool is_surface_mesh(const MeshPart& part) {
     return part.reducer().max(paloverde::is_surface_mesh(part.mesh()) ? 1.0 : 0.0) > 0.0;
 }

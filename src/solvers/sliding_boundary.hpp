@@ -116,6 +116,10 @@ Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const T
 
 // Whether `part` is a surface mesh: triangles in 3D that do not lie in one plane. Collective.
 bool is_surface_mesh(const MeshPart& part);
+// A surface mesh's normals as its solvers rate it about (Mesh::surface_normals; the default
+// feature angle), from the mesh as it is: a report's, so that the triangles the input turned
+// over count as inverted. Collective: a part's come from the whole surface.
+std::vector<Vec3> input_surface_normals(const MeshPart& part);
 
 // A solver's run on a surface mesh: one shape run, `run(&sliding)`, in which every vertex that is
 // not fixed slides on the input surface (on its patch, along its crease or, where
