@@ -307,7 +307,9 @@ BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things
 }
 
 // Truncated Newton directions in the shape phase: never a worse worst element, never an inverted
-// one, the same mesh on one thread as on two.
+// one, the same mesh on one thread as on two. Slow (tests/CMakeLists.txt): the sanitizers see
+// Newton directions in newton_directions_after_untangling.
+BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
 BOOST_DATA_TEST_CASE(newton_directions_never_make_things_worse,
                      bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
                                   "mesquite/tris/tri_20258.vtk"}),

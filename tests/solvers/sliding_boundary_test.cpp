@@ -68,7 +68,9 @@ BOOST_DATA_TEST_CASE(boundary_vertices_end_on_the_input_boundary,
     BOOST_TEST(slide.boundary->moved > 0);
 }
 
-BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides) {
+// Slow (tests/CMakeLists.txt): the sanitizers see the tire slide in
+// boundary_vertices_end_on_the_input_boundary.
+BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides, *boost::unit_test::label("slow")) {
     auto one = shared_mesh("mesquite/tets/tire.vtk"), two = one;
     pv::LocalSolver(sliding(1)).improve(one);
     pv::LocalSolver(sliding(2)).improve(two);
@@ -76,8 +78,9 @@ BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides) {
 }
 
 // Past the cube's 90-degree creases (feature angle 95) the cube is one smooth surface: its edge
-// vertices may cut across them, and the volume shrinks; at the default angle it does not.
-BOOST_AUTO_TEST_CASE(the_feature_angle_decides_which_creases_stay) {
+// vertices may cut across them, and the volume shrinks; at the default angle it does not. Slow
+// (tests/CMakeLists.txt): the sanitizers see the cube slide in the first case.
+BOOST_AUTO_TEST_CASE(the_feature_angle_decides_which_creases_stay, *boost::unit_test::label("slow")) {
     auto kept = tangled_cube(), cut = kept;
     auto blunt = sliding();
     blunt.surface.feature_angle = 95.0;
