@@ -13,6 +13,7 @@
 #include "solvers/iteration_start.hpp"
 #include "support/sliding_checks.hpp"
 #include "support/solver_checks.hpp"
+#include "support/test_support.hpp"
 
 namespace pv = paloverde;
 namespace detail = paloverde::detail;
@@ -118,6 +119,36 @@ BOOST_AUTO_TEST_CASE(a_spent_time_limit_says_so) {
     BOOST_TEST(spent->message == "time limit reached");
 }
 
+// A stop request takes a checkpoint whether one is due or not; without one, a due checkpoint is
+// taken and the iteration goes on; a run without a checkpoint file takes none.
+BOOST_AUTO_TEST_CASE(a_stop_or_a_due_checkpoint_takes_the_checkpoint) {
+    const StopCleared cleared;
+    const pv::test::ScratchDir dir("iteration_start_checkpoints");
+    auto mesh = pv::test::shared_mesh("mesquite/tets/tet_4_tangled.vtk");
+    pv::CheckpointOptions every_two;
+    every_two.file = (dir / "c.ckpt").string();
+    every_two.every_iterations = 2;
+    every_two.every_seconds = 0.0;
+    const pv::Reducer serial;
+    const pv::TerminationCriterion c;
+    detail::Checkpointer writes(every_two, "test", "", mesh), none({}, "test", "", mesh);
+    detail::IterationStart top(c, serial, detail::Clock::now(), "iterations", &writes),
+        without(c, serial, detail::Clock::now(), "iterations", &none);
+    int saved = 0;
+    auto save = [&] { ++saved; };
+    BOOST_TEST(!top(2, 1, save).has_value());
+    BOOST_TEST(saved == 0);  // one iteration since the start: not due
+    BOOST_TEST(!top(3, 2, save).has_value());
+    BOOST_TEST(saved == 1);  // due, and the iteration goes on
+    pv::request_stop();
+    BOOST_TEST(without(2, 1, save).has_value());
+    BOOST_TEST(saved == 1);
+    const auto stopped = top(2, 1, save);
+    BOOST_TEST_REQUIRE(stopped.has_value());
+    BOOST_TEST((stopped->reason == pv::TerminationReason::Interrupted));
+    BOOST_TEST(saved == 2);  // not due, but stopped
+}
+
 BOOST_AUTO_TEST_CASE(every_solver_stops_on_a_request_in_the_same_words) {
     const StopCleared cleared;
     pv::request_stop();
@@ -143,6 +174,17 @@ BOOST_AUTO_TEST_CASE(every_solver_stops_at_its_target_in_the_same_words) {
     pv::TerminationCriterion t;
     t.target_worst_quality = -1.0;
     every_solver_stops(t, "target_reached", -1, [](const Case&) { return std::string("the worst quality reached the target"); });
+}
+
+// The untangling energy out of iterations hands over in the budget's words.
+BOOST_AUTO_TEST_CASE(the_untangling_energy_out_of_iterations_says_so_in_the_same_words) {
+    auto mesh = pv::test::tangled_cube();
+    pv::GlobalSolverOptions o;
+    o.untangle_termination.max_iterations = 2;
+    const auto s = pv::GlobalSolver(o).improve(mesh);
+    BOOST_TEST(to_string(s.reason) == "cannot_untangle");
+    BOOST_TEST(s.message.find("untangling stopped (stopped after 2 iterations) with elements still inverted") == 0u,
+               s.message);
 }
 
 // Untangling says what it was doing: the local sweeps in the message's end, the global solver's
