@@ -196,8 +196,10 @@ Tables::Tables() {
         .maybe_real("target_worst_quality", &TerminationCriterion::target_worst_quality,
                     "Stop once the worst quality reaches this; ~: no target. Missing it ends a run with exit code 3.")
         .real("min_progress", &TerminationCriterion::min_progress,
-              "Converged when the worst quality rose by less than this (relative) over progress_window iterations, >= 0.")
-        .integer("progress_window", &TerminationCriterion::progress_window, "Iterations that min_progress looks back over, >= 1.")
+              "Converged when the worst quality rose by less than this (relative) over progress_window iterations, >= 0. "
+              "Laplace reads it as a distance instead: it stops once no vertex moved more than this many mean edge lengths in a sweep.")
+        .integer("progress_window", &TerminationCriterion::progress_window,
+                 "Iterations that min_progress looks back over, >= 1 (Laplace looks at one sweep and does not read it).")
         .real("gradient_tolerance", &TerminationCriterion::gradient_tolerance,
               "Global solver only (the local and Laplace sweeps have no whole gradient): stop when the gradient "
               "norm falls below this fraction of its first value, in [0, 1).");
@@ -361,7 +363,8 @@ Tables::Tables() {
         .add(metric_field(&LaplaceSolverOptions::metric, &LaplaceSolverOptions::metric_options,
                           "Metric that smart Laplace protects and the summary reports (any metric)."))
         .object("termination", &LaplaceSolverOptions::termination, termination,
-                "When the sweeps stop (also once no vertex moves by more than min_progress mean edge lengths).")
+                "When the sweeps stop; min_progress here is a distance: the sweeps stop once no vertex moved more than "
+                "min_progress mean edge lengths in one.")
         .choice("coloring", &LaplaceSolverOptions::coloring,
                 {{"smallest_last", ColoringOrder::SmallestLast}, {"greedy", ColoringOrder::Greedy}},
                 "Vertex coloring order; smart Laplace moves one color at a time.");

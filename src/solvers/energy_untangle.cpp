@@ -7,8 +7,8 @@
 
 #include "core/exact_sums.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
+#include "iteration_start.hpp"
 #include "local_untangle.hpp"
-#include "stopping.hpp"
 
 namespace paloverde::detail {
 
@@ -279,6 +279,10 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
         if (now_.bad == 0 && untangled()) return finish(TerminationReason::TargetReached, "untangled");
     }
 
+    TerminationCriterion budget;
+    budget.max_iterations = max_iterations;
+    budget.max_seconds = max_seconds;
+    IterationStart top(budget, reducer, start_, "iterations", &checkpointer);
     std::vector<double> g_new(n3), d(n3), trial(n3);
     bool new_round = !resume;  // restore() has set up the round it resumes
     for (int idle = 0;;) {
@@ -287,19 +291,13 @@ EnergyUntangling EnergyUntangler::run(int max_iterations, double max_seconds, Ch
             e_start_ = e_;
             new_round = false;
         }
-        // Checkpoints and stops at the top of an iteration, where the state is complete.
-        if (stop_requested_anywhere(reducer)) {
-            if (checkpointer.writes()) save(checkpointer);
-            return finish(TerminationReason::Interrupted, interrupted_after(summary_.iterations));
+        // Checkpoints and stops at the top of an iteration, where the state is complete. Its
+        // budget counts steps; a spent one ends the untangling where a valid iterate was found.
+        if (auto stop = top(steps_ + 1, summary_.iterations, [&] { save(checkpointer); })) {
+            if (stop->reason != TerminationReason::Interrupted && valid_found_)
+                return finish(TerminationReason::TargetReached, "untangled");
+            return finish(stop->reason, std::move(stop->message));
         }
-        if (checkpointer.due(summary_.iterations)) save(checkpointer);
-        if (steps_ >= max_iterations)
-            return valid_found_ ? finish(TerminationReason::TargetReached, "untangled")
-                                : finish(TerminationReason::IterationLimit, "the untangling energy used its " +
-                                                                               std::to_string(max_iterations) + " iterations");
-        if (time_is_up(max_seconds, reducer, start_))
-            return finish(valid_found_ ? TerminationReason::TargetReached : TerminationReason::TimeLimit,
-                          valid_found_ ? "untangled" : "time limit reached");
         if (idle > kStepsPerEpsilon)  // rounds in a row without a step: the energy cannot go on
             return finish(valid_found_ ? TerminationReason::TargetReached : TerminationReason::CannotUntangle,
                           valid_found_ ? "untangled" : "the untangling energy found no more steps");

@@ -7,8 +7,8 @@
 
 #include "core/blocked_sum.hpp"
 #include "paloverde/core/error.hpp"
-#include "paloverde/solvers/stop.hpp"
 #include "global_phase.hpp"
+#include "iteration_start.hpp"
 
 namespace paloverde::detail {
 
@@ -144,16 +144,12 @@ std::optional<PhaseResult> Phase::iterate(int iteration, double& objective) {
     return judge_end(iteration, s, objective, sub);
 }
 
-// Checkpoints and stops at the top of an iteration, where the state is complete. Every process
-// stops at the same iteration: a stop requested on any of them counts.
+// Checkpoints and stops at the top of an iteration, where the state is complete. The target is
+// judged after an iteration instead (reached_end), where the untangling stage has its own.
 std::optional<PhaseResult> Phase::at_top(int iteration) {
-    if (stop_requested_anywhere(reducer_)) {
-        if (checkpointer_.writes()) save_checkpoint(iteration);
-        return end(TerminationReason::Interrupted, interrupted_after(summary_.iterations));
-    }
-    if (checkpointer_.due(summary_.iterations)) save_checkpoint(iteration);
-    if (const auto spent = budget_spent(stop_, iteration, reducer_, start_))
-        return end(*spent, budget_message(*spent, stop_, "iterations"));
+    IterationStart top(stop_, reducer_, start_, "iterations", &checkpointer_);
+    if (auto stop = top(iteration, summary_.iterations, [&] { save_checkpoint(iteration); }))
+        return end(stop->reason, std::move(stop->message));
     return std::nullopt;
 }
 

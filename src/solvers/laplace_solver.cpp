@@ -7,8 +7,8 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
+#include "iteration_start.hpp"
 #include "run_support.hpp"
-#include "stopping.hpp"
 
 namespace paloverde {
 
@@ -101,14 +101,9 @@ Summary LaplaceSolver::improve(MeshPart part) {
 
     const TerminationCriterion& stop = options_.termination;
     double best = record(0, -1e300).worst;
+    detail::IterationStart top(stop, part.reducer(), start, "sweeps");  // no checkpoints
     for (int s = 1;; ++s) {
-        if (stop_requested_anywhere(part.reducer()))
-            return done(TerminationReason::Interrupted,
-                        "interrupted (a stop was requested) after " + std::to_string(summary.iterations) + " sweeps");
-        if (detail::target_reached(stop, best))
-            return done(TerminationReason::TargetReached, "the worst quality reached the target");
-        if (const auto spent = detail::budget_spent(stop, s, part.reducer(), start))
-            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
+        if (auto ended = top(s, summary.iterations, [] {}, best)) return done(ended->reason, std::move(ended->message));
         int moved = 0;
         double largest = 0.0;
         for (const auto& members : groups) {

@@ -13,6 +13,7 @@
 #include "paloverde/parallel/distributed_mesh.hpp"
 #include "boundary_motion.hpp"
 #include "checkpointer.hpp"
+#include "iteration_start.hpp"
 #include "local_untangle.hpp"
 #include "run_support.hpp"
 #include "sliding_boundary.hpp"
@@ -405,12 +406,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         state.vertex_fields = {{"x", xyz}, {"best_x", best_xyz}};
         checkpointer.save(summary, state, seconds_since(start));
     };
-    // At the top of each sweep: a stop request (any process's) ends the run, a due checkpoint is written.
-    auto stopping = [&](bool untangling, int next_sweep) {
-        const bool stop = stop_requested_anywhere(reducer);
-        if (stop ? checkpointer.writes() : checkpointer.due(summary.iterations)) save(untangling, next_sweep);
-        return stop;
-    };
     // The whole mesh's energy at the current epsilon (exact sums: the same on any rank count).
     auto total_energy = [&] {
         auto energy = make_untangle_energy(epsilon, detail::kUntangleTheta);
@@ -446,7 +441,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         epsilon = std::isfinite(next) ? std::max(next, 1e-12) : epsilon;
         return moved;
     };
-    const std::string interrupted = "interrupted (a stop was requested) after ";
     int first_sweep = 1;
     bool resume_untangling = false;
     if (resume) {
@@ -476,16 +470,15 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             inverted_history = {static_cast<double>(inverted)};
             worst_history = {record("untangle", *volume, inverted, 0, -1e300).worst};
         }
+        detail::IterationStart top(stop, reducer, start, "sweeps", &checkpointer, "while untangling");
         for (int s = resume ? first_sweep : 1; inverted > 0; ++s) {
-            if (stopping(true, s))
-                return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) +
-                                                                " sweeps, while untangling");
-            if (const auto spent = detail::budget_spent(stop, s, reducer, start)) {
-                if (*spent == TerminationReason::TimeLimit)
-                    return done(TerminationReason::TimeLimit, "time limit reached while untangling");
-                return done(TerminationReason::CannotUntangle, "untangling stopped after " +
-                                                                   std::to_string(stop.max_iterations) +
-                                                                   " sweeps with elements still inverted");
+            if (auto ended = top(s, summary.iterations, [&] { save(true, s); })) {
+                // Out of sweeps with elements inverted: the mesh cannot be untangled locally.
+                if (ended->reason == TerminationReason::IterationLimit)
+                    return done(TerminationReason::CannotUntangle, "untangling stopped after " +
+                                                                       std::to_string(stop.max_iterations) +
+                                                                       " sweeps with elements still inverted");
+                return done(ended->reason, std::move(ended->message));
             }
             const int moved = by_energy ? energy_sweep() : sweep([&](VertexId v, VertexAscent&, VertexAscent& ascent, auto&) {
                     bool touches_inverted = false;
@@ -521,13 +514,10 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
         best = record("shape", *metric, 0, 0, -1e300).worst;
         best_history = {best};
     }
+    detail::IterationStart top(stop, reducer, start, "sweeps", &checkpointer);
     for (int s = resume ? first_sweep : 1;; ++s) {
-        if (stopping(false, s))
-            return done(TerminationReason::Interrupted, interrupted + std::to_string(summary.iterations) + " sweeps");
-        if (detail::target_reached(stop, best))
-            return done(TerminationReason::TargetReached, "the worst quality reached the target");
-        if (const auto spent = detail::budget_spent(stop, s, reducer, start))
-            return done(*spent, detail::budget_message(*spent, stop, "sweeps"));
+        if (auto ended = top(s, summary.iterations, [&] { save(false, s); }, best))
+            return done(ended->reason, std::move(ended->message));
         const double threshold = best + options_.improve_below * (metric->ideal_value() - best);
         const int moved = sweep([&](VertexId v, VertexAscent& ascent, VertexAscent&, auto&) {
             if (!(detail::patch_minimum(*metric, mesh, xyz, v) < threshold)) return 0;

@@ -48,12 +48,6 @@ inline bool target_reached(const TerminationCriterion& c, double best_worst) {
     return c.target_worst_quality && best_worst >= *c.target_worst_quality;
 }
 
-// What a run stopped by a request (stop.hpp) says.
-inline std::string interrupted_after(int iterations) {
-    return "interrupted (a stop was requested) after " + std::to_string(iterations) +
-           " iterations; the best iterate is handed back";
-}
-
 // The stall window of a TerminationCriterion over histories of one entry per iteration, the
 // latest last: progress is measured against the entry progress_window iterations back, and is
 // too little when below min_progress relative to `magnitude` (the current worst quality; at

@@ -17,8 +17,10 @@ struct LaplaceSolverOptions {
     bool smart = true;
     std::string metric = "aspect_ratio";  // what smart Laplace protects and the Summary reports
     MetricOptions metric_options;
-    // An iteration is a sweep. Sweeps also stop once no vertex moves by more than
-    // min_progress times the mean edge length.
+    // An iteration is a sweep. Here min_progress is a distance, not the other solvers' relative
+    // rise of the worst quality: the sweeps stop once no vertex moved more than min_progress
+    // times the mean edge length in one (progress_window is not read). Plain Laplace may lower the
+    // worst quality while it settles, so how far the vertices still move is what says it has.
     TerminationCriterion termination = [] {
         TerminationCriterion c;
         c.max_iterations = 100;

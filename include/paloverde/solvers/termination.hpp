@@ -10,7 +10,8 @@ struct TerminationCriterion {
     double max_seconds = 0.0;                     // 0: no time limit
     std::optional<double> target_worst_quality;   // stop once the worst quality reaches it
     // Stop when the worst quality rose by less than this (relative to its magnitude, at least
-    // 1e-3 in absolute terms) over the last `progress_window` iterations.
+    // 1e-3 in absolute terms) over the last `progress_window` iterations. Laplace reads it as a
+    // distance (laplace_solver.hpp).
     double min_progress = 1e-6;
     int progress_window = 10;
     // Stop when the gradient norm falls below this fraction of its first value (the global
