@@ -1,5 +1,7 @@
+#include <algorithm>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "mpi_session.hpp"
@@ -14,6 +16,50 @@ std::string help_of(std::string_view kind, std::string_view name, std::string_vi
     for (const auto& option : config::describe(kind, name).options)
         if (option.key == key) return option.help;
     return "";
+}
+
+// What a solver does is read from its options in the registry, so a new solver takes the flags
+// that fit it without this file naming it.
+bool solver_has(const std::string& solver, std::string_view key) {
+    return !help_of("solver", solver, key).empty();
+}
+
+// "global or local": the solvers that have `key`.
+std::string solvers_with(std::string_view key) {
+    std::vector<std::string> names;
+    for (const auto& name : config::names_of("solver"))
+        if (solver_has(name, key)) names.push_back(name);
+    std::string out;
+    for (std::size_t i = 0; i < names.size(); ++i)
+        out += (i == 0 ? "" : i + 1 == names.size() ? " or " : ", ") + names[i];
+    return out;
+}
+
+// The help of a solver option, from the first solver that has it.
+std::string solver_option_help(std::string_view key) {
+    for (const auto& name : config::names_of("solver"))
+        if (solver_has(name, key)) return help_of("solver", name, key);
+    throw Error("no solver has the option '" + std::string(key) + "'");
+}
+
+// The solver an improve step runs when none is named.
+std::string default_solver() {
+    for (const auto& option : config::describe("section", "improve step").options)
+        if (option.key == "name") return option.default_value;
+    throw Error("the registry's improve step has no default solver");
+}
+
+// Each solver with the first sentence of its registry help.
+std::string method_help() {
+    std::string out;
+    const std::string fallback = default_solver();
+    for (const auto& name : config::names_of("solver")) {
+        std::string help = config::describe("solver", name).help;
+        help = help.substr(0, help.find(". "));
+        if (help.ends_with('.')) help.pop_back();
+        out += (out.empty() ? "" : "; ") + name + (name == fallback ? " (the default)" : "") + ": " + help;
+    }
+    return out;
 }
 }  // namespace
 
@@ -37,14 +83,15 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
               : app.add_subcommand("improve", "Untangle a mesh (if it has inverted elements) and raise its worst element's "
                                               "quality: a run of one improve step, each flag a config key (see --print-config)");
     std::vector<std::string> methods = config::names_of("solver");
-    methods.push_back("smart-laplace");  // the spelling of earlier versions
+    for (std::size_t i = 0, n = methods.size(); i < n; ++i)  // earlier versions spelled them with hyphens
+        if (std::string hyphens = methods[i]; std::replace(hyphens.begin(), hyphens.end(), '_', '-'), hyphens != methods[i])
+            methods.push_back(hyphens);
     cmd->add_option("input", o->input, "Mesh to improve (input.mesh)")->required()->type_name("IN");
     cmd->add_option("-o,--output", o->output, "Where to write the improved mesh, .vtk .vtu .msh .mesh (output.mesh)")
         ->required()
         ->type_name("OUT");
     cmd->add_option("--method", o->method,
-                    "Solver (queue[0].improve.name): global (log-barrier over the whole mesh, the default), local "
-                    "(Freitag-Plassmann max-min per vertex, by colors), smart_laplace, or laplace (may invert elements)")
+                    "Solver (queue[0].improve.name): " + method_help())
         ->check(CLI::IsMember(methods))
         ->type_name("NAME");
     cmd->add_option("--iterations", o->iterations,
@@ -57,18 +104,18 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
                     "termination.max_seconds (and untangle_termination.max_seconds): stop after this many seconds")
         ->type_name("SECONDS");
     cmd->add_flag("--untangle", o->untangle_only,
-                  "Only untangle: stop once no element is inverted (improve_shape: false; global and local; laplace "
-                  "and smart_laplace do not untangle)");
+                  "Only untangle: stop once no element is inverted (improve_shape: false; --method " +
+                      solvers_with("untangle") + ")");
     cmd->add_flag("--no-untangle", o->no_untangle, "Do not untangle; only improve a mesh that is already valid (untangle: false)");
     cmd->add_flag("--steepest", o->steepest, "Steepest ascent instead of conjugate gradient directions (direction; global)");
-    cmd->add_option("--metric", o->metric, "metric: " + help_of("solver", "global", "metric"))
+    cmd->add_option("--metric", o->metric, "metric: " + solver_option_help("metric"))
         ->type_name("NAME");
-    cmd->add_option("--objective", o->objective, "objective: " + help_of("solver", "global", "objective"))
+    cmd->add_option("--objective", o->objective, "objective: " + solver_option_help("objective"))
         ->type_name("NAME");
     cmd->add_option("--barrier-shrink", o->barrier_shrink,
                     "objective.barrier_shrink: " + help_of("objective", "log_barrier", "barrier_shrink"))
         ->type_name("X");
-    cmd->add_option("--improve-below", o->improve_below, "improve_below (local): " + help_of("solver", "local", "improve_below"))
+    cmd->add_option("--improve-below", o->improve_below, "improve_below (" + solvers_with("improve_below") + "): " + solver_option_help("improve_below"))
         ->type_name("X");
     cmd->add_option("--boundary", o->boundary,
                     "boundary (global, local): fixed, or slide: boundary vertices move on the input's boundary, "
@@ -150,8 +197,8 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         };
         const std::string step = "queue[0].improve.";
         std::string method = o->method;
-        for (char& c : method)
-            if (c == '-') c = '_';
+        std::replace(method.begin(), method.end(), '-', '_');
+        const std::string solver = method.empty() ? default_solver() : method;
         flag("input.mesh", o->input, "input", true);
         flag("output.mesh", o->output, "--output", true);
         if (!method.empty()) flag(step + "name", method, "--method");
@@ -159,14 +206,13 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         if (!o->target.empty()) flag(step + "termination.target_worst_quality", o->target, "--target");
         if (!o->time_limit.empty()) {
             flag(step + "termination.max_seconds", o->time_limit, "--time-limit");
-            if (method.empty() || method == "global" || method == "local")
+            if (solver_has(solver, "untangle_termination"))
                 flag(step + "untangle_termination.max_seconds", o->time_limit, "--time-limit");
         }
-        const bool laplace = method == "laplace" || method == "smart_laplace";
-        if (laplace && (o->untangle_only || o->no_untangle))
+        if (!solver_has(solver, "untangle") && (o->untangle_only || o->no_untangle))
             throw OptionError(std::string(o->untangle_only ? "--untangle" : "--no-untangle") + ": --method " + method +
-                              " does not untangle (Laplace smoothing moves vertices towards their neighbours' mean, "
-                              "whatever is inverted); untangle with --method global or local");
+                              " does not untangle (it moves vertices whatever is inverted); untangle with --method " +
+                              solvers_with("untangle"));
         if (o->untangle_only) flag(step + "improve_shape", "false", "--untangle");
         if (o->no_untangle) flag(step + "untangle", "false", "--no-untangle");
         if (o->steepest) flag(step + "direction", "steepest_ascent", "--steepest");
@@ -175,21 +221,19 @@ void add_improving_command(CLI::App& app, int& exit_code, bool morph) {
         if (!o->barrier_shrink.empty()) flag(step + "objective.barrier_shrink", o->barrier_shrink, "--barrier-shrink");
         if (!o->improve_below.empty()) flag(step + "improve_below", o->improve_below, "--improve-below");
         if (!o->domain.empty()) {
-            if (!method.empty() && method != "global" && method != "local")
-                throw OptionError("--domain: only the global solver and the local smoother keep vertices on a domain "
-                                  "(--method global or local)");
+            if (!solver_has(solver, "surface"))
+                throw OptionError("--domain: only some solvers keep vertices on a domain (--method " +
+                                  solvers_with("surface") + ")");
             flag(step + "surface.domain", o->domain, "--domain");
         }
         if (!o->boundary.empty() || !o->feature_angle.empty()) {
-            // The global solver (the default) and the local smoother slide boundary vertices;
-            // Laplace smoothing keeps them fixed.
-            if (method.empty() || method == "global" || method == "local") {
+            if (solver_has(solver, "boundary")) {
                 if (!o->boundary.empty()) flag(step + "boundary", o->boundary, "--boundary");
                 if (!o->feature_angle.empty()) flag(step + "surface.feature_angle", o->feature_angle, "--feature-angle");
             } else if (!o->feature_angle.empty() || o->boundary != "fixed") {
                 throw OptionError(std::string(o->feature_angle.empty() ? "--boundary " + o->boundary : "--feature-angle") +
-                                  ": only the global solver and the local smoother slide boundary vertices (--method "
-                                  "global or local); the " + method + " method keeps the boundary fixed");
+                                  ": only some solvers slide boundary vertices (--method " + solvers_with("boundary") +
+                                  "); the " + method + " method keeps the boundary fixed");
             }
         }
         if (!o->keep.empty()) flag("targets.keep", "[" + o->keep + "]", "--keep");

@@ -58,7 +58,7 @@ int execute(const config::RunSpec& spec, const ReportFlags& flags) {
         return kDone;
     }
     // A partitioned config runs without mpirun too, as a run of one rank.
-    if (spec.partitioned()) MpiSession::ensure();
+    if (config::runs_distributed(spec)) MpiSession::ensure();
     const std::vector<std::string> inputs = inputs_of(spec);
     ProgressLine progress(!flags.quiet && MpiSession::rank() == 0 && ProgressLine::terminal());
     config::RunResult result;

@@ -435,10 +435,12 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads) {
     return detail::build_queue_of(steps, threads).queue;
 }
 
+// Under mpirun every rank runs the spec: a serial run on each would write the same files at once.
+bool runs_distributed(const RunSpec& spec) { return spec.partitioned() || detail::world_size() > 1; }
+
 RunResult run(const RunSpec& spec, const RunHooks& hooks) {
     spec.check_runnable();
-    // Under mpirun every rank runs this: a serial run on each would write the same files at once.
-    if (spec.partitioned() || detail::world_size() > 1) return detail::run_partitioned(spec, hooks);
+    if (runs_distributed(spec)) return detail::run_partitioned(spec, hooks);
     std::vector<detail::BuiltQueue> queues;  // every option checked before the mesh is read
     for (const auto& m : spec.methods()) queues.push_back(detail::build_queue_of(m.queue, spec.threads));
 
@@ -460,7 +462,7 @@ RunResult run(const RunSpec& spec, const RunHooks& hooks) {
 }
 
 RunResult run(Mesh& mesh, const RunSpec& spec, const RunHooks& hooks) {
-    if (spec.partitioned() || detail::world_size() > 1)
+    if (runs_distributed(spec))
         throw ConfigError(detail::origin(spec, "partition.parts"), "partition.parts",
                           "a mesh in memory is improved serially; partitioned runs read their input from files");
     std::vector<detail::BuiltQueue> queues;

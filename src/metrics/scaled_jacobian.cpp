@@ -86,8 +86,18 @@ public:
     // A simplex alone: the worst of its corners, over the regular simplex's.
     double value(ElementKind kind, const double* x) const override {
         if (kind == ElementKind::Tetrahedron) {
+            // Each of the six edges is measured once: seen from either end its length has the same
+            // bits, so the corners' values are corner_jacobian's at half the square roots.
+            double length[4][4];
+            for (int i = 0; i < 4; ++i)
+                for (int j = i + 1; j < 4; ++j) length[i][j] = length[j][i] = norm(load(x, j) - load(x, i));
             double worst = INFINITY;
-            for (const auto& c : kTetCorners) worst = std::min(worst, corner_jacobian(x, c));
+            for (const auto& c : kTetCorners) {
+                const P o = load(x, c[0]);
+                const P e1 = load(x, c[1]) - o, e2 = load(x, c[2]) - o, e3 = load(x, c[3]) - o;
+                const double lengths = length[c[0]][c[1]] * length[c[0]][c[2]] * length[c[0]][c[3]];
+                worst = std::min(worst, lengths > 0.0 ? dot(e1, cross(e2, e3)) / lengths : 0.0);
+            }
             return std::numbers::sqrt2 * worst;
         }
         return triangle(x, normal(x));

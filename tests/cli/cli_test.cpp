@@ -597,7 +597,7 @@ BOOST_AUTO_TEST_CASE(boundary_slide_with_the_local_smoother) {
     for (const std::string flags : {"--method laplace --boundary slide", "--method smart-laplace --feature-angle 30"}) {
         const auto refused = run_cli("improve " + quoted(input) + " -o " + out + " " + flags);
         BOOST_TEST(refused.exit_code == 2, flags);
-        BOOST_TEST(has(refused.output, "only the global solver and the local smoother slide boundary vertices"), refused.output);
+        BOOST_TEST(has(refused.output, "only some solvers slide boundary vertices (--method global or local)"), refused.output);
     }
     BOOST_TEST(run_cli("improve -q " + quoted(input) + " -o " + out + " --boundary fixed --iterations 2").exit_code == 0);
     for (const std::string flags : {"--boundary sideways", "--feature-angle 190"}) {
@@ -607,3 +607,43 @@ BOOST_AUTO_TEST_CASE(boundary_slide_with_the_local_smoother) {
 }
 
 BOOST_AUTO_TEST_SUITE_END()
+
+// Each flag of improve is a config key: the config a command line prints, read back by `run`,
+// is the same config, for every solver the registry names (and its hyphenated spelling), and
+// --time-limit bounds untangling exactly for the solvers that untangle.
+BOOST_AUTO_TEST_CASE(improve_flags_are_the_config_they_print) {
+    const pv::test::ScratchDir dir("cli_flags_config");
+    const auto input = pv::test::shared_data("mesquite/tets/tire.vtk");
+    const std::string common = " -o " + quoted(dir / "out.vtu") +
+                               " --iterations 7 --target 0.3 --time-limit 9 --threads 2 --fixed boundary"
+                               " --orientation as_is --history h.csv --summary s.json --table t.csv --plot p.svg --ascii"
+                               " --keep size,aspect --set output.metric=mean_ratio --print-config";
+    const std::vector<std::pair<std::string, std::string>> methods{
+        {"global", " --steepest --metric mean_ratio --barrier-shrink 0.5 --feature-angle 30 --checkpoint c.ckpt "
+                   "--checkpoint-every 5 --no-untangle"},
+        {"local", " --improve-below 0.5 --boundary slide --untangle"},
+        {"smart-laplace", ""},
+        {"laplace", " --boundary fixed"}};
+    for (const auto& [method, flags] : methods) {
+        BOOST_TEST_CONTEXT(method) {
+            const auto printed = run_cli("improve " + quoted(input) + " --method " + method + flags + common);
+            BOOST_TEST_REQUIRE(printed.exit_code == 0, printed.output);
+            pv::test::write_file(dir / "run.yaml", printed.output);
+            const auto again = run_cli("run " + quoted(dir / "run.yaml") + " --print-config");
+            BOOST_TEST_REQUIRE(again.exit_code == 0, again.output);
+            BOOST_TEST(again.output == printed.output);
+            std::string name = method;
+            std::replace(name.begin(), name.end(), '-', '_');
+            BOOST_TEST(has(printed.output, "name: " + name), printed.output);
+            BOOST_TEST(has(printed.output, "max_iterations: 7"), printed.output);
+            BOOST_TEST(has(printed.output, "target_worst_quality: 0.3"), printed.output);
+            // termination.max_seconds, and untangle_termination's where the solver untangles.
+            const bool untangles = name == "global" || name == "local";
+            std::size_t limits = 0;
+            for (std::size_t at = printed.output.find("max_seconds: 9"); at != std::string::npos;
+                 at = printed.output.find("max_seconds: 9", at + 1))
+                ++limits;
+            BOOST_TEST(limits == (untangles ? 2u : 1u), printed.output);
+        }
+    }
+}

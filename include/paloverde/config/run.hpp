@@ -105,6 +105,8 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);
 // exceptions, and rank 0 writes the files other than pieces. Hooks are called on every rank
 // that passes them.
 RunResult run(const RunSpec& spec, const RunHooks& hooks = {});
+// Whether run(spec) runs over MPI_COMM_WORLD, as just said: the one place that decides it.
+bool runs_distributed(const RunSpec& spec);
 // The same on a mesh already in memory (the Python package's improve): `input` is not read (the
 // mesh's own fixed vertices stay), targets are set for the run as for a file and the mesh's own
 // put back after it, the last method's result is left in `mesh` (a study's methods each start
