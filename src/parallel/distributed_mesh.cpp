@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 #include <type_traits>
 
@@ -12,6 +13,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
+#include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
 #include "parallel/mpi_support.hpp"
 #include "parallel/parts.hpp"
@@ -486,6 +488,63 @@ BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
 }
 
 void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }
+
+void DistributedMesh::reorder_elements(std::span<const ElementId> order) {
+    const auto permuted = [&](const auto& values) {
+        std::remove_cvref_t<decltype(values)> out(values.size());
+        for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
+        return out;
+    };
+    Renumbering elements;
+    elements.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
+    std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
+    elements.old_element.assign(order.begin(), order.end());
+    Mesh reordered = renumbered(mesh, elements);
+    std::vector<GlobalId> positions = permuted(element_order);
+    std::vector<std::uint8_t> flags = permuted(counted);
+    mesh = std::move(reordered);
+    element_order = std::move(positions);
+    counted = std::move(flags);
+}
+
+std::vector<double> DistributedMesh::gather_vertex_field(std::span<const double> field, int width) const {
+    const auto w = static_cast<std::size_t>(width);
+    std::vector<double> mine;
+    std::vector<std::int64_t> keys;
+    const auto ids = mesh.global_ids();
+    for (std::size_t v = 0; v < vertex_owner.size(); ++v)
+        if (vertex_owner[v] == rank) {
+            keys.push_back(ids[v]);
+            for (std::size_t c = 0; c < w; ++c) mine.push_back(field[w * v + c]);
+        }
+    const int count = static_cast<int>(keys.size());
+    std::vector<int> counts(static_cast<std::size_t>(ranks)), offsets(static_cast<std::size_t>(ranks));
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm);
+    std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
+    const int total = rank == 0 ? offsets.back() + counts.back() : 0;
+    std::vector<std::int64_t> all_keys(static_cast<std::size_t>(total));
+    MPI_Gatherv(keys.data(), count, MPI_INT64_T, all_keys.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, comm);
+    for (int r = 0; r < ranks; ++r) counts[r] *= width, offsets[r] *= width;
+    std::vector<double> values(w * static_cast<std::size_t>(total));
+    MPI_Gatherv(mine.data(), width * count, MPI_DOUBLE, values.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm);
+    std::vector<double> out;
+    if (rank != 0) return out;
+    out.assign(w * static_cast<std::size_t>(global_vertices), 0.0);
+    for (std::size_t i = 0; i < all_keys.size(); ++i)
+        for (std::size_t c = 0; c < w; ++c) out[w * static_cast<std::size_t>(all_keys[i]) + c] = values[w * i + c];
+    return out;
+}
+
+void DistributedMesh::broadcast(std::string& bytes) const {
+    std::uint64_t size = bytes.size();
+    MPI_Bcast(&size, 1, MPI_UINT64_T, 0, comm);
+    bytes.resize(size);
+    // Counts of MPI calls are ints: send in pieces.
+    for (std::uint64_t at = 0; at < size; at += 1u << 30)
+        MPI_Bcast(bytes.data() + at, static_cast<int>(std::min<std::uint64_t>(size - at, 1u << 30)), MPI_CHAR, 0, comm);
+}
+
+void DistributedMesh::on_root(const std::function<void()>& work) const { parallel::together(comm, rank == 0, work); }
 
 // The owned vertices' global ids and coordinates (3 per vertex), in local order.
 void DistributedMesh::owned_vertices(std::vector<std::int64_t>& ids, std::vector<double>& xyz) const {

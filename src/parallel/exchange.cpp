@@ -37,6 +37,10 @@ public:
         if (counts.empty()) return;
         MPI_Allreduce(MPI_IN_PLACE, counts.data(), static_cast<int>(counts.size()), MPI_INT64_T, MPI_SUM, comm_);
     }
+    void sum_wrapping(std::span<std::uint64_t> values) const override {
+        if (values.empty()) return;
+        MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_UINT64_T, MPI_SUM, comm_);
+    }
     double min(double value) const override {
         MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MIN, comm_);
         return value;

@@ -77,15 +77,35 @@ BOOST_AUTO_TEST_CASE(a_mesh_part_owns_and_counts_as_its_mesh_says) {
     auto distributed = scatter(whole);
     const pv::MeshPart part(distributed);
     BOOST_TEST(&part.mesh() == &distributed.mesh);
-    BOOST_TEST(part.distributed() == &distributed);
+    BOOST_TEST(!part.whole());
+    BOOST_TEST(part.rank() == distributed.rank);
+    BOOST_TEST(part.ranks() == distributed.ranks);
+    BOOST_TEST(part.global_vertices() == whole.num_vertices());
+    BOOST_TEST(part.global_elements() == whole.num_elements());
+    BOOST_TEST(part.element_positions().size() == static_cast<std::size_t>(distributed.mesh.num_elements()));
     long owned = 0, counted = 0;
     for (pv::VertexId v = 0; v < part.mesh().num_vertices(); ++v) owned += part.owns(v);
     for (pv::ElementId e = 0; e < part.mesh().num_elements(); ++e) counted += part.counts(e);
     BOOST_TEST(part.reducer().total(static_cast<double>(owned)) == whole.num_vertices());
     BOOST_TEST(part.reducer().total(static_cast<double>(counted)) == whole.num_elements());
 
+    // Rank 0 gets the owners' values in global id order, as the gathered whole mesh has them.
+    const std::vector<double> gathered = part.gather_to_root(distributed.mesh.coordinates(), 3);
+    const pv::Mesh all = distributed.gather_whole();
+    if (part.root()) {
+        const auto xyz = all.coordinates();
+        BOOST_TEST(gathered == std::vector<double>(xyz.begin(), xyz.end()));
+    } else {
+        BOOST_TEST(gathered.empty());
+    }
+    std::string bytes = part.root() ? std::string("rank 0's") : std::string();
+    part.broadcast(bytes);
+    BOOST_TEST(bytes == "rank 0's");
+
     const pv::MeshPart serial(whole);
-    BOOST_TEST(serial.distributed() == nullptr);
+    BOOST_TEST(serial.whole());
+    BOOST_TEST(serial.ranks() == 1);
+    BOOST_TEST(serial.element_positions().empty());
     BOOST_TEST(serial.owns(whole.num_vertices() - 1));
     BOOST_TEST(serial.counts(whole.num_elements() - 1));
     BOOST_TEST(serial.reducer().total(2.5) == 2.5);
@@ -503,7 +523,7 @@ BOOST_AUTO_TEST_CASE(coloring_is_proper_and_independent_of_the_rank_count) {
     }
     BOOST_TEST(part.reducer().total(static_cast<double>(clashes)) == 0.0);
     // The same colors as a one-rank run, vertex by vertex.
-    const auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &whole);
+    auto alone = pv::DistributedMesh::scatter(MPI_COMM_SELF, &whole);
     const auto reference = pv::color_vertices(alone);
     long different = 0;
     for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v) {

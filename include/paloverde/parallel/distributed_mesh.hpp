@@ -15,7 +15,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -101,6 +103,17 @@ public:
 
     // Collective: refreshes ghost coordinates from their owners.
     void update_ghost_coordinates();
+
+    // Element e becomes the element now at order[e]; element_order and counted go with them. All
+    // or nothing.
+    void reorder_elements(std::span<const ElementId> order);
+    // Collective: rank 0 gets `width` values per vertex of the whole mesh, in global id order,
+    // each from the vertex's owner; the other ranks get nothing.
+    std::vector<double> gather_vertex_field(std::span<const double> field, int width) const;
+    // Collective: every rank gets rank 0's bytes.
+    void broadcast(std::string& bytes) const;
+    // Collective: runs `work` on rank 0 alone; a failure there is thrown on every rank.
+    void on_root(const std::function<void()>& work) const;
 
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
