@@ -19,36 +19,36 @@ const Halo kNoGhosts;
 MeshPart::MeshPart(Mesh& whole) : mesh_(&whole), reducer_(&kWholeMeshReducer), halo_(&kNoGhosts) {}
 
 MeshPart::MeshPart(DistributedMesh& part)
-    : mesh_(&part.mesh), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}
+    : mesh_(&part.mesh()), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}
 
 bool MeshPart::owns(VertexId v) const {
-    return !distributed_ || distributed_->vertex_owner[static_cast<std::size_t>(v)] == distributed_->rank;
+    return !distributed_ || distributed_->vertex_owner()[static_cast<std::size_t>(v)] == distributed_->rank();
 }
 
 bool MeshPart::counts(ElementId e) const {
-    return !distributed_ || distributed_->counted[static_cast<std::size_t>(e)] != 0;
+    return !distributed_ || distributed_->counted()[static_cast<std::size_t>(e)] != 0;
 }
 
-int MeshPart::rank() const { return distributed_ ? distributed_->rank : 0; }
+int MeshPart::rank() const { return distributed_ ? distributed_->rank() : 0; }
 
-int MeshPart::ranks() const { return distributed_ ? distributed_->ranks : 1; }
+int MeshPart::ranks() const { return distributed_ ? distributed_->ranks() : 1; }
 
 GlobalId MeshPart::global_vertices() const {
-    return distributed_ ? distributed_->global_vertices : static_cast<GlobalId>(mesh_->num_vertices());
+    return distributed_ ? distributed_->global_vertices() : static_cast<GlobalId>(mesh_->num_vertices());
 }
 
 GlobalId MeshPart::global_elements() const {
-    return distributed_ ? distributed_->global_elements : static_cast<GlobalId>(mesh_->num_elements());
+    return distributed_ ? distributed_->global_elements() : static_cast<GlobalId>(mesh_->num_elements());
 }
 
 std::span<const GlobalId> MeshPart::element_positions() const {
     if (!distributed_) return {};
-    return distributed_->element_order;
+    return distributed_->element_order();
 }
 
 std::span<const std::uint8_t> MeshPart::counted() const {
     if (!distributed_) return {};
-    return distributed_->counted;
+    return distributed_->counted();
 }
 
 void MeshPart::reorder_elements(std::span<const ElementId> order) const {
@@ -56,7 +56,7 @@ void MeshPart::reorder_elements(std::span<const ElementId> order) const {
     distributed_->reorder_elements(order);
 }
 
-Vec3 MeshPart::plane_normal() const { return distributed_ ? distributed_->plane_normal : mesh_->plane_normal(); }
+Vec3 MeshPart::plane_normal() const { return distributed_ ? distributed_->plane_normal() : mesh_->plane_normal(); }
 
 BoundarySurface MeshPart::boundary_surface(bool surface_mesh, const SurfaceOptions& options) const {
     if (!distributed_) return BoundarySurface(*mesh_, options);
