@@ -13,7 +13,6 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
 
@@ -156,11 +155,15 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
 }
 
 QualityReport QualityAssessor::assess(const MeshPart& whole_or_part) const {
-    if (!whole_or_part.distributed()) return assess(whole_or_part.mesh());
-    const DistributedMesh& part = *whole_or_part.distributed();
-    std::vector<std::uint8_t> owned(part.vertex_owner.size());
-    for (std::size_t v = 0; v < owned.size(); ++v) owned[v] = part.vertex_owner[v] == part.rank;
-    return assess(part.mesh, part.mesh.coordinates(), part.counted, owned, part.reducer(), part.plane_normal);
+    const Mesh& mesh = whole_or_part.mesh();
+    // Empty flags: every element counted, every vertex owned.
+    std::vector<std::uint8_t> owned;
+    if (!whole_or_part.counted().empty()) {
+        owned.resize(static_cast<std::size_t>(mesh.num_vertices()));
+        for (VertexId v = 0; v < mesh.num_vertices(); ++v) owned[v] = whole_or_part.owns(v);
+    }
+    return assess(mesh, mesh.coordinates(), whole_or_part.counted(), owned, whole_or_part.reducer(),
+                  whole_or_part.plane_normal());
 }
 
 QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> xyz,

@@ -246,13 +246,13 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
         part = read_input_pieces(spec, comm, rank, distribute);
         report.read_seconds = seconds_since(start);
         if (spec.input.fixed == FixedVertices::None)
-            part.mesh.set_fixed(std::vector<std::uint8_t>(static_cast<std::size_t>(part.mesh.num_vertices()), 0));
+            part.mesh().set_fixed(std::vector<std::uint8_t>(static_cast<std::size_t>(part.mesh().num_vertices()), 0));
     } else {
         together(comm, rank == 0, [&] { file = read_input(spec); });
         report.read_seconds = seconds_since(start);
         part = DistributedMesh::scatter(comm, rank == 0 ? &file.mesh : nullptr, distribute);
-        report.partition_seconds = part.timings.partition;
-        report.distribute_seconds = part.timings.distribute;
+        report.partition_seconds = part.timings().partition;
+        report.distribute_seconds = part.timings().distribute;
         // The whole mesh is as large as all the parts together: rank 0 keeps it only to write it.
         if (!writes_whole) file = MeshFile();
     }
@@ -260,24 +260,24 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     // reference coordinates (scattered with the whole mesh's; RunSpec::check_runnable refuses a
     // reference for pieces).
     // keep: auto keeps nothing of a surface's cells (as set_run_targets).
-    const bool surface = part.reducer().max(is_surface_mesh(part.mesh) ? 1.0 : 0.0) > 0.0;
+    const bool surface = part.reducer().max(is_surface_mesh(part.mesh()) ? 1.0 : 0.0) > 0.0;
     set_targets(MeshPart(part),
-                spec.targets.options(part.mesh.has_cells() && !surface, !spec.input.displacement.empty()));
+                spec.targets.options(part.mesh().has_cells() && !surface, !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
     int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;
     MPI_Bcast(&kept, 1, MPI_INT, 0, comm);
     report.whole_mesh_on_rank_0 = pieces ? (writes_whole ? "gathered" : "never") : (kept ? "kept" : "dropped");
-    report.schedule_seconds = part.timings.schedule;
-    report.vertices = part.global_vertices;
-    report.elements = part.global_cells;  // as the reports count: cells, for a mesh with cells
+    report.schedule_seconds = part.timings().schedule;
+    report.vertices = part.global_vertices();
+    report.elements = part.global_cells();  // as the reports count: cells, for a mesh with cells
     report.ghost_copies = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.received_vertices())));
     report.messages = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.schedule().partners.size())));
     report.colors = part.schedule().colors;
 
     RunResult result;
     result.input = input_name(spec);
-    result.kind = part.mesh.kind();
-    result.orientation = pieces ? part.orientation : broadcast(comm, file.orientation);
+    result.kind = part.mesh().kind();
+    result.orientation = pieces ? part.orientation() : broadcast(comm, file.orientation);
     WriteOptions write;
     write.encoding = spec.output.ascii ? Encoding::Ascii : Encoding::Binary;
     run_methods(spec, hooks, part, queues, [&](MethodResult& r) {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 #include <type_traits>
 
@@ -12,6 +13,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
+#include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
 #include "parallel/mpi_support.hpp"
 #include "parallel/parts.hpp"
@@ -186,20 +188,20 @@ std::vector<GlobalId> canonical_positions(MPI_Comm comm, const std::vector<std::
 OrientationDecision orient_pieces(DistributedMesh& part, OrientationMode mode) {
     const Reducer& reducer = part.reducer();
     const bool oriented =
-        part.mesh.kind() == ElementKind::Tetrahedron || reducer.min(part.mesh.is_planar() ? 1.0 : 0.0) > 0.0;
+        part.mesh().kind() == ElementKind::Tetrahedron || reducer.min(part.mesh().is_planar() ? 1.0 : 0.0) > 0.0;
     double largest = 0.0;
-    for (double x : part.mesh.coordinates()) largest = std::max(largest, std::abs(x));
+    for (double x : part.mesh().coordinates()) largest = std::max(largest, std::abs(x));
     largest = reducer.max(largest);
     SignedMeasure measure;
     if (oriented)
-        measure = signed_measure(part.mesh, part.mesh.coordinates(), unit_scale_exponent(std::span<const double>(&largest, 1)),
-                                 part.plane_normal, part.counted);
+        measure = signed_measure(part.mesh(), part.mesh().coordinates(), unit_scale_exponent(std::span<const double>(&largest, 1)),
+                                 part.plane_normal(), part.counted());
     std::array<ExactSum, 3> sums{measure.total, measure.magnitude, measure.rounding};
     reducer.sum(sums);
     const OrientationDecision d = decide_orientation(mode, oriented, {sums[0], sums[1], sums[2]});
     if (d.flipped) {
-        part.mesh.flip_elements();
-        part.mesh.set_elements_flipped(true);
+        part.mesh().flip_elements();
+        part.mesh().set_elements_flipped(true);
     }
     return d;
 }
@@ -215,16 +217,16 @@ DistributedMesh& DistributedMesh::operator=(DistributedMesh&&) noexcept = defaul
 DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const DistributeOptions& options) {
     options.validate();
     DistributedMesh out;
-    out.comm = comm;
-    MPI_Comm_rank(comm, &out.rank);
-    MPI_Comm_size(comm, &out.ranks);
-    const int ranks = out.ranks;
+    out.comm_ = comm;
+    MPI_Comm_rank(comm, &out.rank_);
+    MPI_Comm_size(comm, &out.ranks_);
+    const int ranks = out.ranks_;
 
     auto start = Clock::now();
     WholeSplit split;
     std::int64_t header[5] = {0, 0, 0, 0, 0};  // kind, global vertices, elements, elements flipped, cells
     double normal[3] = {0.0, 0.0, 1.0};
-    parallel::together(comm, out.rank == 0, [&] {
+    parallel::together(comm, out.rank_ == 0, [&] {
         if (!whole) throw OptionError("DistributedMesh::scatter: rank 0 must pass the mesh");
         split = split_whole(*whole, ranks);
         out.original_vertex_ = std::move(split.original_vertex);
@@ -235,17 +237,17 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
         header[4] = whole->num_cells();
         normal[0] = whole->plane_normal()[0], normal[1] = whole->plane_normal()[1], normal[2] = whole->plane_normal()[2];
     });
-    out.timings.partition = seconds_since(start);
+    out.timings_.partition = seconds_since(start);
     start = Clock::now();
     MPI_Bcast(header, 5, MPI_INT64_T, 0, comm);
     MPI_Bcast(normal, 3, MPI_DOUBLE, 0, comm);
-    out.global_vertices = header[1];
-    out.global_elements = header[2];
-    out.global_cells = header[4];
-    out.plane_normal = {normal[0], normal[1], normal[2]};
+    out.global_vertices_ = header[1];
+    out.global_elements_ = header[2];
+    out.global_cells_ = header[4];
+    out.plane_normal_ = {normal[0], normal[1], normal[2]};
 
     PartArrays mine;
-    if (out.rank == 0) {
+    if (out.rank_ == 0) {
         for (int p = 1; p < ranks; ++p) {
             PartArrays& part = split.parts[p];
             send_vector(part.coordinates, p, 1, comm);
@@ -278,8 +280,8 @@ DistributedMesh DistributedMesh::scatter(MPI_Comm comm, const Mesh* whole, const
         mine.metrics = receive_vector<double>(0, 12, comm);
     }
     out.assemble(&mine, static_cast<ElementKind>(header[0]), options.exchange);
-    out.mesh.set_elements_flipped(header[3] != 0);
-    out.timings.distribute = seconds_since(start);
+    out.mesh_.set_elements_flipped(header[3] != 0);
+    out.timings_.distribute = seconds_since(start);
     return out;
 }
 
@@ -287,18 +289,18 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
                                              const DistributeOptions& options) {
     options.validate();
     DistributedMesh out;
-    out.comm = comm;
-    MPI_Comm_rank(comm, &out.rank);
-    MPI_Comm_size(comm, &out.ranks);
+    out.comm_ = comm;
+    MPI_Comm_rank(comm, &out.rank_);
+    MPI_Comm_size(comm, &out.ranks_);
     const auto start = Clock::now();
     PartArrays mine;
     ElementKind kind = ElementKind::Tetrahedron;
     parallel::together(comm, true, [&] {
-        const auto files = piece_files(path, out.ranks);
-        if (static_cast<int>(files.size()) != out.ranks)
+        const auto files = piece_files(path, out.ranks_);
+        if (static_cast<int>(files.size()) != out.ranks_)
             throw OptionError(path.string() + " has " + std::to_string(files.size()) + " pieces; run it on as many " +
-                              "processes (got " + std::to_string(out.ranks) + ")");
-        mine = read_piece(files[static_cast<std::size_t>(out.rank)], out.ranks, kind);
+                              "processes (got " + std::to_string(out.ranks_) + ")");
+        mine = read_piece(files[static_cast<std::size_t>(out.rank_)], out.ranks_, kind);
     });
     int kinds[3] = {static_cast<int>(kind), -static_cast<int>(kind), mine.cell_types.empty() ? 0 : 1};
     MPI_Allreduce(MPI_IN_PLACE, kinds, 3, MPI_INT, MPI_MAX, comm);
@@ -316,7 +318,7 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
     // Every global id must be owned exactly once, by the rank whose piece says so.
     std::vector<std::int64_t> owned;
     for (std::size_t v = 0; v < mine.owner.size(); ++v)
-        if (mine.owner[v] == out.rank) owned.push_back(mine.canonical[v]);
+        if (mine.owner[v] == out.rank_) owned.push_back(mine.canonical[v]);
     std::string failure;
     {
         const auto all_owned = gather_to_root(comm, owned);
@@ -326,75 +328,75 @@ DistributedMesh DistributedMesh::read_pieces(MPI_Comm comm, const std::filesyste
             if (ids[i] != static_cast<std::int64_t>(i))
                 failure = path.string() + ": global vertex id " + std::to_string(i < ids.size() && ids[i] < static_cast<std::int64_t>(i) ? ids[i] : static_cast<std::int64_t>(i)) +
                           (ids[i] < static_cast<std::int64_t>(i) ? " is owned by more than one piece" : " is owned by no piece");
-        out.global_vertices = static_cast<GlobalId>(ids.size());
+        out.global_vertices_ = static_cast<GlobalId>(ids.size());
     }
-    agree(comm, out.rank == 0 ? failure : "");
-    MPI_Bcast(&out.global_vertices, 1, MPI_INT64_T, 0, comm);
+    agree(comm, out.rank_ == 0 ? failure : "");
+    MPI_Bcast(&out.global_vertices_, 1, MPI_INT64_T, 0, comm);
     out.assemble(&mine, kind, options.exchange);
     // Ghosts must sit where their owners put them.
-    std::vector<double> xyz(out.mesh.coordinates().begin(), out.mesh.coordinates().end());
+    std::vector<double> xyz(out.mesh_.coordinates().begin(), out.mesh_.coordinates().end());
     out.halo().update(xyz, 3);
     failure.clear();
-    for (VertexId v = 0; v < out.mesh.num_vertices() && failure.empty(); ++v)
+    for (VertexId v = 0; v < out.mesh_.num_vertices() && failure.empty(); ++v)
         for (int c = 0; c < 3; ++c)
-            if (xyz[3 * static_cast<std::size_t>(v) + c] != out.mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]) {
-                failure = path.string() + ": vertex " + std::to_string(out.mesh.global_ids()[v]) + " has coordinates in piece " +
-                          std::to_string(out.rank) + " that differ from those in its owner's piece " +
-                          std::to_string(out.vertex_owner[v]);
+            if (xyz[3 * static_cast<std::size_t>(v) + c] != out.mesh_.coordinates()[3 * static_cast<std::size_t>(v) + c]) {
+                failure = path.string() + ": vertex " + std::to_string(out.mesh_.global_ids()[v]) + " has coordinates in piece " +
+                          std::to_string(out.rank_) + " that differ from those in its owner's piece " +
+                          std::to_string(out.vertex_owner_[v]);
                 break;
             }
     agree(comm, failure);
     // Oriented before the corners' keys are taken: a mirrored cell has other corners.
-    out.orientation = orient_pieces(out, options.orientation);
+    out.orientation_ = orient_pieces(out, options.orientation);
     // Canonical positions of the elements (corners) and cells, from their keys.
     {
         const int width = cells ? 5 : 4;  // a corner's map tells corners of two cells apart
         std::vector<std::int64_t> keys;
-        keys.reserve(static_cast<std::size_t>(out.mesh.num_elements()) * static_cast<std::size_t>(width));
-        for (ElementId e = 0; e < out.mesh.num_elements(); ++e) append_element_key(out.mesh, e, width, keys);
-        out.element_order = canonical_positions(comm, keys, width, out.global_elements);
+        keys.reserve(static_cast<std::size_t>(out.mesh_.num_elements()) * static_cast<std::size_t>(width));
+        for (ElementId e = 0; e < out.mesh_.num_elements(); ++e) append_element_key(out.mesh_, e, width, keys);
+        out.element_order_ = canonical_positions(comm, keys, width, out.global_elements_);
     }
-    out.global_cells = out.global_elements;
+    out.global_cells_ = out.global_elements_;
     if (cells) {
         std::vector<std::int64_t> keys;
-        keys.reserve(static_cast<std::size_t>(out.mesh.num_cells()) * kCellKeyWidth);
-        for (ElementId c = 0; c < out.mesh.num_cells(); ++c)
-            append_cell_key(out.mesh.cell_type(c), out.mesh.cell(c), out.mesh.global_ids(), keys);
-        out.cell_order = canonical_positions(comm, keys, kCellKeyWidth, out.global_cells);
+        keys.reserve(static_cast<std::size_t>(out.mesh_.num_cells()) * kCellKeyWidth);
+        for (ElementId c = 0; c < out.mesh_.num_cells(); ++c)
+            append_cell_key(out.mesh_.cell_type(c), out.mesh_.cell(c), out.mesh_.global_ids(), keys);
+        out.cell_order_ = canonical_positions(comm, keys, kCellKeyWidth, out.global_cells_);
     }
     // Each element must be counted exactly once: every piece must hold all the elements around
     // the vertices it owns.
     double counted = 0.0;
-    for (auto c : out.counted) counted += c;
-    agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements)
+    for (auto c : out.counted_) counted += c;
+    agree(comm, out.reducer().total(counted) != static_cast<double>(out.global_elements_)
                     ? path.string() + ": the pieces do not hold every element around the vertices they own"
                     : "");
-    out.timings.distribute = seconds_since(start);
+    out.timings_.distribute = seconds_since(start);
     return out;
 }
 
 void DistributedMesh::assemble(void* arrays, ElementKind kind, ExchangeMode mode) {
     PartArrays& mine = *static_cast<PartArrays*>(arrays);
     static_assert(std::is_same_v<std::int32_t, int>, "the owners are moved, not copied");
-    mesh = part_mesh(mine, kind);
-    vertex_owner = std::move(mine.owner);
-    element_order = std::move(mine.element_order);
-    cell_order = std::move(mine.cell_order);
+    mesh_ = part_mesh(mine, kind);
+    vertex_owner_ = std::move(mine.owner);
+    element_order_ = std::move(mine.element_order);
+    cell_order_ = std::move(mine.cell_order);
     // A cell's corners are counted where the cell is.
-    counted = per_element(mesh, counted_cells(mesh, vertex_owner, rank));
+    counted_ = per_element(mesh_, counted_cells(mesh_, vertex_owner_, rank_));
     const auto start = Clock::now();
     build_schedule(mode);
-    reducer_ = parallel::make_mpi_reducer(comm);
-    halo_ = parallel::make_mpi_halo(comm, rank, ranks, *schedule_);
-    timings.schedule = seconds_since(start);
+    reducer_ = parallel::make_mpi_reducer(comm_);
+    halo_ = parallel::make_mpi_halo(comm_, rank_, ranks_, *schedule_);
+    timings_.schedule = seconds_since(start);
 }
 
 void DistributedMesh::write_pieces(const std::filesystem::path& path) const {
-    parallel::together(comm, true, [&] {
-        if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, rank).parent_path());
-        write_piece(piece_path(path, rank), mesh, vertex_owner, counted_cells(mesh, vertex_owner, rank), rank,
+    parallel::together(comm_, true, [&] {
+        if (path.extension() == ".pvtu") std::filesystem::create_directories(piece_path(path, rank_).parent_path());
+        write_piece(piece_path(path, rank_), mesh_, vertex_owner_, counted_cells(mesh_, vertex_owner_, rank_), rank_,
                     path.extension() != ".pvtu");
-        if (rank == 0 && path.extension() == ".pvtu") write_pvtu(path, ranks);
+        if (rank_ == 0 && path.extension() == ".pvtu") write_pvtu(path, ranks_);
     });
 }
 
@@ -423,13 +425,13 @@ BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
     BoundaryFacets local;
     std::string failure;
     try {
-        local = BoundaryFacets::of(mesh, surface);
+        local = BoundaryFacets::of(mesh_, surface);
     } catch (const MeshError& e) {
         failure = e.what();
     }
-    agree(comm, failure);
-    const auto global = mesh.global_ids();
-    auto owned = [&](GlobalId v) { return vertex_owner[static_cast<std::size_t>(v)] == rank; };
+    agree(comm_, failure);
+    const auto global = mesh_.global_ids();
+    auto owned = [&](GlobalId v) { return vertex_owner_[static_cast<std::size_t>(v)] == rank_; };
     std::vector<std::int64_t> facets;
     for (const auto& f : local.facets) {
         GlobalId first = f[0];
@@ -453,25 +455,25 @@ BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
     // The bounding box of all vertices, as the serial mesh's.
     std::array<double, 6> box;
     box.fill(std::numeric_limits<double>::infinity());
-    const auto coordinates = mesh.coordinates();
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
+    const auto coordinates = mesh_.coordinates();
+    for (VertexId v = 0; v < mesh_.num_vertices(); ++v)
         for (int c = 0; c < 3; ++c) {
             const double x = coordinates[3 * static_cast<std::size_t>(v) + c];
             box[c] = std::min(box[c], x);
             box[3 + c] = std::min(box[3 + c], -x);
         }
-    MPI_Allreduce(MPI_IN_PLACE, box.data(), 6, MPI_DOUBLE, MPI_MIN, comm);
+    MPI_Allreduce(MPI_IN_PLACE, box.data(), 6, MPI_DOUBLE, MPI_MIN, comm_);
 
     BoundaryFacets out;
-    out.kind = mesh.kind();
+    out.kind = mesh_.kind();
     out.surface = surface;
-    const auto all_cuts = gather_to_all(comm, cuts);
+    const auto all_cuts = gather_to_all(comm_, cuts);
     for (std::size_t i = 0; i + 1 < all_cuts.size(); i += 2) out.cuts.push_back({all_cuts[i], all_cuts[i + 1]});
-    const auto all_facets = gather_to_all(comm, facets);
+    const auto all_facets = gather_to_all(comm_, facets);
     for (std::size_t i = 0; i + 2 < all_facets.size(); i += 3)
         out.facets.push_back({all_facets[i], all_facets[i + 1], all_facets[i + 2]});
-    const auto all_ids = gather_to_all(comm, ids);
-    const auto all_xyz = gather_to_all(comm, xyz);
+    const auto all_ids = gather_to_all(comm_, ids);
+    const auto all_xyz = gather_to_all(comm_, xyz);
     std::vector<std::size_t> order(all_ids.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return all_ids[a] < all_ids[b]; });
@@ -481,18 +483,75 @@ BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
                        all_xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i + 1));
     }
     const double dx = -box[3] - box[0], dy = -box[4] - box[1], dz = -box[5] - box[2];
-    out.diagonal = global_vertices > 0 ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0;
+    out.diagonal = global_vertices_ > 0 ? std::sqrt(dx * dx + dy * dy + dz * dz) : 0.0;
     return out;
 }
 
-void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh.coordinates(), 3); }
+void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh_.coordinates(), 3); }
+
+void DistributedMesh::reorder_elements(std::span<const ElementId> order) {
+    const auto permuted = [&](const auto& values) {
+        std::remove_cvref_t<decltype(values)> out(values.size());
+        for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
+        return out;
+    };
+    Renumbering elements;
+    elements.old_vertex.resize(static_cast<std::size_t>(mesh_.num_vertices()));
+    std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
+    elements.old_element.assign(order.begin(), order.end());
+    Mesh reordered = renumbered(mesh_, elements);
+    std::vector<GlobalId> positions = permuted(element_order_);
+    std::vector<std::uint8_t> flags = permuted(counted_);
+    mesh_ = std::move(reordered);
+    element_order_ = std::move(positions);
+    counted_ = std::move(flags);
+}
+
+std::vector<double> DistributedMesh::gather_vertex_field(std::span<const double> field, int width) const {
+    const auto w = static_cast<std::size_t>(width);
+    std::vector<double> mine;
+    std::vector<std::int64_t> keys;
+    const auto ids = mesh_.global_ids();
+    for (std::size_t v = 0; v < vertex_owner_.size(); ++v)
+        if (vertex_owner_[v] == rank_) {
+            keys.push_back(ids[v]);
+            for (std::size_t c = 0; c < w; ++c) mine.push_back(field[w * v + c]);
+        }
+    const int count = static_cast<int>(keys.size());
+    std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
+    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, comm_);
+    std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
+    const int total = rank_ == 0 ? offsets.back() + counts.back() : 0;
+    std::vector<std::int64_t> all_keys(static_cast<std::size_t>(total));
+    MPI_Gatherv(keys.data(), count, MPI_INT64_T, all_keys.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, comm_);
+    for (int r = 0; r < ranks_; ++r) counts[r] *= width, offsets[r] *= width;
+    std::vector<double> values(w * static_cast<std::size_t>(total));
+    MPI_Gatherv(mine.data(), width * count, MPI_DOUBLE, values.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, comm_);
+    std::vector<double> out;
+    if (rank_ != 0) return out;
+    out.assign(w * static_cast<std::size_t>(global_vertices_), 0.0);
+    for (std::size_t i = 0; i < all_keys.size(); ++i)
+        for (std::size_t c = 0; c < w; ++c) out[w * static_cast<std::size_t>(all_keys[i]) + c] = values[w * i + c];
+    return out;
+}
+
+void DistributedMesh::broadcast(std::string& bytes) const {
+    std::uint64_t size = bytes.size();
+    MPI_Bcast(&size, 1, MPI_UINT64_T, 0, comm_);
+    bytes.resize(size);
+    // Counts of MPI calls are ints: send in pieces.
+    for (std::uint64_t at = 0; at < size; at += 1u << 30)
+        MPI_Bcast(bytes.data() + at, static_cast<int>(std::min<std::uint64_t>(size - at, 1u << 30)), MPI_CHAR, 0, comm_);
+}
+
+void DistributedMesh::on_root(const std::function<void()>& work) const { parallel::together(comm_, rank_ == 0, work); }
 
 // The owned vertices' global ids and coordinates (3 per vertex), in local order.
 void DistributedMesh::owned_vertices(std::vector<std::int64_t>& ids, std::vector<double>& xyz) const {
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (vertex_owner[v] == rank) {
-            ids.push_back(mesh.global_ids()[v]);
-            for (int c = 0; c < 3; ++c) xyz.push_back(mesh.coordinates()[3 * static_cast<std::size_t>(v) + c]);
+    for (VertexId v = 0; v < mesh_.num_vertices(); ++v)
+        if (vertex_owner_[v] == rank_) {
+            ids.push_back(mesh_.global_ids()[v]);
+            for (int c = 0; c < 3; ++c) xyz.push_back(mesh_.coordinates()[3 * static_cast<std::size_t>(v) + c]);
         }
 }
 
@@ -500,11 +559,11 @@ void DistributedMesh::gather_coordinates(Mesh* whole) const {
     std::vector<std::int64_t> ids;
     std::vector<double> xyz;
     owned_vertices(ids, xyz);
-    const auto all_ids = gather_to_root(comm, ids).values;
-    const auto all_xyz = gather_to_root(comm, xyz).values;
-    if (rank != 0) return;
-    if (!whole || static_cast<GlobalId>(whole->num_vertices()) != global_vertices ||
-        all_ids.size() != static_cast<std::size_t>(global_vertices))
+    const auto all_ids = gather_to_root(comm_, ids).values;
+    const auto all_xyz = gather_to_root(comm_, xyz).values;
+    if (rank_ != 0) return;
+    if (!whole || static_cast<GlobalId>(whole->num_vertices()) != global_vertices_ ||
+        all_ids.size() != static_cast<std::size_t>(global_vertices_))
         throw OptionError("DistributedMesh::gather_coordinates: rank 0 must pass the mesh given to scatter()");
     auto out = whole->coordinates();
     for (std::size_t i = 0; i < all_ids.size(); ++i) {
@@ -523,14 +582,14 @@ Mesh DistributedMesh::gather_whole() const {
         std::vector<double> xyz;
         owned_vertices(ids, xyz);
         std::vector<std::int64_t> flags;  // int64 rather than bytes: one gather helper for both
-        for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-            if (vertex_owner[v] == rank) flags.push_back(mesh.fixed()[v]);
-        const auto all_ids = gather_to_root(comm, ids).values;
-        const auto all_flags = gather_to_root(comm, flags).values;
-        const auto all_xyz = gather_to_root(comm, xyz).values;
-        if (rank == 0) {
-            coordinates.resize(3 * static_cast<std::size_t>(global_vertices));
-            fixed.resize(static_cast<std::size_t>(global_vertices));
+        for (VertexId v = 0; v < mesh_.num_vertices(); ++v)
+            if (vertex_owner_[v] == rank_) flags.push_back(mesh_.fixed()[v]);
+        const auto all_ids = gather_to_root(comm_, ids).values;
+        const auto all_flags = gather_to_root(comm_, flags).values;
+        const auto all_xyz = gather_to_root(comm_, xyz).values;
+        if (rank_ == 0) {
+            coordinates.resize(3 * static_cast<std::size_t>(global_vertices_));
+            fixed.resize(static_cast<std::size_t>(global_vertices_));
             for (std::size_t i = 0; i < all_ids.size(); ++i) {
                 const auto g = static_cast<std::size_t>(all_ids[i]);
                 std::copy_n(all_xyz.begin() + 3 * static_cast<std::ptrdiff_t>(i), 3, coordinates.begin() + 3 * static_cast<std::ptrdiff_t>(g));
@@ -540,23 +599,23 @@ Mesh DistributedMesh::gather_whole() const {
     }
     // Each element (each cell, for a mesh with cells) once, from the rank that counts it: its
     // canonical position, (its type,) then its vertices' ids.
-    const bool cells = reducer().max(mesh.has_cells() ? 1.0 : 0.0) > 0.0;
+    const bool cells = reducer().max(mesh_.has_cells() ? 1.0 : 0.0) > 0.0;
     std::vector<std::int64_t> records;
     {
-        const std::vector<std::uint8_t> counted_cell = cells ? counted_cells(mesh, vertex_owner, rank) : counted;
-        const std::vector<GlobalId>& order = cells ? cell_order : element_order;
-        for (ElementId c = 0; c < mesh.num_cells(); ++c)
+        const std::vector<std::uint8_t> counted_cell = cells ? counted_cells(mesh_, vertex_owner_, rank_) : counted_;
+        const std::vector<GlobalId>& order = cells ? cell_order_ : element_order_;
+        for (ElementId c = 0; c < mesh_.num_cells(); ++c)
             if (counted_cell[c]) {
                 records.push_back(order[c]);
-                if (cells) records.push_back(static_cast<std::int64_t>(mesh.cell_type(c)));
-                for (VertexId v : mesh.cell(c)) records.push_back(mesh.global_ids()[v]);
+                if (cells) records.push_back(static_cast<std::int64_t>(mesh_.cell_type(c)));
+                for (VertexId v : mesh_.cell(c)) records.push_back(mesh_.global_ids()[v]);
             }
     }
-    auto all_records = gather_to_root(comm, records).values;
+    auto all_records = gather_to_root(comm_, records).values;
     std::vector<std::int64_t>().swap(records);
-    if (rank != 0) return {};
-    const int k = corner_count(mesh.kind());
-    const std::size_t head = cells ? 2 : 1, units = static_cast<std::size_t>(global_cells);
+    if (rank_ != 0) return {};
+    const int k = corner_count(mesh_.kind());
+    const std::size_t head = cells ? 2 : 1, units = static_cast<std::size_t>(global_cells_);
     auto vertices_of = [&](std::size_t at) {
         return static_cast<std::size_t>(cells ? cell_info(static_cast<CellType>(all_records[at + 1])).corners : k);
     };
@@ -577,9 +636,9 @@ Mesh DistributedMesh::gather_whole() const {
     }
     std::vector<std::int64_t>().swap(all_records);  // before the mesh builds its adjacency
     Mesh whole = cells ? Mesh::from_cells(std::move(coordinates), types, std::move(connectivity))
-                              : Mesh(mesh.kind(), std::move(coordinates), std::move(connectivity));
+                              : Mesh(mesh_.kind(), std::move(coordinates), std::move(connectivity));
     whole.set_fixed(std::move(fixed));
-    whole.set_elements_flipped(mesh.elements_flipped());  // written back in the pieces' convention
+    whole.set_elements_flipped(mesh_.elements_flipped());  // written back in the pieces' convention
     return whole;
 }
 

@@ -37,6 +37,10 @@ public:
         if (counts.empty()) return;
         MPI_Allreduce(MPI_IN_PLACE, counts.data(), static_cast<int>(counts.size()), MPI_INT64_T, MPI_SUM, comm_);
     }
+    void sum_wrapping(std::span<std::uint64_t> values) const override {
+        if (values.empty()) return;
+        MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), MPI_UINT64_T, MPI_SUM, comm_);
+    }
     double min(double value) const override {
         MPI_Allreduce(MPI_IN_PLACE, &value, 1, MPI_DOUBLE, MPI_MIN, comm_);
         return value;
@@ -160,16 +164,16 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
     ExchangeSchedule& schedule = *schedule_;
     schedule = {};
     schedule.mode = mode;
-    const auto ids = mesh.global_ids();
+    const auto ids = mesh_.global_ids();
     // Ghosts, grouped by owner (in canonical order within each group).
-    std::vector<std::vector<VertexId>> receive(static_cast<std::size_t>(ranks));
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v)
-        if (vertex_owner[v] != rank) receive[vertex_owner[v]].push_back(v);
+    std::vector<std::vector<VertexId>> receive(static_cast<std::size_t>(ranks_));
+    for (VertexId v = 0; v < mesh_.num_vertices(); ++v)
+        if (vertex_owner_[v] != rank_) receive[vertex_owner_[v]].push_back(v);
     // Tell each owner which of its vertices this rank holds.
-    std::vector<int> request_counts(static_cast<std::size_t>(ranks)), offer_counts(static_cast<std::size_t>(ranks));
-    for (int p = 0; p < ranks; ++p) request_counts[p] = static_cast<int>(receive[p].size());
-    MPI_Alltoall(request_counts.data(), 1, MPI_INT, offer_counts.data(), 1, MPI_INT, comm);
-    std::vector<int> request_offsets(static_cast<std::size_t>(ranks), 0), offer_offsets(static_cast<std::size_t>(ranks), 0);
+    std::vector<int> request_counts(static_cast<std::size_t>(ranks_)), offer_counts(static_cast<std::size_t>(ranks_));
+    for (int p = 0; p < ranks_; ++p) request_counts[p] = static_cast<int>(receive[p].size());
+    MPI_Alltoall(request_counts.data(), 1, MPI_INT, offer_counts.data(), 1, MPI_INT, comm_);
+    std::vector<int> request_offsets(static_cast<std::size_t>(ranks_), 0), offer_offsets(static_cast<std::size_t>(ranks_), 0);
     std::partial_sum(request_counts.begin(), request_counts.end() - 1, request_offsets.begin() + 1);
     std::partial_sum(offer_counts.begin(), offer_counts.end() - 1, offer_offsets.begin() + 1);
     std::vector<std::int64_t> requested;
@@ -177,11 +181,11 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
         for (VertexId v : list) requested.push_back(ids[v]);
     std::vector<std::int64_t> offered(static_cast<std::size_t>(offer_offsets.back() + offer_counts.back()));
     MPI_Alltoallv(requested.data(), request_counts.data(), request_offsets.data(), MPI_INT64_T, offered.data(),
-                  offer_counts.data(), offer_offsets.data(), MPI_INT64_T, comm);
+                  offer_counts.data(), offer_offsets.data(), MPI_INT64_T, comm_);
 
     std::vector<std::pair<int, int>> my_edges;
     std::string failure;
-    for (int p = 0; p < ranks; ++p) {
+    for (int p = 0; p < ranks_; ++p) {
         if (receive[p].empty() && offer_counts[p] == 0) continue;
         ExchangePartner partner;
         partner.rank = p;
@@ -189,38 +193,38 @@ void DistributedMesh::build_schedule(ExchangeMode mode) {
         for (int i = 0; i < offer_counts[p]; ++i) {
             const GlobalId id = offered[offer_offsets[p] + i];
             const auto it = std::lower_bound(ids.begin(), ids.end(), id);
-            if (it == ids.end() || *it != id || vertex_owner[it - ids.begin()] != rank) {
+            if (it == ids.end() || *it != id || vertex_owner_[it - ids.begin()] != rank_) {
                 if (failure.empty())
                     failure = "rank " + std::to_string(p) + " holds vertex " + std::to_string(id) + " as owned by rank " +
-                              std::to_string(rank) + ", which does not own it";
+                              std::to_string(rank_) + ", which does not own it";
                 continue;
             }
             partner.send.push_back(static_cast<VertexId>(it - ids.begin()));
         }
         schedule.partners.push_back(std::move(partner));
-        my_edges.push_back({std::min(rank, p), std::max(rank, p)});
+        my_edges.push_back({std::min(rank_, p), std::max(rank_, p)});
     }
-    parallel::agree(comm, failure);
+    parallel::agree(comm_, failure);
     // The whole process graph on every rank, colored the same way everywhere.
     int mine = static_cast<int>(my_edges.size());
-    std::vector<int> edge_counts(static_cast<std::size_t>(ranks));
-    MPI_Allgather(&mine, 1, MPI_INT, edge_counts.data(), 1, MPI_INT, comm);
-    std::vector<int> edge_offsets(static_cast<std::size_t>(ranks), 0);
-    for (int p = 1; p < ranks; ++p) edge_offsets[p] = edge_offsets[p - 1] + 2 * edge_counts[p - 1];
+    std::vector<int> edge_counts(static_cast<std::size_t>(ranks_));
+    MPI_Allgather(&mine, 1, MPI_INT, edge_counts.data(), 1, MPI_INT, comm_);
+    std::vector<int> edge_offsets(static_cast<std::size_t>(ranks_), 0);
+    for (int p = 1; p < ranks_; ++p) edge_offsets[p] = edge_offsets[p - 1] + 2 * edge_counts[p - 1];
     std::vector<int> flat;
     for (const auto& [a, b] : my_edges) flat.push_back(a), flat.push_back(b);
-    std::vector<int> flat_counts(static_cast<std::size_t>(ranks));
-    for (int p = 0; p < ranks; ++p) flat_counts[p] = 2 * edge_counts[p];
+    std::vector<int> flat_counts(static_cast<std::size_t>(ranks_));
+    for (int p = 0; p < ranks_; ++p) flat_counts[p] = 2 * edge_counts[p];
     std::vector<int> all_flat(static_cast<std::size_t>(edge_offsets.back() + flat_counts.back()));
     MPI_Allgatherv(flat.data(), static_cast<int>(flat.size()), MPI_INT, all_flat.data(), flat_counts.data(),
-                   edge_offsets.data(), MPI_INT, comm);
+                   edge_offsets.data(), MPI_INT, comm_);
     std::set<std::pair<int, int>> edge_set;
     for (std::size_t i = 0; i + 1 < all_flat.size(); i += 2) edge_set.insert({all_flat[i], all_flat[i + 1]});
     const std::vector<std::pair<int, int>> edges(edge_set.begin(), edge_set.end());
-    const auto colors = color_process_graph(ranks, edges);
+    const auto colors = color_process_graph(ranks_, edges);
     schedule.colors = colors.empty() ? 0 : *std::max_element(colors.begin(), colors.end()) + 1;
     for (ExchangePartner& p : schedule.partners) {
-        const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(rank, p.rank), std::max(rank, p.rank)});
+        const auto it = std::lower_bound(edges.begin(), edges.end(), std::pair{std::min(rank_, p.rank), std::max(rank_, p.rank)});
         p.color = colors[static_cast<std::size_t>(it - edges.begin())];
     }
     std::sort(schedule.partners.begin(), schedule.partners.end(),

@@ -19,14 +19,66 @@ const Halo kNoGhosts;
 MeshPart::MeshPart(Mesh& whole) : mesh_(&whole), reducer_(&kWholeMeshReducer), halo_(&kNoGhosts) {}
 
 MeshPart::MeshPart(DistributedMesh& part)
-    : mesh_(&part.mesh), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}
+    : mesh_(&part.mesh()), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}
 
 bool MeshPart::owns(VertexId v) const {
-    return !distributed_ || distributed_->vertex_owner[static_cast<std::size_t>(v)] == distributed_->rank;
+    return !distributed_ || distributed_->vertex_owner()[static_cast<std::size_t>(v)] == distributed_->rank();
 }
 
 bool MeshPart::counts(ElementId e) const {
-    return !distributed_ || distributed_->counted[static_cast<std::size_t>(e)] != 0;
+    return !distributed_ || distributed_->counted()[static_cast<std::size_t>(e)] != 0;
+}
+
+int MeshPart::rank() const { return distributed_ ? distributed_->rank() : 0; }
+
+int MeshPart::ranks() const { return distributed_ ? distributed_->ranks() : 1; }
+
+GlobalId MeshPart::global_vertices() const {
+    return distributed_ ? distributed_->global_vertices() : static_cast<GlobalId>(mesh_->num_vertices());
+}
+
+GlobalId MeshPart::global_elements() const {
+    return distributed_ ? distributed_->global_elements() : static_cast<GlobalId>(mesh_->num_elements());
+}
+
+std::span<const GlobalId> MeshPart::element_positions() const {
+    if (!distributed_) return {};
+    return distributed_->element_order();
+}
+
+std::span<const std::uint8_t> MeshPart::counted() const {
+    if (!distributed_) return {};
+    return distributed_->counted();
+}
+
+void MeshPart::reorder_elements(std::span<const ElementId> order) const {
+    if (!distributed_) throw Error("MeshPart::reorder_elements: the whole mesh keeps the order it was given");
+    distributed_->reorder_elements(order);
+}
+
+Vec3 MeshPart::plane_normal() const { return distributed_ ? distributed_->plane_normal() : mesh_->plane_normal(); }
+
+BoundarySurface MeshPart::boundary_surface(bool surface_mesh, const SurfaceOptions& options) const {
+    if (!distributed_) return BoundarySurface(*mesh_, options);
+    return BoundarySurface(distributed_->gather_boundary(surface_mesh), mesh_->global_ids(), options);
+}
+
+std::vector<Vec3> MeshPart::normals_of(const BoundarySurface& surface, const Mesh& mesh) const {
+    return distributed_ ? surface.normals_of(mesh, mesh_->global_ids()) : surface.normals_of(mesh);
+}
+
+std::vector<double> MeshPart::gather_to_root(std::span<const double> field, int width) const {
+    if (!distributed_) return {field.begin(), field.end()};
+    return distributed_->gather_vertex_field(field, width);
+}
+
+void MeshPart::broadcast(std::string& bytes) const {
+    if (distributed_) distributed_->broadcast(bytes);
+}
+
+void MeshPart::on_root(const std::function<void()>& work) const {
+    if (!distributed_) return work();
+    distributed_->on_root(work);
 }
 
 void set_targets(MeshPart part, const TargetOptions& options, const Mesh* reference) {

@@ -11,7 +11,6 @@
 #include "paloverde/assess/quality_assessor.hpp"
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "checkpointer.hpp"
 #include "run_support.hpp"
 
@@ -200,7 +199,7 @@ Summary run_first(MeshPart part, const std::vector<double>& given, const std::ve
 class RunCheckpoints {
 public:
     RunCheckpoints(MeshPart part, const CheckpointOptions& motion)
-        : motion_(motion), root_(!part.distributed() || part.distributed()->rank == 0) {
+        : motion_(motion), root_(part.root()) {
         if (!motion.resume.empty()) {
             // Rank 0's file system decides (it reads the file).
             const bool found = root_ && std::filesystem::exists(motion.resume + kSuffix);

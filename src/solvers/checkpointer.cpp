@@ -1,7 +1,5 @@
 #include "checkpointer.hpp"
 
-#include <mpi.h>
-
 #include <algorithm>
 #include <array>
 #include <bit>
@@ -14,8 +12,6 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/atomic_file.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
-#include "parallel/collective.hpp"
 
 namespace paloverde {
 
@@ -180,13 +176,6 @@ IterationRecord get_record(Reader& r) {
     out.inverted = static_cast<long>(r.i64());
     out.moved = static_cast<long>(r.i64());
     return out;
-}
-
-// Runs `work` on rank 0 of a distributed run (or serially); a failure there is thrown on every rank.
-template <class Work>
-void on_root(const DistributedMesh* part, Work&& work) {
-    if (!part) return work();
-    parallel::together(part->comm, part->rank == 0, work);
 }
 
 }  // namespace
@@ -368,27 +357,20 @@ OptionsText& OptionsText::operator()(const char* key, const TerminationCriterion
 
 Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
                            MeshPart whole_or_part, CheckpointKind kind)
-    : options_(options), solver_(std::move(solver)), kind_(kind), reducer_(&whole_or_part.reducer()),
-      part_(whole_or_part.distributed()), saved_at_(Clock::now()) {
+    : options_(options), solver_(std::move(solver)), kind_(kind), part_(whole_or_part), saved_at_(Clock::now()) {
     options_.validate();
     if (!writes() && !resumes()) return;
     const Mesh& mesh = whole_or_part.mesh();
-    const DistributedMesh* part = part_;
     const VertexId n = mesh.num_vertices();
     keys_.resize(static_cast<std::size_t>(n));
-    owned_.assign(static_cast<std::size_t>(n), 1);
-    if (part) {
-        ranks_ = part->ranks;
-        rank_ = part->rank;
-        vertices_ = static_cast<std::uint64_t>(part->global_vertices);
-        for (VertexId v = 0; v < n; ++v) {
-            keys_[v] = mesh.global_ids()[v];
-            owned_[v] = part->vertex_owner[v] == part->rank;
-        }
-    } else {
-        std::iota(keys_.begin(), keys_.end(), GlobalId{0});
-        vertices_ = static_cast<std::uint64_t>(n);
-    }
+    owned_.resize(static_cast<std::size_t>(n));
+    ranks_ = whole_or_part.ranks();
+    rank_ = whole_or_part.rank();
+    vertices_ = static_cast<std::uint64_t>(whole_or_part.global_vertices());
+    // A part's vertices are named by global id; the whole mesh's by their index.
+    if (whole_or_part.whole()) std::iota(keys_.begin(), keys_.end(), GlobalId{0});
+    else std::copy(mesh.global_ids().begin(), mesh.global_ids().end(), keys_.begin());
+    for (VertexId v = 0; v < n; ++v) owned_[v] = whole_or_part.owns(v);
 
     options_hash_ = fnv1a(solver_ + "\n" + options_text);
     // The mesh's fingerprint: a sum of one hash per element (its sorted vertex keys) and one per
@@ -397,7 +379,7 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
     std::array<std::uint64_t, 2> sums{0, 0};
     const int corners = mesh.corners();
     for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        if (part && !part->counted[e]) continue;
+        if (!whole_or_part.counts(e)) continue;
         std::array<GlobalId, 4> key{};
         // Sorted by insertion: at most 4 keys.
         for (int i = 0; i < corners; ++i) {
@@ -421,7 +403,7 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
             for (int c = 0; c < 3; ++c) h = mix(h, std::bit_cast<std::uint64_t>(reference[3 * static_cast<std::size_t>(v) + c]));
         sums[1] += h;
     }
-    if (part) MPI_Allreduce(MPI_IN_PLACE, sums.data(), 2, MPI_UINT64_T, MPI_SUM, part->comm);
+    part_.reducer().sum_wrapping(sums);
     mesh_hash_ = mix(mix(sums[0], sums[1]), vertices_);
 }
 
@@ -431,37 +413,6 @@ bool Checkpointer::due(int iterations) {
     // Clocks differ between ranks: the slowest decides, as for time limits.
     const bool by_time = options_.every_seconds > 0.0 && reducer().max(seconds_since(saved_at_)) >= options_.every_seconds;
     return by_count || by_time;
-}
-
-// Rank 0 gets every vertex's 3 values, indexed by key; the other ranks get nothing.
-std::vector<double> Checkpointer::gather(const std::vector<double>& field) const {
-    std::vector<double> out;
-    if (!part_) {
-        out = field;
-        return out;
-    }
-    std::vector<double> mine;
-    std::vector<std::int64_t> keys;
-    for (std::size_t v = 0; v < owned_.size(); ++v)
-        if (owned_[v]) {
-            keys.push_back(keys_[v]);
-            for (int c = 0; c < 3; ++c) mine.push_back(field[3 * v + c]);
-        }
-    const int count = static_cast<int>(keys.size());
-    std::vector<int> counts(static_cast<std::size_t>(ranks_)), offsets(static_cast<std::size_t>(ranks_));
-    MPI_Gather(&count, 1, MPI_INT, counts.data(), 1, MPI_INT, 0, part_->comm);
-    std::exclusive_scan(counts.begin(), counts.end(), offsets.begin(), 0);
-    const int total = rank_ == 0 ? offsets.back() + counts.back() : 0;
-    std::vector<std::int64_t> all_keys(static_cast<std::size_t>(total));
-    MPI_Gatherv(keys.data(), count, MPI_INT64_T, all_keys.data(), counts.data(), offsets.data(), MPI_INT64_T, 0, part_->comm);
-    for (int r = 0; r < ranks_; ++r) counts[r] *= 3, offsets[r] *= 3;
-    std::vector<double> values(static_cast<std::size_t>(3 * total));
-    MPI_Gatherv(mine.data(), 3 * count, MPI_DOUBLE, values.data(), counts.data(), offsets.data(), MPI_DOUBLE, 0, part_->comm);
-    if (rank_ != 0) return out;
-    out.assign(3 * vertices_, 0.0);
-    for (std::size_t i = 0; i < all_keys.size(); ++i)
-        for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(all_keys[i]) + c] = values[3 * i + c];
-    return out;
 }
 
 void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const {
@@ -502,12 +453,12 @@ void Checkpointer::save(const Summary& summary, const SolverState& state, double
     // Vertex fields are gathered (collectively) one at a time and appended on rank 0.
     w.u64(state.vertex_fields.size());
     for (const auto& [name, values] : state.vertex_fields) {
-        const std::vector<double> all = gather(values);
+        const std::vector<double> all = part_.gather_to_root(values, 3);
         if (rank_ != 0) continue;
         w.text(name);
         w.f64s(all);
     }
-    on_root(part_, [&] {
+    part_.on_root([&] {
         const std::string& content = w.bytes();
         std::string header(kMagic, 8);
         put_u64(header, kVersion);
@@ -531,16 +482,8 @@ SolverState Checkpointer::resume(Summary& summary, SolverRun& run) {
 SolverState Checkpointer::resume(Summary& summary) {
     const std::string& path = options_.resume;
     std::string content;
-    on_root(part_, [&] { content = read_checked(path); });
-    if (part_) {
-        std::uint64_t size = content.size();
-        MPI_Bcast(&size, 1, MPI_UINT64_T, 0, part_->comm);
-        content.resize(size);
-        // Counts of MPI calls are ints: send in pieces.
-        for (std::uint64_t at = 0; at < size; at += 1u << 30)
-            MPI_Bcast(content.data() + at, static_cast<int>(std::min<std::uint64_t>(size - at, 1u << 30)), MPI_CHAR, 0,
-                      part_->comm);
-    }
+    part_.on_root([&] { content = read_checked(path); });
+    part_.broadcast(content);
     // Every rank parses the same bytes, so every rank fails alike.
     Reader r(content, path);
     std::string solver = r.text();

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/reducer.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
@@ -27,7 +28,6 @@
 #include "run_support.hpp"
 
 namespace paloverde {
-class DistributedMesh;
 }
 
 namespace paloverde::detail {
@@ -102,15 +102,13 @@ public:
 
 private:
     void encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const;
-    std::vector<double> gather(const std::vector<double>& field) const;
-    const Reducer& reducer() const { return *reducer_; }
+    const Reducer& reducer() const { return part_.reducer(); }
 
     CheckpointOptions options_;
     std::string solver_;
     CheckpointKind kind_;
     std::uint64_t mesh_hash_ = 0, options_hash_ = 0;
-    const Reducer* reducer_;
-    const DistributedMesh* part_;  // nullptr serially
+    MeshPart part_;
     std::vector<GlobalId> keys_;        // per local vertex
     std::vector<std::uint8_t> owned_;   // per local vertex
     std::uint64_t vertices_ = 0;        // over all processes

@@ -79,7 +79,7 @@ void Phase::refocus() {
 }
 
 void Phase::moving_like_owners() {
-    if (!work_.distributed()) return;
+    if (work_.part().whole()) return;
     for (std::size_t v = 0; v < moving_.size(); ++v) mark_[v] = moving_[v];
     work_.halo().update(mark_, 1);
     for (std::size_t v = 0; v < moving_.size(); ++v) moving_[v] = mark_[v] != 0.0;

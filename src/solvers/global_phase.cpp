@@ -53,7 +53,7 @@ void Phase::prepare() {
     preconditioned_.assign(n3, 0.0);
     previous_preconditioned_.assign(n3, 0.0);
     stamp_.assign(n3 / 3, 0);
-    mark_.assign(work_.distributed() ? n3 / 3 : 0, 0.0);
+    mark_.assign(work_.part().whole() ? 0 : n3 / 3, 0.0);
     once_damped_mark_.assign(n3 / 3, 0);
     // Newton's directions from the start come out worse on a focus than on the whole mesh: they
     // keep the whole mesh. The finish, from where conjugate gradients stalled, focuses like them

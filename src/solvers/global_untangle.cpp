@@ -140,8 +140,8 @@ private:
             if (result.reason == TerminationReason::TargetReached) break;
             if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
                 return {result.reason, "while untangling: " + result.message};
-            if (work_.distributed() && !out_of_budget(result) && round < options_.local_untangle_rounds && !colors_)
-                colors_ = color_vertices(*work_.distributed());
+            if (!work_.part().whole() && !out_of_budget(result) && round < options_.local_untangle_rounds && !colors_)
+                colors_ = color_vertices(work_.part());
             if (out_of_budget(result) || round == options_.local_untangle_rounds ||
                 local_untangle_sweeps(work_, colors_ ? &*colors_ : nullptr, xyz_, *hybrid_, context_.summary,
                                       context_.observer, context_.start, slides()) == 0)

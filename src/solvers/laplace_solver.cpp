@@ -22,7 +22,7 @@ void LaplaceSolverOptions::validate() const {
 LaplaceSolver::LaplaceSolver(LaplaceSolverOptions options) : options_(std::move(options)) { options_.validate(); }
 
 Summary LaplaceSolver::improve(MeshPart part) {
-    if (part.distributed())
+    if (!part.whole())
         throw OptionError("'" + std::string(name()) + "' has no distributed version: smooth the whole mesh serially");
     Mesh& mesh = part.mesh();
     detail::ThreadScope threads(options_.threads);
@@ -53,7 +53,7 @@ Summary LaplaceSolver::improve(MeshPart part) {
     std::vector<std::vector<VertexId>> groups;
     std::string colors;
     if (smart) {
-        const VertexColoring coloring = color_vertices(mesh, options_.coloring);
+        const VertexColoring coloring = color_vertices(part, options_.coloring);
         groups = coloring.classes();
         colors = " (" + std::to_string(coloring.count) + " colors)";
     } else {

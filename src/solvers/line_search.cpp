@@ -219,7 +219,7 @@ void Phase::note_barrier_changes(std::span<const ElementId> elements, double t) 
 // A distributed run: the owner of a vertex holds all its elements, so its decision to damp the
 // vertex is complete; ghosts take their owners' decisions.
 void Phase::damp_like_owners(std::vector<VertexId>& damped) {
-    if (!work_.distributed()) return;
+    if (work_.part().whole()) return;
     const auto owned = work_.owned();
     for (VertexId v : damped) mark_[v] = 1.0;
     work_.halo().update(mark_, 1);

@@ -10,7 +10,6 @@
 #include "core/exact_sums.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "boundary_motion.hpp"
 #include "checkpointer.hpp"
 #include "iteration_start.hpp"
@@ -193,6 +192,31 @@ private:
     std::array<double, 12> all_gradients_{};
 };
 
+// The metric scale. A part's is the whole mesh's: its mean element volume summed over the ranks,
+// its plane the whole mesh's.
+MetricScale whole_mesh_scale(const MeshPart& part) {
+    const Mesh& mesh = part.mesh();
+    MetricScale scale = MetricScale::of(mesh);
+    if (part.whole()) return scale;
+    auto volume = make_metric("scaled_volume");
+    MetricScale unit = scale;
+    unit.reference_volume = 1.0;
+    unit.plane_normal = part.plane_normal();
+    volume->set_scale(unit);
+    ExactSum sums[2];
+    double v = 0.0;
+    for (ElementId e = 0; e < mesh.num_elements(); ++e)
+        if (part.counts(e)) {
+            volume->evaluate(mesh, mesh.coordinates(), e, e + 1, &v);
+            sums[0].add(std::abs(v));
+            sums[1].add(1.0);
+        }
+    part.reducer().sum(sums);
+    if (sums[0].value() > 0.0 && std::isfinite(sums[0].value())) scale.reference_volume = sums[0].value() / sums[1].value();
+    scale.plane_normal = part.plane_normal();
+    return scale;
+}
+
 }  // namespace
 
 LocalSolver::LocalSolver(LocalSolverOptions options) : options_(std::move(options)) { options_.validate(); }
@@ -240,41 +264,15 @@ Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundar
     if (auto nothing = run.nothing_to_move()) return *nothing;
     detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
     const Mesh& mesh = whole_or_part.mesh();
-    DistributedMesh* part = whole_or_part.distributed();
-    if (!part) {
-        Domain domain{mesh, detail::movable_elements(mesh), whole_or_part.reducer(), whole_or_part.halo(),
-                      color_vertices(mesh, options_.coloring), MetricScale::of(mesh)};
-        return sweep_colors(run, domain, checkpointer, sliding);
-    }
-    // The serial smallest-last coloring needs the whole mesh: a part is colored in rounds
-    // (Jones & Plassmann), and a rank moves only the vertices it owns.
+    // A rank moves only the vertices it owns, and sums over the elements it counts.
     std::vector<ElementId> counted;
     for (ElementId e : detail::movable_elements(mesh))
         if (whole_or_part.counts(e)) counted.push_back(e);
-    VertexColoring coloring = color_vertices(*part);
+    VertexColoring coloring = color_vertices(whole_or_part, options_.coloring);
     for (VertexId v = 0; v < mesh.num_vertices(); ++v)
         if (!whole_or_part.owns(v)) coloring.color[v] = -1;
-    MetricScale scale = MetricScale::of(mesh);
-    {
-        // The whole mesh's mean element volume.
-        auto volume = make_metric("scaled_volume");
-        MetricScale unit = scale;
-        unit.reference_volume = 1.0;
-        unit.plane_normal = part->plane_normal;
-        volume->set_scale(unit);
-        ExactSum sums[2];
-        double v = 0.0;
-        for (ElementId e = 0; e < mesh.num_elements(); ++e)
-            if (whole_or_part.counts(e)) {
-                volume->evaluate(mesh, mesh.coordinates(), e, e + 1, &v);
-                sums[0].add(std::abs(v));
-                sums[1].add(1.0);
-            }
-        whole_or_part.reducer().sum(sums);
-        if (sums[0].value() > 0.0 && std::isfinite(sums[0].value())) scale.reference_volume = sums[0].value() / sums[1].value();
-        scale.plane_normal = part->plane_normal;
-    }
-    Domain domain{mesh, std::move(counted), whole_or_part.reducer(), whole_or_part.halo(), std::move(coloring), scale};
+    Domain domain{mesh, std::move(counted), whole_or_part.reducer(), whole_or_part.halo(), std::move(coloring),
+                  whole_mesh_scale(whole_or_part)};
     return sweep_colors(run, domain, checkpointer, sliding);
 }
 

@@ -7,7 +7,6 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/core/exact_sum.hpp"
 #include "paloverde/mesh/orientation.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde::detail {
 
@@ -37,18 +36,14 @@ double volume_of(const MeshPart& part) {
     for (double c : xyz) largest = std::max(largest, std::abs(c));
     largest = part.reducer().max(largest);  // one scale on every process
     const int exponent = unit_scale_exponent(std::span<const double>(&largest, 1));
-    const DistributedMesh* d = part.distributed();
-    SignedMeasure m = d ? signed_measure(mesh, xyz, exponent, d->plane_normal, d->counted)
-                        : signed_measure(mesh, xyz, exponent, mesh.plane_normal());
+    const SignedMeasure m = signed_measure(mesh, xyz, exponent, part.plane_normal(), part.counted());
     const double total = part.reducer().total(m.total);
     return std::ldexp(total, -exponent * (mesh.kind() == ElementKind::Tetrahedron ? 3 : 2));
 }
 
 // The input's boundary: a part's is the whole mesh's, its vertices named by global id.
 BoundarySurface surface_of(const MeshPart& part, const SurfaceOptions& options) {
-    if (const DistributedMesh* d = part.distributed())
-        return BoundarySurface(d->gather_boundary(is_surface_mesh(part)), d->mesh.global_ids(), options);
-    return BoundarySurface(part.mesh(), options);
+    return part.boundary_surface(is_surface_mesh(part), options);
 }
 
 }  // namespace
@@ -85,9 +80,8 @@ std::optional<TerminationCriterion> sliding_budget(const TerminationCriterion& t
 }
 
 std::vector<Vec3> input_surface_normals(const MeshPart& part) {
-    const DistributedMesh* d = part.distributed();
     const BoundarySurface surface = surface_of(part, SurfaceOptions{});
-    return d ? surface.normals_of(part.mesh(), d->mesh.global_ids()) : surface.normals_of(part.mesh());
+    return part.normals_of(surface, part.mesh());
 }
 
 bool is_surface_mesh(const MeshPart& part) {
@@ -192,8 +186,7 @@ void SlidingBoundary::slide_on_surface(bool open_edges_slide) {
         slides_[v] = 1;
         released_[v] = role == BoundaryRole::Surface ? 2 : 1;
     }
-    const DistributedMesh* d = part_.distributed();
-    std::vector<Vec3> normals = d ? surface_.normals_of(mesh_, d->mesh.global_ids()) : surface_.normals_of(mesh_);
+    std::vector<Vec3> normals = part_.normals_of(surface_, mesh_);
     turn_targets_to(normals);
     mesh_.set_surface_normals(std::move(normals));
     normals_set_ = true;

@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include "paloverde/mesh/renumber.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde {
 
@@ -66,9 +65,8 @@ std::vector<VertexId> smallest_last(const VertexGraph& graph, const Mesh& mesh) 
     return order;
 }
 
-}  // namespace
-
-VertexColoring color_vertices(const Mesh& mesh, ColoringOrder order) {
+// The whole mesh: first fit in `order`.
+VertexColoring color_whole(const Mesh& mesh, ColoringOrder order) {
     const VertexId n = mesh.num_vertices();
     VertexColoring result;
     result.color.assign(static_cast<std::size_t>(n), -1);
@@ -97,25 +95,9 @@ VertexColoring color_vertices(const Mesh& mesh, ColoringOrder order) {
     return result;
 }
 
-bool is_proper_coloring(const Mesh& mesh, const VertexColoring& coloring) {
-    if (coloring.color.size() != static_cast<std::size_t>(mesh.num_vertices())) return false;
-    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
-        const int c = coloring.color[v];
-        if (!mesh.can_move(v) ? c != -1 : (c < 0 || c >= coloring.count)) return false;
-    }
-    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
-        const auto element = mesh.element(e);
-        for (std::size_t i = 0; i < element.size(); ++i)
-            for (std::size_t j = i + 1; j < element.size(); ++j) {
-                const int a = coloring.color[element[i]], b = coloring.color[element[j]];
-                if (a >= 0 && a == b) return false;
-            }
-    }
-    return true;
-}
-
-VertexColoring color_vertices(const DistributedMesh& part) {
-    const Mesh& mesh = part.mesh;
+// A part: in rounds (Jones & Plassmann), by priorities every rank computes alike.
+VertexColoring color_part(const MeshPart& part) {
+    const Mesh& mesh = part.mesh();
     const auto ids = mesh.global_ids();
     const Reducer& reducer = part.reducer();
     const VertexId n = mesh.num_vertices();
@@ -135,7 +117,7 @@ VertexColoring color_vertices(const DistributedMesh& part) {
         chosen.clear();
         double uncolored = 0.0;
         for (VertexId v = 0; v < n; ++v) {
-            if (!mesh.can_move(v) || part.vertex_owner[v] != part.rank || color[v] >= 0.0) continue;
+            if (!mesh.can_move(v) || !part.owns(v) || color[v] >= 0.0) continue;
             uncolored += 1.0;
             bool first = true;
             used.assign(1, 0);
@@ -167,6 +149,30 @@ VertexColoring color_vertices(const DistributedMesh& part) {
     }
     result.count = static_cast<int>(reducer.max(count));
     return result;
+}
+
+}  // namespace
+
+VertexColoring color_vertices(MeshPart part, ColoringOrder order) {
+    // The serial orders need the whole mesh.
+    return part.whole() ? color_whole(part.mesh(), order) : color_part(part);
+}
+
+bool is_proper_coloring(const Mesh& mesh, const VertexColoring& coloring) {
+    if (coloring.color.size() != static_cast<std::size_t>(mesh.num_vertices())) return false;
+    for (VertexId v = 0; v < mesh.num_vertices(); ++v) {
+        const int c = coloring.color[v];
+        if (!mesh.can_move(v) ? c != -1 : (c < 0 || c >= coloring.count)) return false;
+    }
+    for (ElementId e = 0; e < mesh.num_elements(); ++e) {
+        const auto element = mesh.element(e);
+        for (std::size_t i = 0; i < element.size(); ++i)
+            for (std::size_t j = i + 1; j < element.size(); ++j) {
+                const int a = coloring.color[element[i]], b = coloring.color[element[j]];
+                if (a >= 0 && a == b) return false;
+            }
+    }
+    return true;
 }
 
 }  // namespace paloverde

@@ -10,7 +10,6 @@
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "local_untangle.hpp"
 
 namespace paloverde::detail {
@@ -59,14 +58,6 @@ std::vector<ElementId> inverse(std::span<const ElementId> order) {
     for (std::size_t i = 0; i < order.size(); ++i) out[static_cast<std::size_t>(order[i])] = static_cast<ElementId>(i);
     return out;
 }
-// The mesh with its elements in `order` (element i is element order[i]), vertices unchanged.
-Mesh reordered_elements(const Mesh& mesh, std::vector<ElementId> order) {
-    Renumbering elements;
-    elements.old_vertex.resize(static_cast<std::size_t>(mesh.num_vertices()));
-    std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
-    elements.old_element = std::move(order);
-    return renumbered(mesh, elements);
-}
 
 // The corners of copy k of a tetrahedron: edge k of (0 1), (0 2), (0 3), (1 2), (1 3), (2 3) first,
 // the other two after them in the order that keeps the permutation even.
@@ -103,17 +94,17 @@ std::vector<GlobalId> term_positions(std::span<const GlobalId> positions) {
 }  // namespace
 
 Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
-    : original_(&part.mesh()), part_(part.distributed()), mesh_(part_ && !angle_terms ? part.mesh() : own_),
+    : original_(&part.mesh()), part_(part), mesh_(!part.whole() && !angle_terms ? part.mesh() : own_),
       angle_terms_(angle_terms) {
     if (angle_terms && (part.mesh().kind() != ElementKind::Tetrahedron || part.mesh().has_cells()))
         throw OptionError("angle terms are for meshes of tetrahedra only");
     // Each copy permutes its element's corners, which a target's map is written for.
     if (angle_terms && part.mesh().has_targets())
         throw OptionError("the dihedral angles are rated against the regular tetrahedron: they take no targets");
-    if (part_) {
+    if (!part.whole()) {
         reducer_ = &part.reducer();
         halo_ = &part.halo();
-        Mesh& held = part_->mesh;
+        const Mesh& held = part.mesh();
         const VertexId n = held.num_vertices();
         owned_.resize(static_cast<std::size_t>(n));
         for (VertexId v = 0; v < n; ++v) {
@@ -121,20 +112,18 @@ Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
             if (!owned_[v]) ghosts_.push_back(v);
         }
         // The part's elements in the working order, in place.
-        auto [order, movable] = movable_first(held, part_->element_order);
-        held = reordered_elements(held, order);
-        part_->element_order = permuted(part_->element_order, order);
-        if (!part_->counted.empty()) part_->counted = permuted(part_->counted, order);
+        auto [order, movable] = movable_first(held, part.element_positions());
+        part.reorder_elements(order);
         part_order_ = std::move(order);
         if (angle_terms_) {  // the copies in a mesh of the workspace's own, the part as it is
             own_ = with_angle_terms(held);
-            for (std::uint8_t c : part_->counted) term_counted_.insert(term_counted_.end(), kAngleTerms, c);
-            finish(term_positions(part_->element_order), term_counted_, kAngleTerms * part_->global_elements,
+            for (std::uint8_t c : part.counted()) term_counted_.insert(term_counted_.end(), kAngleTerms, c);
+            finish(term_positions(part.element_positions()), term_counted_, kAngleTerms * part.global_elements(),
                    kAngleTerms * movable);
         } else {
-            finish(part_->element_order, part_->counted, part_->global_elements, movable);
+            finish(part.element_positions(), part.counted(), part.global_elements(), movable);
         }
-        if (held.kind() == ElementKind::Triangle) scale_.plane_normal = part_->plane_normal;
+        if (held.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal();
         return;
     }
     // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
@@ -168,17 +157,11 @@ Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
 }
 
 Workspace::~Workspace() {
-    if (!part_) return;
+    if (part_.whole()) return;
     // The local smoother's sums follow the part's element order: hand the part back in it. All
     // or nothing: should memory run out, the part stays whole, in the workspace's order.
     try {
-        const std::vector<ElementId> back = inverse(part_order_);
-        Mesh mesh = reordered_elements(part_->mesh, back);
-        std::vector<GlobalId> element_order = permuted(part_->element_order, back);
-        std::vector<std::uint8_t> counted = permuted(part_->counted, back);
-        part_->mesh = std::move(mesh);
-        part_->element_order = std::move(element_order);
-        part_->counted = std::move(counted);
+        part_.reorder_elements(inverse(part_order_));
     } catch (const std::exception&) {
     }
 }
@@ -309,17 +292,19 @@ void Workspace::focus(std::span<const std::uint8_t> moving) {
         f.mesh.carry_element_data_from(mesh_, same, f.elements);
     }
     const auto size = static_cast<ElementId>(f.elements.size());
-    if (part_)
+    if (!part_.whole()) {
+        const std::span<const std::uint8_t> counted = angle_terms_ ? std::span<const std::uint8_t>(term_counted_) : part_.counted();
         for (ElementId i = 0; i < size; ++i)
-            if ((angle_terms_ ? term_counted_ : part_->counted)[f.elements[i]]) f.counted.push_back(i);
-    f.global_count = reducer_->total(static_cast<double>(part_ ? f.counted.size() : f.elements.size()));
+            if (counted[f.elements[i]]) f.counted.push_back(i);
+    }
+    f.global_count = reducer_->total(static_cast<double>(part_.whole() ? f.elements.size() : f.counted.size()));
     f.lanes = make_lanes(f.mesh, size, positions, global_elements_, true);
     f.free = free_vertices_of(f.mesh);
     focus_ = std::move(f);
 }
 
 std::span<const double> Workspace::counted(std::span<const double> quality, std::vector<double>& buffer) const {
-    if (!part_) return quality;
+    if (part_.whole()) return quality;
     const std::vector<ElementId>& counted = focus_ ? focus_->counted : counted_;
     buffer.resize(counted.size());
     for (std::size_t i = 0; i < counted.size(); ++i) buffer[i] = quality[counted[i]];
@@ -436,7 +421,7 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
 
 void Workspace::copy_back(std::span<const double> xyz) const {
     // A distributed part keeps its own vertex order (only its elements were reordered).
-    if (part_) {
+    if (!part_.whole()) {
         std::copy(xyz.begin(), xyz.end(), original_->coordinates().begin());
         return;
     }

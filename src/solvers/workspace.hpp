@@ -57,9 +57,9 @@ public:
     const MetricScale& scale() const { return scale_; }
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
-    // The DistributedMesh of a distributed run's part (its elements in the workspace's order until
-    // the workspace is destroyed); nullptr serially.
-    DistributedMesh* distributed() const { return part_; }
+    // The part worked on (a distributed run's with its elements in the workspace's order until the
+    // workspace is destroyed).
+    const MeshPart& part() const { return part_; }
     // Per movable element, as metric scale: the mean size of its corners' neighbourhoods.
     std::vector<double> local_reference_volumes() const;
 
@@ -144,7 +144,7 @@ private:
 
     Mesh* original_;             // the part's mesh
     Mesh own_;                   // serial runs: the mesh in canonical order
-    DistributedMesh* part_ = nullptr;    // distributed runs: the part, whose elements mesh_ reorders
+    MeshPart part_;                      // a distributed run's part has its elements reordered
     std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
     Mesh& mesh_;                  // own_, or the part's mesh (own_, the copies, with angle terms)
     bool angle_terms_ = false;

@@ -110,34 +110,34 @@ BOOST_DATA_TEST_CASE(a_part_holds_whole_cells_and_counts_each_once, bdata::make(
         const auto whole = grid(g);
         auto part = scatter(whole);
         const pv::Reducer& reducer = part.reducer();
-        BOOST_TEST(part.global_cells == whole.num_cells());
-        BOOST_TEST(part.global_elements == whole.num_elements());
+        BOOST_TEST(part.global_cells() == whole.num_cells());
+        BOOST_TEST(part.global_elements() == whole.num_elements());
         // Every part holds cells, even one of tetrahedra only.
-        BOOST_TEST(reducer.min(part.mesh.has_cells() ? 1.0 : 0.0) == 1.0);
+        BOOST_TEST(reducer.min(part.mesh().has_cells() ? 1.0 : 0.0) == 1.0);
         // A cell's corners are counted together, every cell once.
-        std::vector<int> cell_counted(static_cast<std::size_t>(part.mesh.num_cells()), -1);
+        std::vector<int> cell_counted(static_cast<std::size_t>(part.mesh().num_cells()), -1);
         long corners = 0, cells = 0, split = 0;
-        for (pv::ElementId e = 0; e < part.mesh.num_elements(); ++e) {
-            int& c = cell_counted[static_cast<std::size_t>(part.mesh.cell_of(e))];
-            corners += part.counted[e];
-            if (c < 0) c = part.counted[e], cells += c;
-            else split += c != part.counted[e];
+        for (pv::ElementId e = 0; e < part.mesh().num_elements(); ++e) {
+            int& c = cell_counted[static_cast<std::size_t>(part.mesh().cell_of(e))];
+            corners += part.counted()[e];
+            if (c < 0) c = part.counted()[e], cells += c;
+            else split += c != part.counted()[e];
         }
         BOOST_TEST(reducer.total(static_cast<double>(corners)) == whole.num_elements());
         BOOST_TEST(reducer.total(static_cast<double>(cells)) == whole.num_cells());
         BOOST_TEST(reducer.total(static_cast<double>(split)) == 0.0);
         // The counted cells' canonical positions: each position once.
         std::vector<int> seen(static_cast<std::size_t>(whole.num_cells()), 0);
-        for (pv::ElementId c = 0; c < part.mesh.num_cells(); ++c) seen[static_cast<std::size_t>(part.cell_order[c])] += cell_counted[c];
+        for (pv::ElementId c = 0; c < part.mesh().num_cells(); ++c) seen[static_cast<std::size_t>(part.cell_order()[c])] += cell_counted[c];
         MPI_Allreduce(MPI_IN_PLACE, seen.data(), static_cast<int>(seen.size()), MPI_INT, MPI_SUM, MPI_COMM_WORLD);
         BOOST_TEST(std::all_of(seen.begin(), seen.end(), [](int n) { return n == 1; }));
         // The owner of a vertex holds every corner around it.
         const auto order = pv::locality_order(whole);
         long missing = 0;
-        for (pv::VertexId v = 0; v < part.mesh.num_vertices(); ++v)
-            if (part.vertex_owner[v] == rank()) {
-                const auto original = order.old_vertex[static_cast<std::size_t>(part.mesh.global_ids()[v])];
-                missing += part.mesh.elements_of(v).size() != whole.elements_of(original).size();
+        for (pv::VertexId v = 0; v < part.mesh().num_vertices(); ++v)
+            if (part.vertex_owner()[v] == rank()) {
+                const auto original = order.old_vertex[static_cast<std::size_t>(part.mesh().global_ids()[v])];
+                missing += part.mesh().elements_of(v).size() != whole.elements_of(original).size();
             }
         BOOST_TEST(reducer.total(static_cast<double>(missing)) == 0.0);
     }
@@ -256,9 +256,9 @@ BOOST_DATA_TEST_CASE(pieces_of_cells_give_the_serial_answer, bdata::make(kGrids)
             if (rank() == 0) pv::DistributedMesh::write_partitioned(input, ranks(), path);
             MPI_Barrier(MPI_COMM_WORLD);
             auto part = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, path);
-            BOOST_TEST(part.global_cells == input.num_cells());
-            BOOST_TEST(part.global_elements == input.num_elements());
-            BOOST_TEST(part.mesh.has_cells());
+            BOOST_TEST(part.global_cells() == input.num_cells());
+            BOOST_TEST(part.global_elements() == input.num_elements());
+            BOOST_TEST(part.mesh().has_cells());
             check_same_report(assessor.assess(part), assessor.assess(input));
             const auto summary = pv::GlobalSolver(options).improve(part);
             BOOST_TEST(summary.iterations == serial_summary.iterations);
@@ -281,18 +281,18 @@ BOOST_DATA_TEST_CASE(pieces_of_cells_give_the_serial_answer, bdata::make(kGrids)
                                                                          : path.parent_path() / (stem + ".vtk"));
             const pv::Field* ghost = piece.cell_field("vtkGhostType");
             BOOST_REQUIRE(ghost);
-            BOOST_REQUIRE(ghost->values.size() == static_cast<std::size_t>(part.mesh.num_cells()));
+            BOOST_REQUIRE(ghost->values.size() == static_cast<std::size_t>(part.mesh().num_cells()));
             long flags_wrong = 0;
-            for (pv::ElementId e = 0; e < part.mesh.num_elements(); ++e)
-                flags_wrong += (ghost->values[static_cast<std::size_t>(part.mesh.cell_of(e))] == 0.0) != (part.counted[e] != 0);
+            for (pv::ElementId e = 0; e < part.mesh().num_elements(); ++e)
+                flags_wrong += (ghost->values[static_cast<std::size_t>(part.mesh().cell_of(e))] == 0.0) != (part.counted()[e] != 0);
             BOOST_TEST(flags_wrong == 0);
             const auto again_path = pv::test::scratch(std::to_string(g) + "again_" + name);
             part.write_pieces(again_path);
             auto again = pv::DistributedMesh::read_pieces(MPI_COMM_WORLD, again_path);
-            BOOST_TEST(again.mesh.num_cells() == part.mesh.num_cells());
-            BOOST_TEST(std::equal(again.mesh.coordinates().begin(), again.mesh.coordinates().end(),
-                                  part.mesh.coordinates().begin(), part.mesh.coordinates().end()));
-            BOOST_TEST((again.counted == part.counted));
+            BOOST_TEST(again.mesh().num_cells() == part.mesh().num_cells());
+            BOOST_TEST(std::equal(again.mesh().coordinates().begin(), again.mesh().coordinates().end(),
+                                  part.mesh().coordinates().begin(), part.mesh().coordinates().end()));
+            BOOST_TEST(std::ranges::equal(again.counted(), part.counted()));
         }
     }
 }

@@ -46,8 +46,8 @@ inline double relative_difference(const Mesh& a, const Mesh& b) {
 // mesh; the other ranks an empty one.
 inline Mesh gathered_whole(const Mesh& input) {
     auto part = scatter(input);
-    for (VertexId v = 0; v < part.mesh.num_vertices(); ++v)
-        if (part.vertex_owner[v] == rank()) part.mesh.coordinates()[3 * static_cast<std::size_t>(v)] += 0.25;
+    for (VertexId v = 0; v < part.mesh().num_vertices(); ++v)
+        if (part.vertex_owner()[v] == rank()) part.mesh().coordinates()[3 * static_cast<std::size_t>(v)] += 0.25;
     Mesh whole = part.gather_whole();
     if (rank() != 0) {
         BOOST_TEST(whole.num_vertices() == 0);

@@ -79,7 +79,7 @@ BOOST_DATA_TEST_CASE(the_parts_follow_the_motion_as_the_whole_mesh_does, bdata::
     BOOST_TEST(serial_summary.before.inverted > 0);
 
     auto part = pv::test::scatter(input);
-    BOOST_TEST(part.mesh.reference_coordinates().size() == part.mesh.coordinates().size());
+    BOOST_TEST(part.mesh().reference_coordinates().size() == part.mesh().coordinates().size());
     const auto summary = pv::GlobalSolver(options).improve(part);
     BOOST_TEST(summary.message == serial_summary.message);
     BOOST_TEST(summary.iterations == serial_summary.iterations);

@@ -80,7 +80,7 @@ int main(int argc, char** argv) {
         const pv::Summary summary = solver->improve(part);
         const double solve_seconds = part.reducer().max(seconds_since(start));
 
-        double timings[3] = {part.timings.partition, part.timings.distribute, part.timings.schedule};
+        double timings[3] = {part.timings().partition, part.timings().distribute, part.timings().schedule};
         MPI_Bcast(timings, 3, MPI_DOUBLE, 0, MPI_COMM_WORLD);
         const auto ghost_copies = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.received_vertices())));
         const auto messages = static_cast<std::int64_t>(part.reducer().total(static_cast<double>(part.schedule().partners.size())));

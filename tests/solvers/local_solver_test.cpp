@@ -38,7 +38,7 @@ BOOST_AUTO_TEST_SUITE(vertex_coloring)
 BOOST_DATA_TEST_CASE(colorings_are_proper, bdata::make({"mesquite/tets/tire.vtk", "mesquite/tris/tri_20258.vtk"}) *
                                                bdata::make({0, 1}),
                      name, order) {
-    const auto mesh = shared_mesh(name);
+    auto mesh = shared_mesh(name);
     const auto kind = order == 0 ? pv::ColoringOrder::Greedy : pv::ColoringOrder::SmallestLast;
     const auto coloring = pv::color_vertices(mesh, kind);
     BOOST_TEST_MESSAGE(name << (order == 0 ? " greedy: " : " smallest-last: ") << coloring.count << " colors");
@@ -50,7 +50,7 @@ BOOST_DATA_TEST_CASE(colorings_are_proper, bdata::make({"mesquite/tets/tire.vtk"
 }
 
 BOOST_AUTO_TEST_CASE(an_improper_coloring_is_detected) {
-    const auto mesh = shared_mesh("mesquite/tets/tire.vtk");
+    auto mesh = shared_mesh("mesquite/tets/tire.vtk");
     auto coloring = pv::color_vertices(mesh);
     pv::VertexId a = -1, b = -1;
     for (pv::ElementId e = 0; e < mesh.num_elements() && b < 0; ++e) {

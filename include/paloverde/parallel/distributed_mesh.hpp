@@ -15,7 +15,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -102,28 +104,47 @@ public:
     // Collective: refreshes ghost coordinates from their owners.
     void update_ghost_coordinates();
 
+    // Element e becomes the element now at order[e]; element_order and counted go with them. All
+    // or nothing.
+    void reorder_elements(std::span<const ElementId> order);
+    // Collective: rank 0 gets `width` values per vertex of the whole mesh, in global id order,
+    // each from the vertex's owner; the other ranks get nothing.
+    std::vector<double> gather_vertex_field(std::span<const double> field, int width) const;
+    // Collective: every rank gets rank 0's bytes.
+    void broadcast(std::string& bytes) const;
+    // Collective: runs `work` on rank 0 alone; a failure there is thrown on every rank.
+    void on_root(const std::function<void()>& work) const;
+
     const Reducer& reducer() const { return *reducer_; }
     const Halo& halo() const { return *halo_; }
 
-    MPI_Comm comm = MPI_COMM_NULL;
-    int rank = 0, ranks = 1;
-    Mesh mesh;                     // this rank's elements and the vertices they touch
-    std::vector<int> vertex_owner;        // per local vertex
-    std::vector<GlobalId> element_order;  // per local element: its canonical position
-    std::vector<std::uint8_t> counted;    // per local element: counted in sums by this rank
+    MPI_Comm comm() const { return comm_; }
+    int rank() const { return rank_; }
+    int ranks() const { return ranks_; }
+    // This rank's elements and the vertices they touch.
+    Mesh& mesh() { return mesh_; }
+    const Mesh& mesh() const { return mesh_; }
+    // Per local vertex: its owner.
+    std::span<const int> vertex_owner() const { return vertex_owner_; }
+    // Per local element: its canonical position, and whether this rank counts it in sums.
+    std::span<const GlobalId> element_order() const { return element_order_; }
+    std::span<const std::uint8_t> counted() const { return counted_; }
     // A mesh with cells, per local cell: its canonical position (the cells sorted by their sorted
     // global ids, then type); empty without cells.
-    std::vector<GlobalId> cell_order;
+    std::span<const GlobalId> cell_order() const { return cell_order_; }
     // The whole mesh's; global_cells is global_elements for a mesh without cells.
-    GlobalId global_vertices = 0, global_elements = 0, global_cells = 0;
-    Vec3 plane_normal{0.0, 0.0, 1.0};     // triangle meshes: the whole mesh's plane
+    GlobalId global_vertices() const { return global_vertices_; }
+    GlobalId global_elements() const { return global_elements_; }
+    GlobalId global_cells() const { return global_cells_; }
+    // Triangle meshes: the whole mesh's plane.
+    const Vec3& plane_normal() const { return plane_normal_; }
     // read_pieces: whether the elements were flipped, and why (the same on every rank). scatter()
     // takes the whole mesh's orientation as it is; the parts keep its elements_flipped() mark.
-    OrientationDecision orientation;
+    const OrientationDecision& orientation() const { return orientation_; }
     // Partners and send/receive lists. (Held on the heap: the halo refers to it, and a moved
     // DistributedMesh must keep working.)
     const ExchangeSchedule& schedule() const { return *schedule_; }
-    DistributeTimings timings;
+    const DistributeTimings& timings() const { return timings_; }
 
     // Communication counts (this rank): ghost values it receives per exchange, messages per exchange.
     std::int64_t received_vertices() const;
@@ -135,6 +156,17 @@ public:
     DistributedMesh& operator=(DistributedMesh&&) noexcept;
 
 private:
+    MPI_Comm comm_ = MPI_COMM_NULL;
+    int rank_ = 0, ranks_ = 1;
+    Mesh mesh_;
+    std::vector<int> vertex_owner_;
+    std::vector<GlobalId> element_order_;
+    std::vector<std::uint8_t> counted_;
+    std::vector<GlobalId> cell_order_;
+    GlobalId global_vertices_ = 0, global_elements_ = 0, global_cells_ = 0;
+    Vec3 plane_normal_{0.0, 0.0, 1.0};
+    OrientationDecision orientation_;
+    DistributeTimings timings_;
     // Builds the part from its arrays (an internal type), then the schedule and the reductions.
     void assemble(void* arrays, ElementKind kind, ExchangeMode mode);
     void build_schedule(ExchangeMode mode);

@@ -17,6 +17,8 @@ public:
     virtual void sum(std::span<ExactSum> sums) const { (void)sums; }
     // In place: each count becomes its sum over all processes (integers: exact in any order).
     virtual void sum_counts(std::span<std::int64_t> counts) const { (void)counts; }
+    // In place: each entry becomes its sum over all processes modulo 2^64 (hashes).
+    virtual void sum_wrapping(std::span<std::uint64_t> values) const { (void)values; }
     virtual double min(double value) const { return value; }
     virtual double max(double value) const { return value; }
     // The total over all processes, rounded.

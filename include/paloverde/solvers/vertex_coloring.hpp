@@ -7,10 +7,9 @@
 #include <vector>
 
 #include "paloverde/mesh/mesh.hpp"
+#include "paloverde/parallel/mesh_part.hpp"
 
 namespace paloverde {
-
-class DistributedMesh;
 
 enum class ColoringOrder {
     Greedy,       // first fit in vertex id order
@@ -24,13 +23,12 @@ struct VertexColoring {
     std::vector<std::vector<VertexId>> classes() const;
 };
 
-VertexColoring color_vertices(const Mesh& mesh, ColoringOrder order = ColoringOrder::SmallestLast);
-
-// Collective: a coloring of the whole distributed mesh (Jones & Plassmann: in rounds, each free
-// vertex whose uncolored neighbours all have lower priority takes the smallest color its
-// neighbours do not have; priorities are a hash of the global id). Every rank learns the colors
-// of its ghosts; the colors do not depend on the number of ranks. `count` is global.
-VertexColoring color_vertices(const DistributedMesh& part);
+// The whole mesh: first fit in `order`. A part of a distributed mesh (collective): a coloring of
+// the whole distributed mesh, `order` aside (Jones & Plassmann: in rounds, each free vertex whose
+// uncolored neighbours all have lower priority takes the smallest color its neighbours do not
+// have; priorities are a hash of the global id). Every rank learns the colors of its ghosts; the
+// colors do not depend on the number of ranks. `count` is global.
+VertexColoring color_vertices(MeshPart part, ColoringOrder order = ColoringOrder::SmallestLast);
 
 // Whether every free vertex has a color in [0, count), every fixed vertex -1, and no element
 // holds two free vertices of the same color.
