@@ -288,8 +288,8 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     const RunCheckpoints runs(part, checkpoints.options);
     // The run the motion's checkpoint was written before, resumed from its own checkpoint if it wrote one.
     bool resume_run = checkpointer.resumes();
-    auto run = [&](double seconds) {
-        const Summary summary = solve(seconds, runs.options(resume_run));
+    auto run = [&](double seconds, bool is_first = false) {
+        const Summary summary = solve(seconds, runs.options(resume_run), is_first);
         resume_run = false;
         return summary;
     };
@@ -330,7 +330,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             state.numbers = {{"first_run_done", 0.0}};
             checkpointer.save(total, state, seconds_since(start));
         }
-        total = run_first(part, given, reference, driven, [&] { return run(max_seconds); });
+        total = run_first(part, given, reference, driven, [&] { return run(max_seconds, true); });
         if (total.reason == TerminationReason::Interrupted) return total;
         floor = 0.5 * worst_at(part, total.quality_metric, reference);
         if (total.valid() && total.worst_after >= floor) return total;

@@ -22,8 +22,12 @@ namespace paloverde::detail {
 bool has_boundary_motion(MeshPart part);
 
 // One whole run of a solver on the part, its time limit `seconds` (0: the solver's own), with
-// `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its own).
-using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint)>;
+// `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its
+// own). `first`: the run from the whole motion at once, which steps replace when it leaves inverted
+// elements or a poor worst element; it skips the solver's finishing stage (the global solver's
+// Newton finish, whose iterations cost many shape iterations each), work that steps would throw
+// away, and that a first run which is kept seldom needs (its shape phase rarely stalls).
+using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint, bool first)>;
 
 // The checkpoints of a run in steps: the solver's settings, its name and its options as text
 // (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).

@@ -169,9 +169,10 @@ Summary GlobalSolver::improve(MeshPart part) {
         // The time limit bounds the steps together: each run gets what is left of it.
         return detail::follow_boundary_motion(part, options_.smallest_motion_step, options_.termination.max_seconds,
                                               {options_.checkpoint, "global", options_text(options_)},
-                                              [&](double seconds, const CheckpointOptions& checkpoint) {
+                                              [&](double seconds, const CheckpointOptions& checkpoint, bool first) {
                                                   GlobalSolverOptions each = options_;
                                                   each.checkpoint = checkpoint;
+                                                  if (first) each.finish = GlobalSolverOptions::Finish::None;
                                                   GlobalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(part);

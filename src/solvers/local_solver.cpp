@@ -229,7 +229,7 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
         return detail::follow_boundary_motion(whole_or_part, options_.smallest_motion_step,
                                               options_.termination.max_seconds,
                                               {options_.checkpoint, std::string(name()), options_text(options_)},
-                                              [&](double seconds, const CheckpointOptions& checkpoint) {
+                                              [&](double seconds, const CheckpointOptions& checkpoint, bool /*first: no finishing stage to skip*/) {
                                                   LocalSolverOptions each = options_;
                                                   each.checkpoint = checkpoint;
                                                   LocalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
