@@ -10,7 +10,8 @@
 #   bash scripts/setup.sh fuzz       build the libFuzzer targets of the mesh readers and the
 #                                    config reader with clang (build-fuzz/) and run each for a
 #                                    short fixed number of inputs (docs/robustness.md)
-# Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build.
+# Run as root (or with sudo available). Set PALOVERDE_BUILD_DIR to build elsewhere than ./build,
+# and PALOVERDE_MPI=OFF for `run`, `test` and `build` without MPI (serial only: docs/parallel.md).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -70,7 +71,8 @@ build() {  # PYTHON=ON|OFF, then the targets given as arguments (--target NAME),
   local python=$1
   shift
   use_compiler_cache
-  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DPALOVERDE_PYTHON="$python" "${LAUNCHER[@]}"
+  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DPALOVERDE_PYTHON="$python" \
+    -DPALOVERDE_MPI="${PALOVERDE_MPI:-ON}" "${LAUNCHER[@]}"
   cmake --build "$BUILD_DIR" -j "$(nproc)" "$@"
 }
 

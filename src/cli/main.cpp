@@ -1,4 +1,5 @@
 #include <iostream>
+#include <optional>
 #include <streambuf>
 #include <string_view>
 #include <vector>
@@ -35,7 +36,14 @@ private:
 int main(int argc, char** argv) {
     using namespace paloverde::cli;
     paloverde::keep_freed_memory();  // arrays below 2 MiB, and larger ones where not on huge pages (huge_pages.cpp)
-    const MpiSession mpi;
+    // A build without MPI refuses to run under an MPI launcher, before any command runs.
+    std::optional<MpiSession> mpi;
+    try {
+        mpi.emplace();
+    } catch (const std::exception& e) {
+        std::cerr << "paloverde: error: " << e.what() << "\n";
+        return kError;
+    }
     const bool root = MpiSession::rank() == 0;
     // Every rank runs the command, and its errors are thrown on every rank: rank 0 tells.
     const Silence others(!root);

@@ -2,7 +2,7 @@
 
 #include <mpi.h>
 
-#include <cstdlib>
+#include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde::cli {
 
@@ -24,13 +24,6 @@ MpiSession::~MpiSession() {
     if (running()) MPI_Finalize();
 }
 
-bool MpiSession::launched() {
-    // Open MPI's mpirun, PMIx launchers, and MPICH's hydra (PMI) set these in every process.
-    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMIX_RANK", "PMI_RANK", "PMI_SIZE"})
-        if (std::getenv(name)) return true;
-    return false;
-}
-
 void MpiSession::ensure() {
     int initialized = 0;
     MPI_Initialized(&initialized);
@@ -38,6 +31,12 @@ void MpiSession::ensure() {
     // Solvers use OpenMP threads inside a rank; only the main thread calls MPI.
     int provided = 0;
     MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided);
+}
+
+void MpiSession::require(const std::string&) {}  // this build has MPI
+
+void MpiSession::write_pieces(const Mesh& whole, int parts, const std::string& path) {
+    DistributedMesh::write_partitioned(whole, parts, path);
 }
 
 int MpiSession::rank() {

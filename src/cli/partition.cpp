@@ -7,9 +7,9 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "mpi_session.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
-#include "paloverde/parallel/distributed_mesh.hpp"
 #include "paloverde/parallel/partition.hpp"
 
 namespace paloverde::cli {
@@ -38,6 +38,7 @@ void add_partition_command(CLI::App& app, int& exit_code) {
     cmd->callback([options, &exit_code] {
         if (!options->output.empty() && options->parts.size() != 1)
             throw OptionError("--output writes one partition: give a single --parts count");
+        if (!options->output.empty()) MpiSession::require("paloverde partition --output (pieces for a distributed run)");
         ReadOptions read;
         read.fix_boundary = !options->free_all;
         const MeshFile file = read_mesh(options->mesh, read);
@@ -67,7 +68,7 @@ void add_partition_command(CLI::App& app, int& exit_code) {
         }
         if (options->json) std::cout << nlohmann::json{{"mesh", options->mesh}, {"partitions", rows}}.dump(2) << "\n";
         if (!options->output.empty()) {
-            DistributedMesh::write_partitioned(file.mesh, options->parts.front(), options->output);
+            MpiSession::write_pieces(file.mesh, options->parts.front(), options->output);
             if (!options->json) std::cout << "wrote " << options->parts.front() << " pieces: " << options->output << "\n";
         }
         exit_code = kDone;

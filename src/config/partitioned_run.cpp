@@ -3,7 +3,6 @@
 // mesh, the outputs are written (meshes gathered on rank 0, or as pieces; reports by rank 0), and
 // every rank returns the same RunResult. Anything that can fail on one rank alone is made to fail
 // on all of them, so no rank is left waiting in a collective call.
-#include <mpi.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -11,23 +10,14 @@
 
 #include "config/partitioned_run.hpp"
 #include "config/registry_internal.hpp"
-#include "parallel/collective.hpp"
+#include "parallel/mpi_support.hpp"
 #include "io/xml_reader.hpp"
 #include "paloverde/io/atomic_file.hpp"
 #include "paloverde/parallel/distributed_mesh.hpp"
 
 namespace paloverde::config::detail {
 
-int world_size() {
-    int initialized = 0, finalized = 0;
-    MPI_Initialized(&initialized);
-    if (!initialized) return 1;
-    MPI_Finalized(&finalized);
-    if (finalized) return 1;
-    int size = 1;
-    MPI_Comm_size(MPI_COMM_WORLD, &size);
-    return size;
-}
+int world_size() { return parallel::mpi_running() ? parallel::ranks_in(MPI_COMM_WORLD) : 1; }
 
 namespace {
 
@@ -195,7 +185,7 @@ DistributedMesh read_input_pieces(const RunSpec& spec, MPI_Comm comm, int rank, 
 OrientationDecision broadcast(MPI_Comm comm, OrientationDecision d) {
     double packed[5] = {static_cast<double>(d.mode), d.oriented ? 1.0 : 0.0, static_cast<double>(d.sign), d.share,
                         d.flipped ? 1.0 : 0.0};
-    MPI_Bcast(packed, 5, MPI_DOUBLE, 0, comm);
+    parallel::broadcast_from_root(comm, packed, 5);
     d.mode = static_cast<OrientationMode>(packed[0]);
     d.oriented = packed[1] != 0.0;
     d.sign = static_cast<int>(packed[2]);
@@ -220,15 +210,12 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     const auto methods = spec.methods();
     std::vector<BuiltQueue> queues;  // every option checked before the mesh is read
     for (std::size_t m = 0; m < methods.size(); ++m) queues.push_back(build_queue_for(spec, methods[m], m));
-    int initialized = 0;
-    MPI_Initialized(&initialized);
-    if (!initialized)
+    if (!parallel::mpi_running())
         throw Error("a partitioned run needs MPI: call MPI_Init before config::run (the paloverde program does it "
                     "for such a config, or when launched by mpirun)");
 
     const MPI_Comm comm = MPI_COMM_WORLD;
-    int rank = 0;
-    MPI_Comm_rank(comm, &rank);
+    const int rank = parallel::rank_in(comm);
     DistributeOptions distribute;
     distribute.exchange = spec.parallel.exchange == "root" ? ExchangeMode::RootRelayed : ExchangeMode::Colored;
     distribute.orientation = spec.input.orientation;
@@ -265,7 +252,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
                 spec.targets.options(part.mesh().has_cells() && !surface, !spec.input.displacement.empty()));
     // What rank 0 holds, told by rank 0's mesh itself so that the report cannot drift from it.
     int kept = rank == 0 && file.mesh.num_vertices() > 0 ? 1 : 0;
-    MPI_Bcast(&kept, 1, MPI_INT, 0, comm);
+    parallel::broadcast_from_root(comm, &kept, 1);
     report.whole_mesh_on_rank_0 = pieces ? (writes_whole ? "gathered" : "never") : (kept ? "kept" : "dropped");
     report.schedule_seconds = part.timings().schedule;
     report.vertices = part.global_vertices();
@@ -305,7 +292,7 @@ RunResult run_partitioned(const RunSpec& spec, const RunHooks& hooks) {
     // Rank 0's clock for the stages it leads, so that every rank reports the same numbers.
     double seconds[4] = {report.read_seconds, report.partition_seconds, report.distribute_seconds,
                          report.schedule_seconds};
-    MPI_Bcast(seconds, 4, MPI_DOUBLE, 0, comm);
+    parallel::broadcast_from_root(comm, seconds, 4);
     report.read_seconds = seconds[0], report.partition_seconds = seconds[1], report.distribute_seconds = seconds[2];
     report.schedule_seconds = seconds[3];
     result.parallel = report;

@@ -41,7 +41,8 @@ std::string replace_method(std::string path, const std::string& method);
 // output.history, output.table, output.summary and output.plot (each through a temporary).
 void write_reports(const RunSpec& spec, const RunResult& result);
 
-// Ranks of MPI_COMM_WORLD; 1 when MPI is not initialized.
+// Ranks of MPI_COMM_WORLD; 1 when MPI is not initialized (or the build has none: serial_run.cpp,
+// whose run_partitioned refuses).
 int world_size();
 
 // A run over the ranks of MPI_COMM_WORLD (see config::run): the spec is partitioned() or the

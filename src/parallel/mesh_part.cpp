@@ -5,7 +5,9 @@
 
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/boundary_surface.hpp"
+#if PALOVERDE_HAVE_MPI
 #include "paloverde/parallel/distributed_mesh.hpp"
+#endif
 
 namespace paloverde {
 
@@ -18,6 +20,10 @@ const Halo kNoGhosts;
 
 MeshPart::MeshPart(Mesh& whole) : mesh_(&whole), reducer_(&kWholeMeshReducer), halo_(&kNoGhosts) {}
 
+// A build without MPI (PALOVERDE_MPI=OFF) has no DistributedMesh: a part is always the whole
+// mesh. This is the one place in the library that tells the two builds apart; the build leaves
+// the distributed sources out.
+#if PALOVERDE_HAVE_MPI
 MeshPart::MeshPart(DistributedMesh& part)
     : mesh_(&part.mesh()), reducer_(&part.reducer()), halo_(&part.halo()), distributed_(&part) {}
 
@@ -80,6 +86,32 @@ void MeshPart::on_root(const std::function<void()>& work) const {
     if (!distributed_) return work();
     distributed_->on_root(work);
 }
+
+#else
+bool MeshPart::owns(VertexId) const { return true; }
+bool MeshPart::counts(ElementId) const { return true; }
+int MeshPart::rank() const { return 0; }
+int MeshPart::ranks() const { return 1; }
+GlobalId MeshPart::global_vertices() const { return static_cast<GlobalId>(mesh_->num_vertices()); }
+GlobalId MeshPart::global_elements() const { return static_cast<GlobalId>(mesh_->num_elements()); }
+std::span<const GlobalId> MeshPart::element_positions() const { return {}; }
+std::span<const std::uint8_t> MeshPart::counted() const { return {}; }
+void MeshPart::reorder_elements(std::span<const ElementId>) const {
+    throw Error("MeshPart::reorder_elements: the whole mesh keeps the order it was given");
+}
+Vec3 MeshPart::plane_normal() const { return mesh_->plane_normal(); }
+BoundarySurface MeshPart::boundary_surface(bool, const SurfaceOptions& options) const {
+    return BoundarySurface(*mesh_, options);
+}
+std::vector<Vec3> MeshPart::normals_of(const BoundarySurface& surface, const Mesh& mesh) const {
+    return surface.normals_of(mesh);
+}
+std::vector<double> MeshPart::gather_to_root(std::span<const double> field, int) const {
+    return {field.begin(), field.end()};
+}
+void MeshPart::broadcast(std::string&) const {}
+void MeshPart::on_root(const std::function<void()>& work) const { work(); }
+#endif
 
 void set_targets(MeshPart part, const TargetOptions& options, const Mesh* reference) {
     if (!options.any()) {

@@ -23,6 +23,30 @@ inline MPI_Datatype mpi_type<std::int64_t>() { return MPI_INT64_T; }
 template <>
 inline MPI_Datatype mpi_type<std::uint8_t>() { return MPI_UINT8_T; }
 
+// Whether MPI can be called: initialized and not yet finalized.
+inline bool mpi_running() {
+    int initialized = 0, finalized = 0;
+    MPI_Initialized(&initialized);
+    if (!initialized) return false;
+    MPI_Finalized(&finalized);
+    return !finalized;
+}
+inline int rank_in(MPI_Comm comm) {
+    int rank = 0;
+    MPI_Comm_rank(comm, &rank);
+    return rank;
+}
+inline int ranks_in(MPI_Comm comm) {
+    int ranks = 1;
+    MPI_Comm_size(comm, &ranks);
+    return ranks;
+}
+// Collective: every rank gets rank 0's `count` values.
+template <class T>
+void broadcast_from_root(MPI_Comm comm, T* values, int count) {
+    MPI_Bcast(values, count, mpi_type<T>(), 0, comm);
+}
+
 template <class T>
 void send_vector(const std::vector<T>& data, int to, int tag, MPI_Comm comm) {
     const std::int64_t size = static_cast<std::int64_t>(data.size());

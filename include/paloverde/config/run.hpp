@@ -103,7 +103,7 @@ InstructionQueue build_queue(std::span<const StepSpec> steps, int threads = 0);
 // one rank, runs over MPI_COMM_WORLD: it is collective, MPI must be initialized, every rank
 // passes the same spec and gets the same result (but for the solvers' own clocks) and the same
 // exceptions, and rank 0 writes the files other than pieces. Hooks are called on every rank
-// that passes them.
+// that passes them. A build without MPI (PALOVERDE_MPI=OFF) refuses a partitioned spec (ConfigError).
 RunResult run(const RunSpec& spec, const RunHooks& hooks = {});
 // Whether run(spec) runs over MPI_COMM_WORLD, as just said: the one place that decides it.
 bool runs_distributed(const RunSpec& spec);

@@ -30,7 +30,7 @@ class DistributedMesh;  // distributed_mesh.hpp, which brings in MPI
 class MeshPart {
 public:
     MeshPart(Mesh& whole);     // the whole mesh, serially
-    MeshPart(DistributedMesh& part);  // this rank's part; what the part does with it is collective
+    MeshPart(DistributedMesh& part);  // this rank's part; what the part does with it is collective (MPI builds)
 
     Mesh& mesh() const { return *mesh_; }
     const Reducer& reducer() const { return *reducer_; }
