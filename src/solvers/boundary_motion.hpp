@@ -26,7 +26,7 @@ bool has_boundary_motion(MeshPart part);
 // own). `first`: the run from the whole motion at once, which steps replace when it leaves inverted
 // elements or a poor worst element; it skips the solver's finishing stage (the global solver's
 // Newton finish, whose iterations cost many shape iterations each), work that steps would throw
-// away, and that a first run which is kept seldom needs (its shape phase rarely stalls).
+// away. A first run that is kept ends where its shape phase stops.
 using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint, bool first)>;
 
 // The checkpoints of a run in steps: the solver's settings, its name and its options as text
