@@ -363,14 +363,10 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
     const Mesh& mesh = whole_or_part.mesh();
     const VertexId n = mesh.num_vertices();
     keys_.resize(static_cast<std::size_t>(n));
-    owned_.resize(static_cast<std::size_t>(n));
-    ranks_ = whole_or_part.ranks();
-    rank_ = whole_or_part.rank();
     vertices_ = static_cast<std::uint64_t>(whole_or_part.global_vertices());
     // A part's vertices are named by global id; the whole mesh's by their index.
     if (whole_or_part.whole()) std::iota(keys_.begin(), keys_.end(), GlobalId{0});
     else std::copy(mesh.global_ids().begin(), mesh.global_ids().end(), keys_.begin());
-    for (VertexId v = 0; v < n; ++v) owned_[v] = whole_or_part.owns(v);
 
     options_hash_ = fnv1a(solver_ + "\n" + options_text);
     // The mesh's fingerprint: a sum of one hash per element (its sorted vertex keys) and one per
@@ -396,7 +392,7 @@ Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver,
     // A motion goes from the reference to the coordinates: both are its input.
     const auto reference = kind_ == CheckpointKind::Motion ? mesh.reference_coordinates() : std::span<const double>{};
     for (VertexId v = 0; v < n; ++v) {
-        if (!owned_[v]) continue;
+        if (!whole_or_part.owns(v)) continue;
         std::uint64_t h = mix(static_cast<std::uint64_t>(keys_[v]), mesh.fixed()[v]);
         for (int c = 0; c < 3; ++c) h = mix(h, std::bit_cast<std::uint64_t>(xyz[3 * static_cast<std::size_t>(v) + c]));
         if (!reference.empty())
@@ -419,7 +415,7 @@ void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const Sol
     w.text(kind_ == CheckpointKind::Motion ? solver_ + std::string(kMotionMark) : solver_);
     w.u64(mesh_hash_);
     w.u64(options_hash_);
-    w.u64(static_cast<std::uint64_t>(ranks_));
+    w.u64(static_cast<std::uint64_t>(part_.ranks()));
     w.u64(vertices_);
     w.f64(elapsed);
     w.i64(summary.iterations);
@@ -448,13 +444,13 @@ void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const Sol
 
 void Checkpointer::save(const Summary& summary, const SolverState& state, double elapsed) {
     CheckpointWriter w;
-    if (rank_ == 0) w.reserve(4096 + 24 * vertices_ * state.vertex_fields.size() + 128 * summary.history.size());
+    if (part_.root()) w.reserve(4096 + 24 * vertices_ * state.vertex_fields.size() + 128 * summary.history.size());
     encode(w, summary, state, elapsed);
     // Vertex fields are gathered (collectively) one at a time and appended on rank 0.
     w.u64(state.vertex_fields.size());
     for (const auto& [name, values] : state.vertex_fields) {
         const std::vector<double> all = part_.gather_to_root(values, 3);
-        if (rank_ != 0) continue;
+        if (!part_.root()) continue;
         w.text(name);
         w.f64s(all);
     }
@@ -500,9 +496,9 @@ SolverState Checkpointer::resume(Summary& summary) {
                                  "steps (morphing), whose checkpoints are of their own kind: resume a single run on the "
                                  "mesh it was written for, or start this one afresh");
     const std::uint64_t mesh_hash = r.u64(), options_hash = r.u64(), ranks = r.u64(), vertices = r.u64();
-    if (ranks != static_cast<std::uint64_t>(ranks_))
+    if (ranks != static_cast<std::uint64_t>(part_.ranks()))
         throw FileError(path, 0, "this checkpoint was written by a run on " + std::to_string(ranks) +
-                                     " rank(s); resume it on as many (this run has " + std::to_string(ranks_) + ")");
+                                     " rank(s); resume it on as many (this run has " + std::to_string(part_.ranks()) + ")");
     if (vertices != vertices_ || mesh_hash != mesh_hash_)
         throw FileError(path, 0, "this checkpoint belongs to another mesh: the connectivity, the fixed vertices or the "
                                  "input coordinates differ; resume from the input the checkpointed run started with");

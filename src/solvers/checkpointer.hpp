@@ -27,9 +27,6 @@
 #include "paloverde/solvers/termination.hpp"
 #include "run_support.hpp"
 
-namespace paloverde {
-}
-
 namespace paloverde::detail {
 
 class CheckpointWriter;
@@ -110,9 +107,7 @@ private:
     std::uint64_t mesh_hash_ = 0, options_hash_ = 0;
     MeshPart part_;
     std::vector<GlobalId> keys_;        // per local vertex
-    std::vector<std::uint8_t> owned_;   // per local vertex
     std::uint64_t vertices_ = 0;        // over all processes
-    int ranks_ = 1, rank_ = 0;
     int saved_iterations_ = 0;          // at the last checkpoint written or read
     Clock::time_point saved_at_;
 };
