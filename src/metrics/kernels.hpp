@@ -311,6 +311,9 @@ struct ShapeSize {
         const double m = MeanRatio::of(t, g ? dm : nullptr);
         return shape_orientation_size<4>(m, dm, 1.0, nullptr, t.volume, t.dvolume, g, s.reference_volume);
     }
+    void tet_block(BlockPath path, const TetBlock& x, const double* reference_volume, double* q, TetBlock* g) const {
+        tet_shape_size_block(path, x, reference_volume, q, g);
+    }
     double tri(const double* x, double* g, const MetricScale& s) const {
         const TriGeometry t(x, s);
         double dm[9] = {};

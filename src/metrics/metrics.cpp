@@ -114,6 +114,12 @@ public:
           targets_(mesh.has_targets() ? mesh.target_maps().data() : nullptr),
           roots_(mesh.target_metric_roots().empty() ? nullptr : mesh.target_metric_roots().data()) {}
     explicit operator bool() const { return ids_ || targets_; }
+    // Every element carried by its target's map (and metric root): a block maps its lanes together
+    // (map_block).
+    bool has_targets() const { return targets_ != nullptr; }
+    bool has_roots() const { return roots_ != nullptr; }
+    const CornerMap* target(ElementId e) const { return targets_ + e; }
+    const CornerMap* root(ElementId e) const { return roots_ + e; }
     ElementMap of(ElementId e) const {
         if (targets_) return {targets_ + e, roots_ ? roots_ + e : nullptr};
         return {ids_ && ids_[e] ? &corner_map(ids_[e]) : nullptr, nullptr};
@@ -202,10 +208,40 @@ inline void map_lane(const ElementMap& m, int j, TetBlock& x) {
     for (int i = 0; i < 12; ++i) x.at[i][j] = corner[i];
 }
 
+// The targets of a block's lanes, the elements ids(0), ..., ids(count - 1); padding lanes get
+// the identity (their corners are at the origin).
+struct LaneTargets {
+    const CornerMap* map[kTetBlock];
+    const CornerMap* root[kTetBlock];
+    bool has_roots;
+    template <class Ids>
+    LaneTargets(const ElementMaps& maps, int count, Ids&& ids) : has_roots(maps.has_roots()) {
+        static const CornerMap identity{{{1.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+        for (int j = 0; j < kTetBlock; ++j) {
+            map[j] = j < count ? maps.target(ids(j)) : &identity;
+            root[j] = j < count && has_roots ? maps.root(ids(j)) : &identity;
+        }
+    }
+    const CornerMap* const* roots() const { return has_roots ? root : nullptr; }
+};
+
+// Maps the corners of a gathered block's lanes, the elements ids(0), ..., ids(count - 1), as
+// gather<4>() maps them: by their targets together, else (cells' corner maps) lane by lane.
+// Padding lanes stay at the origin.
+template <class Ids>
+void map_block(const ElementMaps& maps, int count, Ids&& ids, TetBlock& x) {
+    if (!maps) return;
+    if (maps.has_targets()) {
+        const LaneTargets lanes(maps, count, ids);
+        return map_tets(best_block_path(), lanes.map, lanes.roots(), x);
+    }
+    for (int j = 0; j < count; ++j) map_lane(maps.of(ids(j)), j, x);
+}
+
 // Gathers the corners of the tetrahedra [first, last) kTetBlock at a time and calls
 // rate(corners, b, count) for the block of elements b, ..., b + count - 1. Padding lanes of a
-// last, partial block hold a degenerate element at the origin, which rates 0 without trouble. A
-// cell's corners are mapped lane by lane, as gather<4>() maps them (the same bits). While a block
+// last, partial block hold a degenerate element at the origin, which rates 0 without trouble. An
+// element's corners are mapped as gather<4>() maps them (map_block: the same bits). While a block
 // is rated, the next one's corners come in: asked for unless the mesh is in locality order, where
 // the 128 prefetch instructions per block cost more than they save (a pass is about a sixth
 // faster without them there; on a shuffled mesh, 1-12% slower).
@@ -222,8 +258,7 @@ void for_each_block(const Mesh& mesh, std::span<const double> xyz, ElementId fir
             detail::prefetch_corners(conn + 4 * static_cast<std::size_t>(next),
                                      4 * static_cast<int>(std::min<ElementId>(kTetBlock, last - next)), coords);
         gather_tets(conn + 4 * static_cast<std::size_t>(b), coords, count, x);
-        if (maps)
-            for (int j = 0; j < count; ++j) map_lane(maps.of(b + j), j, x);
+        map_block(maps, count, [b](int j) { return b + j; }, x);
         rate(std::as_const(x), b, count);
     }
 }
@@ -243,8 +278,7 @@ void for_each_listed_block(const Mesh& mesh, std::span<const double> xyz, std::s
         for (int j = 0; j < count; ++j)
             std::copy_n(conn + 4 * static_cast<std::size_t>(ids[j]), 4, corners + 4 * j);
         gather_tets(corners, xyz.data(), count, x);
-        if (maps)
-            for (int j = 0; j < count; ++j) map_lane(maps.of(ids[j]), j, x);
+        map_block(maps, count, [ids](int j) { return ids[j]; }, x);
         rate(std::as_const(x), ids, count);
     }
 }
@@ -427,21 +461,20 @@ private:
 
     // Block passes over tetrahedra: the corners of kTetBlock elements (for_each_block) and their
     // reference volumes rated in one vectorized call, and the gradients scattered.
-    // (Blocks are for the metrics that do not rate size against targets: evaluate_together()
-    // hands them no mesh.)
-    static_assert(!(kTargetSize && (kHasBlocks || kHasValueBlocks)), "a target size metric rates element by element");
-    void reference_volumes(ElementId first, int count, double* reference_volume) const {
-        for (int j = 0; j < count; ++j)
-            reference_volume[j] = scale_.element_reference_volume.empty()
-                                      ? scale_.reference_volume
-                                      : scale_.element_reference_volume[static_cast<std::size_t>(first + j)];
+    void reference_volumes(const Mesh& mesh, ElementId first, int count, double* reference_volume) const {
+        for (int j = 0; j < count; ++j) reference_volume[j] = reference_volume_of(mesh, first + j);
         for (int j = count; j < kTetBlock; ++j) reference_volume[j] = 1.0;
     }
 
-    bool rates_blocks() const override { return kHasBlocks || kHasValueBlocks; }
+    // evaluate_together() hands rate_block() no mesh, and so no targets: a metric that rates size
+    // against them takes its blocks in its own passes.
+    bool rates_blocks() const override { return (kHasBlocks || kHasValueBlocks) && !kTargetSize; }
     void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const override {
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
-        reference_volumes(first, count, reference_volume);
+        for (int j = 0; j < kTetBlock; ++j)
+            reference_volume[j] = j >= count                                  ? 1.0
+                                  : scale_.element_reference_volume.empty() ? scale_.reference_volume
+                                      : scale_.element_reference_volume[static_cast<std::size_t>(first + j)];
         rate_block_at(x, reference_volume, q);
         std::copy(q, q + count, quality);
     }
@@ -454,8 +487,11 @@ private:
 
     void evaluate_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
                          double* quality) const {
+        alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
-            rate_block(x, b, count, quality + (b - first));
+            reference_volumes(mesh, b, count, reference_volume);
+            rate_block_at(x, reference_volume, q);
+            std::copy(q, q + count, quality + (b - first));
         });
     }
 
@@ -468,8 +504,13 @@ private:
         TetBlock g;
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for_each_block(mesh, xyz, first, last, [&](const TetBlock& x, ElementId b, int count) {
-            reference_volumes(b, count, reference_volume);
+            reference_volumes(mesh, b, count, reference_volume);
             kernel_.tet_block(path_, x, reference_volume, q, &g);
+            const bool targets = maps.has_targets();
+            if (targets) {
+                const LaneTargets lanes(maps, count, [b](int j) { return b + j; });
+                unmap_tets(path_, lanes.map, lanes.roots(), g);
+            }
             for (int j = 0; j < count; ++j) {
                 const ElementId e = b + j;
                 const double w = target.weight[e - first];
@@ -478,7 +519,7 @@ private:
                 const VertexId* c = conn + 4 * static_cast<std::size_t>(e);
                 double gradient[12];
                 for (int i = 0; i < 12; ++i) gradient[i] = g.at[i][j];
-                if (const ElementMap m = maps.of(e)) unmap_gradient<4>(m, gradient);
+                if (const ElementMap m = maps.of(e); m && !targets) unmap_gradient<4>(m, gradient);
                 for (int i = 0; i < 4; ++i)
                     add_corner<Curvature>(target, corner_slot(target, c[i]), w, cw, gradient + 3 * i);
             }

@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <utility>
 
 #include "kernels.hpp"
 
@@ -145,6 +146,105 @@ template <class Sqrt>
                                           double* quality, TetBlock* gradient) {
     if (gradient) hybrid_loop<Sqrt, true>(x, reference_volume, alpha, quality, gradient);
     else hybrid_loop<Sqrt, false>(x, reference_volume, alpha, quality, nullptr);
+}
+
+// The lanes' 3 x 3 maps side by side, so that the loops over lanes vectorize.
+[[gnu::always_inline]] inline void lay_out(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
+    for (int j = 0; j < kTetBlock; ++j)
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 3; ++i) m[k][i][j] = (*maps[j])[k][i];
+}
+
+[[gnu::always_inline]] inline void map_loop(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
+    alignas(64) double m[3][3][kTetBlock];
+    lay_out(maps, m);
+    for (int j = 0; j < kTetBlock; ++j) {
+        double e[3][3];
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d) e[k][d] = x.at[3 * (k + 1) + d][j] - x.at[d][j];
+        for (int i = 0; i < 3; ++i)
+            for (int d = 0; d < 3; ++d) {
+                double sum = 0.0;
+                for (int k = 0; k < 3; ++k) sum += e[k][d] * m[k][i][j];
+                x.at[3 * (i + 1) + d][j] = x.at[d][j] + sum;
+            }
+    }
+    if (!roots) return;
+    lay_out(roots, m);
+    for (int j = 0; j < kTetBlock; ++j)
+        for (int i = 0; i < 4; ++i) {
+            const double y[3] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
+            for (int r = 0; r < 3; ++r) x.at[3 * i + r][j] = m[r][0][j] * y[0] + m[r][1][j] * y[1] + m[r][2][j] * y[2];
+        }
+}
+
+[[gnu::always_inline]] inline void unmap_loop(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
+    alignas(64) double m[3][3][kTetBlock];
+    if (roots) {
+        lay_out(roots, m);
+        for (int j = 0; j < kTetBlock; ++j)
+            for (int i = 0; i < 4; ++i) {
+                const double gz[3] = {g.at[3 * i][j], g.at[3 * i + 1][j], g.at[3 * i + 2][j]};
+                for (int c = 0; c < 3; ++c) g.at[3 * i + c][j] = m[0][c][j] * gz[0] + m[1][c][j] * gz[1] + m[2][c][j] * gz[2];
+            }
+    }
+    lay_out(maps, m);
+    for (int j = 0; j < kTetBlock; ++j) {
+        double gy[4][3], total[3] = {0.0, 0.0, 0.0};
+        for (int i = 0; i < 4; ++i)
+            for (int d = 0; d < 3; ++d) gy[i][d] = g.at[3 * i + d][j], total[d] += gy[i][d];
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d) {
+                double sum = 0.0;
+                for (int i = 0; i < 3; ++i) sum += gy[i + 1][d] * m[k][i][j];
+                g.at[3 * (k + 1) + d][j] = sum;
+                total[d] -= sum;
+            }
+        for (int d = 0; d < 3; ++d) g.at[d][j] = total[d];
+    }
+}
+
+// ShapeSize::tet(), operation for operation: MeanRatio::of() and shape_orientation_size() with
+// no orientation factor (h = 1, which the scalar products multiply by exactly).
+template <class Sqrt, bool Gradient>
+[[gnu::always_inline]] inline void shape_size_loop(const TetBlock& x, const double* reference_volume, double* quality,
+                                                   TetBlock* gradient) {
+    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], root[kTetBlock];
+    TetBlock dvolume;
+    for (int j = 0; j < kTetBlock; ++j) measure<Gradient>(x, j, volume, edge_sum, &dvolume);
+    Sqrt::run(edge_sum, root);
+    for (int j = 0; j < kTetBlock; ++j) root[j] = MeanRatio::floored_volume(volume[j], edge_sum[j], root[j]);
+    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
+    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const double l = edge_sum[j];
+        const bool valid = l > 0.0;
+        const double m = valid ? MeanRatio::rated(volume[j], l, root[j]) : 0.0;
+        const SizeTerm size(volume[j] / reference_volume[j]);
+        quality[j] = m * size.value;
+        if constexpr (Gradient) {
+            P c[4], de[4];
+            corners_of(x, j, c);
+            TetGeometry::tet_dedge_sum(c, de);
+            const double dq_dv = 12.0 * 2.0 / root[j] / l, by_edge_sum = m / l;
+            const double by_volume = m * size.derivative / reference_volume[j];
+            for (int i = 0; i < 4; ++i) {
+                const P dv{dvolume.at[3 * i][j], dvolume.at[3 * i + 1][j], dvolume.at[3 * i + 2][j]};
+                const P dm = dq_dv * dv - by_edge_sum * de[i];
+                const P g = size.value * P{valid ? dm.x : 0.0, valid ? dm.y : 0.0, valid ? dm.z : 0.0} + by_volume * dv;
+                gradient->at[3 * i][j] = g.x;
+                gradient->at[3 * i + 1][j] = g.y;
+                gradient->at[3 * i + 2][j] = g.z;
+            }
+        }
+    }
+}
+
+template <class Sqrt>
+[[gnu::always_inline]] inline void shape_size(const TetBlock& x, const double* reference_volume, double* quality,
+                                              TetBlock* gradient) {
+    if (gradient) shape_size_loop<Sqrt, true>(x, reference_volume, quality, gradient);
+    else shape_size_loop<Sqrt, false>(x, reference_volume, quality, nullptr);
 }
 
 // RegularizedEnergy::energy<3>, operation for operation.
@@ -308,6 +408,11 @@ void hybrid_baseline(const TetBlock& x, const double* reference_volume, double a
                      TetBlock* gradient) {
     hybrid<Sqrt128>(x, reference_volume, alpha, quality, gradient);
 }
+void map_baseline(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) { map_loop(maps, roots, x); }
+void unmap_baseline(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) { unmap_loop(maps, roots, g); }
+void shape_size_baseline(const TetBlock& x, const double* reference_volume, double* quality, TetBlock* gradient) {
+    shape_size<Sqrt128>(x, reference_volume, quality, gradient);
+}
 void energy_baseline(const TetBlock& x, const double* reference_volume, double epsilon, double theta, double* quality,
                      TetBlock* gradient) {
     energy<Sqrt128>(x, reference_volume, epsilon, theta, quality, gradient);
@@ -317,6 +422,16 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
 [[gnu::target("avx2")]] void energy_avx2(const TetBlock& x, const double* reference_volume, double epsilon,
                                          double theta, double* quality, TetBlock* gradient) {
     energy<Sqrt256>(x, reference_volume, epsilon, theta, quality, gradient);
+}
+[[gnu::target("avx2")]] void map_avx2(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
+    map_loop(maps, roots, x);
+}
+[[gnu::target("avx2")]] void unmap_avx2(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
+    unmap_loop(maps, roots, g);
+}
+[[gnu::target("avx2")]] void shape_size_avx2(const TetBlock& x, const double* reference_volume, double* quality,
+                                             TetBlock* gradient) {
+    shape_size<Sqrt256>(x, reference_volume, quality, gradient);
 }
 [[gnu::target("avx2")]] void values_avx2(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                          double* quality) {
@@ -336,6 +451,16 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
                                          double theta, double* quality, TetBlock* gradient) {
     energy<Sqrt512>(x, reference_volume, epsilon, theta, quality, gradient);
 }
+[[PALOVERDE_AVX512]] void map_avx512(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
+    map_loop(maps, roots, x);
+}
+[[PALOVERDE_AVX512]] void unmap_avx512(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
+    unmap_loop(maps, roots, g);
+}
+[[PALOVERDE_AVX512]] void shape_size_avx512(const TetBlock& x, const double* reference_volume, double* quality,
+                                             TetBlock* gradient) {
+    shape_size<Sqrt512>(x, reference_volume, quality, gradient);
+}
 [[PALOVERDE_AVX512]] void values_avx512(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                          double* quality) {
     values<Sqrt512>(metric, x, reference_volume, quality);
@@ -348,6 +473,20 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
     hybrid<Sqrt512>(x, reference_volume, alpha, quality, gradient);
 }
 #undef PALOVERDE_AVX512
+#endif
+
+// ON_PATH(kernel, args...) calls the copy of `kernel` compiled for `path`: kernel_avx512,
+// kernel_avx2 or kernel_baseline (the only copy off x86).
+#ifdef PALOVERDE_X86
+template <class Kernel, class... Args>
+void on_path(BlockPath path, Kernel* avx512, Kernel* avx2, Kernel* baseline, Args&&... args) {
+    if (path == BlockPath::avx512) return avx512(std::forward<Args>(args)...);
+    if (path == BlockPath::avx2) return avx2(std::forward<Args>(args)...);
+    baseline(std::forward<Args>(args)...);
+}
+#define ON_PATH(kernel, ...) on_path(path, kernel##_avx512, kernel##_avx2, kernel##_baseline, __VA_ARGS__)
+#else
+#define ON_PATH(kernel, ...) kernel##_baseline(__VA_ARGS__)
 #endif
 
 }  // namespace
@@ -402,38 +541,37 @@ BlockPath best_block_path() {
 }
 
 void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient) {
-#ifdef PALOVERDE_X86
-    if (path == BlockPath::avx512) return aspect_avx512(corners, quality, gradient);
-    if (path == BlockPath::avx2) return aspect_avx2(corners, quality, gradient);
-#endif
-    aspect_baseline(corners, quality, gradient);
+    ON_PATH(aspect, corners, quality, gradient);
 }
 
 void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
                       double* quality, TetBlock* gradient) {
-#ifdef PALOVERDE_X86
-    if (path == BlockPath::avx512) return hybrid_avx512(corners, reference_volume, alpha, quality, gradient);
-    if (path == BlockPath::avx2) return hybrid_avx2(corners, reference_volume, alpha, quality, gradient);
-#endif
-    hybrid_baseline(corners, reference_volume, alpha, quality, gradient);
+    ON_PATH(hybrid, corners, reference_volume, alpha, quality, gradient);
+}
+
+void map_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
+    ON_PATH(map, maps, roots, x);
+}
+
+void unmap_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& gradient) {
+    ON_PATH(unmap, maps, roots, gradient);
+}
+
+void tet_shape_size_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double* quality,
+                          TetBlock* gradient) {
+    ON_PATH(shape_size, corners, reference_volume, quality, gradient);
 }
 
 void tet_energy_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double epsilon,
                       double theta, double* quality, TetBlock* gradient) {
-#ifdef PALOVERDE_X86
-    if (path == BlockPath::avx512) return energy_avx512(corners, reference_volume, epsilon, theta, quality, gradient);
-    if (path == BlockPath::avx2) return energy_avx2(corners, reference_volume, epsilon, theta, quality, gradient);
-#endif
-    energy_baseline(corners, reference_volume, epsilon, theta, quality, gradient);
+    ON_PATH(energy, corners, reference_volume, epsilon, theta, quality, gradient);
 }
 
 void tet_values_block(BlockPath path, TetValueMetric metric, const TetBlock& corners, const double* reference_volume,
                       double* quality) {
-#ifdef PALOVERDE_X86
-    if (path == BlockPath::avx512) return values_avx512(metric, corners, reference_volume, quality);
-    if (path == BlockPath::avx2) return values_avx2(metric, corners, reference_volume, quality);
-#endif
-    values_baseline(metric, corners, reference_volume, quality);
+    ON_PATH(values, metric, corners, reference_volume, quality);
 }
+
+#undef ON_PATH
 
 }  // namespace paloverde::metrics

@@ -4,6 +4,7 @@
 // all, which the compiler turns into SIMD code. The results are bit for bit those of the scalar
 // kernels in kernels.hpp: the same operations in the same order, and no contraction into FMA.
 #include "paloverde/core/types.hpp"
+#include "paloverde/mesh/cell_types.hpp"
 
 namespace paloverde::metrics {
 
@@ -26,12 +27,27 @@ BlockPath best_block_path();  // the widest supported
 // degenerate element at the origin (quality 0, no NaN).
 void gather_tets(const VertexId* connectivity, const double* coordinates, int count, TetBlock& x);
 
+// Carries each lane's corners by its map, maps[j] (a target's, cell_types.hpp: M[k - 1][i - 1]),
+// bit for bit as one element's are carried before a scalar kernel rates it: y_0 = x_0,
+// y_i = x_0 + sum_k (x_k - x_0) M[k][i], the sum from 0 in the order k = 1, 2, 3; then, when
+// `roots` is not null, every corner by the lane's metric root: z = N y.
+void map_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x);
+// The chain rule back through map_tets() for the lanes' gradients, bit for bit as one element's
+// gradient is carried back after a scalar kernel: through the metric root (transposed) first,
+// then g_xk = sum_i g_yi M[k][i] for k = 1, 2, 3, and g_x0 what makes both sums equal.
+void unmap_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& gradient);
+
 // quality[j] for the block's elements, and when `gradient` is not null their gradients.
 // As tet_aspect(): 0 with a zero gradient for an element without edge length.
 void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient);
 // As UntangleHybrid::tet() with the reference volume reference_volume[j] for element j.
 void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
                       double* quality, TetBlock* gradient);
+
+// As ShapeSize::tet() (the mean ratio times the size term) with the reference volume
+// reference_volume[j] for element j.
+void tet_shape_size_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double* quality,
+                          TetBlock* gradient);
 
 // As RegularizedEnergy::tet() with epsilon, theta and the reference volume reference_volume[j].
 void tet_energy_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double epsilon,

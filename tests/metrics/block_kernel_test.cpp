@@ -67,6 +67,7 @@ void check_blocks(const std::string& name, const std::vector<std::vector<double>
             for (double& r : reference) r = reference_volume;
             for (const bool gradient : {false, true}) {
                 if (name == "aspect_ratio") pm::tet_aspect_block(path, x, q, gradient ? &g : nullptr);
+                else if (name == "shape_size") pm::tet_shape_size_block(path, x, reference, q, gradient ? &g : nullptr);
                 else if (name == "untangle_energy")
                     pm::tet_energy_block(path, x, reference, kEpsilon, kTheta, q, gradient ? &g : nullptr);
                 else pm::tet_hybrid_block(path, x, reference, alpha, q, gradient ? &g : nullptr);
@@ -184,6 +185,7 @@ BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_a_real_mesh) {
     check_blocks("aspect_ratio", elements, reference);
     check_blocks("untangle_hybrid", elements, reference);
     check_blocks("untangle_energy", elements, reference);
+    check_blocks("shape_size", elements, reference);
 }
 
 BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degenerate_elements) {
@@ -203,6 +205,8 @@ BOOST_AUTO_TEST_CASE(block_kernels_equal_the_scalar_kernels_on_tangled_and_degen
     check_blocks("aspect_ratio", elements, 0.1);
     check_blocks("untangle_hybrid", elements, 0.1);
     check_blocks("untangle_energy", elements, 0.1);
+    check_blocks("shape_size", elements, 0.1);
+    check_blocks("shape_size", elements, 1e-100);  // the size term's quotient beyond the double range
 }
 
 BOOST_AUTO_TEST_CASE(value_block_kernels_equal_the_scalar_kernels) {

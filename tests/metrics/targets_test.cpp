@@ -2,6 +2,7 @@
 // equals its target 1, the maps' gradients, scaling, and the errors for bad input.
 #include <boost/test/unit_test.hpp>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -348,6 +349,59 @@ std::vector<double> uniform_metric(const pv::Mesh& mesh, std::array<double, 6> m
     std::vector<double> out;
     for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) out.insert(out.end(), m.begin(), m.end());
     return out;
+}
+
+// The batch passes (blocks of tetrahedra, their corners carried by their targets together) give
+// the one-element calls' values and gradients bit for bit, with targets from a reference, kept
+// from the mesh, or from a metric field; on a range off the multiples of the block size.
+BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
+    pv::Mesh reference = random_tets(200, 5);
+    for (int setup = 0; setup < 3; ++setup) {
+        pv::Mesh mesh = reference;
+        for (std::size_t i = 0; i < mesh.coordinates().size(); ++i)
+            mesh.coordinates()[i] += 0.3 * std::sin(0.7 * static_cast<double>(i));
+        if (setup == 0) {
+            pv::TargetOptions options;
+            options.size = options.aspect = options.skew = pv::TargetSource::Reference;
+            pv::set_targets(mesh, options, &reference);
+        } else if (setup == 1) {
+            pv::set_targets(mesh, pv::TargetOptions::from("aspect"));
+        } else {
+            std::vector<double> field;
+            for (pv::VertexId v = 0; v < mesh.num_vertices(); ++v) {
+                const double a = 1.0 + 0.1 * (v % 7);
+                field.insert(field.end(), {a, 1.0, 0.5 * a, 0.1, 0.0, 0.05});
+            }
+            mesh.set_target_metrics(field);
+            pv::set_targets(mesh, from_metric());
+        }
+        const std::span<const double> xyz = mesh.coordinates();
+        const pv::ElementId first = 3, last = mesh.num_elements() - 2;
+        for (const char* name : {"shape_size", "shape_size_orient", "mean_ratio"}) {
+            auto metric = pv::make_metric(name);
+            metric->prepare(mesh);
+            std::vector<double> quality(static_cast<std::size_t>(last - first));
+            metric->evaluate(mesh, xyz, first, last, quality.data());
+            const std::vector<double> weight(quality.size(), 1.0);
+            std::vector<double> batch(xyz.size(), 0.0), single(xyz.size(), 0.0);
+            pv::QualityMetric::GradientTarget target;
+            target.weight = weight.data();
+            target.gradient = batch.data();
+            metric->accumulate_gradient(mesh, xyz, first, last, target);
+            std::size_t mismatches = 0;
+            for (pv::ElementId e = first; e < last; ++e) {
+                double g[12];
+                const double q = metric->element_value(mesh, xyz, e, g);
+                mismatches += std::memcmp(&q, &quality[e - first], sizeof q) != 0;
+                for (int i = 0; i < 4; ++i)
+                    for (int d = 0; d < 3; ++d) single[3 * static_cast<std::size_t>(mesh.element(e)[i]) + d] += g[3 * i + d];
+            }
+            BOOST_TEST_CONTEXT("targets " << setup << ", " << name) {
+                BOOST_TEST(mismatches == 0u);
+                BOOST_TEST(std::memcmp(batch.data(), single.data(), batch.size() * sizeof(double)) == 0);
+            }
+        }
+    }
 }
 
 BOOST_AUTO_TEST_CASE(an_element_ideal_in_its_metric_rates_one) {
