@@ -92,8 +92,8 @@ struct MeanRatio {
         return q;
     }
     double tet(const double* x, double* g, const MetricScale&) const { return of(TetGeometry(x), g); }
-    void tet_values_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q) const {
-        metrics::tet_values_block(path, TetValueMetric::mean_ratio, x, nullptr, q);
+    void tet_block(BlockPath path, const TetBlock& x, const double* /*reference_volume*/, double* q, TetBlock* g) const {
+        tet_mean_ratio_block(path, x, q, g);
     }
     double tri(const double* x, double* g, const MetricScale& s) const { return triangle_shape(TriGeometry(x, s), g); }
 };

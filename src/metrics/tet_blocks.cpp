@@ -204,10 +204,11 @@ template <class Sqrt>
     }
 }
 
-// ShapeSize::tet(), operation for operation: MeanRatio::of() and shape_orientation_size() with
-// no orientation factor (h = 1, which the scalar products multiply by exactly).
-template <class Sqrt, bool Gradient>
-[[gnu::always_inline]] inline void shape_size_loop(const TetBlock& x, const double* reference_volume, double* quality,
+// MeanRatio::tet() and, Sized, ShapeSize::tet(), operation for operation: MeanRatio::of(), then
+// shape_orientation_size() with no orientation factor (h = 1, which the scalar products multiply
+// by exactly).
+template <class Sqrt, bool Gradient, bool Sized>
+[[gnu::always_inline]] inline void mean_ratio_loop(const TetBlock& x, const double* reference_volume, double* quality,
                                                    TetBlock* gradient) {
     alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], root[kTetBlock];
     TetBlock dvolume;
@@ -220,18 +221,19 @@ template <class Sqrt, bool Gradient>
         const double l = edge_sum[j];
         const bool valid = l > 0.0;
         const double m = valid ? MeanRatio::rated(volume[j], l, root[j]) : 0.0;
-        const SizeTerm size(volume[j] / reference_volume[j]);
-        quality[j] = m * size.value;
+        const SizeTerm size(Sized ? volume[j] / reference_volume[j] : 1.0);
+        quality[j] = Sized ? m * size.value : m;
         if constexpr (Gradient) {
             P c[4], de[4];
             corners_of(x, j, c);
             TetGeometry::tet_dedge_sum(c, de);
             const double dq_dv = 12.0 * 2.0 / root[j] / l, by_edge_sum = m / l;
-            const double by_volume = m * size.derivative / reference_volume[j];
+            const double by_volume = Sized ? m * size.derivative / reference_volume[j] : 0.0;
             for (int i = 0; i < 4; ++i) {
                 const P dv{dvolume.at[3 * i][j], dvolume.at[3 * i + 1][j], dvolume.at[3 * i + 2][j]};
                 const P dm = dq_dv * dv - by_edge_sum * de[i];
-                const P g = size.value * P{valid ? dm.x : 0.0, valid ? dm.y : 0.0, valid ? dm.z : 0.0} + by_volume * dv;
+                const P shape{valid ? dm.x : 0.0, valid ? dm.y : 0.0, valid ? dm.z : 0.0};
+                const P g = Sized ? size.value * shape + by_volume * dv : shape;
                 gradient->at[3 * i][j] = g.x;
                 gradient->at[3 * i + 1][j] = g.y;
                 gradient->at[3 * i + 2][j] = g.z;
@@ -240,11 +242,11 @@ template <class Sqrt, bool Gradient>
     }
 }
 
-template <class Sqrt>
-[[gnu::always_inline]] inline void shape_size(const TetBlock& x, const double* reference_volume, double* quality,
+template <class Sqrt, bool Sized>
+[[gnu::always_inline]] inline void mean_ratio(const TetBlock& x, const double* reference_volume, double* quality,
                                               TetBlock* gradient) {
-    if (gradient) shape_size_loop<Sqrt, true>(x, reference_volume, quality, gradient);
-    else shape_size_loop<Sqrt, false>(x, reference_volume, quality, nullptr);
+    if (gradient) mean_ratio_loop<Sqrt, true, Sized>(x, reference_volume, quality, gradient);
+    else mean_ratio_loop<Sqrt, false, Sized>(x, reference_volume, quality, nullptr);
 }
 
 // RegularizedEnergy::energy<3>, operation for operation.
@@ -296,18 +298,6 @@ template <class Sqrt>
 }
 
 // The report's value-only kernels, on the pieces of kernels.hpp they share with the scalar ones.
-template <class Sqrt>
-[[gnu::always_inline]] inline void mean_ratio(const TetBlock& x, double* quality) {
-    alignas(64) double volume[kTetBlock], edge_sum[kTetBlock], root[kTetBlock];
-    for (int j = 0; j < kTetBlock; ++j) measure<false>(x, j, volume, edge_sum, nullptr);
-    Sqrt::run(edge_sum, root);
-    for (int j = 0; j < kTetBlock; ++j) root[j] = MeanRatio::floored_volume(volume[j], edge_sum[j], root[j]);
-    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
-    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
-    for (int j = 0; j < kTetBlock; ++j)
-        quality[j] = edge_sum[j] > 0.0 ? MeanRatio::rated(volume[j], edge_sum[j], root[j]) : 0.0;
-}
-
 template <class Sqrt>
 [[gnu::always_inline]] inline void inverse_condition(const TetBlock& x, double* quality) {
     alignas(64) double det[kTetBlock], n[kTetBlock], c[kTetBlock];
@@ -392,7 +382,6 @@ template <class Sqrt>
 [[gnu::always_inline]] inline void values(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                           double* quality) {
     switch (metric) {
-        case TetValueMetric::mean_ratio: return mean_ratio<Sqrt>(x, quality);
         case TetValueMetric::inverse_condition: return inverse_condition<Sqrt>(x, quality);
         case TetValueMetric::edge_ratio: return edge_ratio<Sqrt>(x, quality);
         case TetValueMetric::scaled_volume: return scaled_volume(x, reference_volume, quality);
@@ -411,7 +400,10 @@ void hybrid_baseline(const TetBlock& x, const double* reference_volume, double a
 void map_baseline(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) { map_loop(maps, roots, x); }
 void unmap_baseline(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) { unmap_loop(maps, roots, g); }
 void shape_size_baseline(const TetBlock& x, const double* reference_volume, double* quality, TetBlock* gradient) {
-    shape_size<Sqrt128>(x, reference_volume, quality, gradient);
+    mean_ratio<Sqrt128, true>(x, reference_volume, quality, gradient);
+}
+void mean_ratio_baseline(const TetBlock& x, double* quality, TetBlock* gradient) {
+    mean_ratio<Sqrt128, false>(x, nullptr, quality, gradient);
 }
 void energy_baseline(const TetBlock& x, const double* reference_volume, double epsilon, double theta, double* quality,
                      TetBlock* gradient) {
@@ -431,7 +423,10 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
 }
 [[gnu::target("avx2")]] void shape_size_avx2(const TetBlock& x, const double* reference_volume, double* quality,
                                              TetBlock* gradient) {
-    shape_size<Sqrt256>(x, reference_volume, quality, gradient);
+    mean_ratio<Sqrt256, true>(x, reference_volume, quality, gradient);
+}
+[[gnu::target("avx2")]] void mean_ratio_avx2(const TetBlock& x, double* quality, TetBlock* gradient) {
+    mean_ratio<Sqrt256, false>(x, nullptr, quality, gradient);
 }
 [[gnu::target("avx2")]] void values_avx2(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                          double* quality) {
@@ -459,7 +454,10 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
 }
 [[PALOVERDE_AVX512]] void shape_size_avx512(const TetBlock& x, const double* reference_volume, double* quality,
                                              TetBlock* gradient) {
-    shape_size<Sqrt512>(x, reference_volume, quality, gradient);
+    mean_ratio<Sqrt512, true>(x, reference_volume, quality, gradient);
+}
+[[PALOVERDE_AVX512]] void mean_ratio_avx512(const TetBlock& x, double* quality, TetBlock* gradient) {
+    mean_ratio<Sqrt512, false>(x, nullptr, quality, gradient);
 }
 [[PALOVERDE_AVX512]] void values_avx512(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                          double* quality) {
@@ -555,6 +553,10 @@ void map_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* con
 
 void unmap_tets(BlockPath path, const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& gradient) {
     ON_PATH(unmap, maps, roots, gradient);
+}
+
+void tet_mean_ratio_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient) {
+    ON_PATH(mean_ratio, corners, quality, gradient);
 }
 
 void tet_shape_size_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double* quality,

@@ -44,6 +44,8 @@ void tet_aspect_block(BlockPath path, const TetBlock& corners, double* quality, 
 void tet_hybrid_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double alpha,
                       double* quality, TetBlock* gradient);
 
+// As MeanRatio::tet(): 0 with a zero gradient for an element without edge length.
+void tet_mean_ratio_block(BlockPath path, const TetBlock& corners, double* quality, TetBlock* gradient);
 // As ShapeSize::tet() (the mean ratio times the size term) with the reference volume
 // reference_volume[j] for element j.
 void tet_shape_size_block(BlockPath path, const TetBlock& corners, const double* reference_volume, double* quality,
@@ -56,7 +58,7 @@ void tet_energy_block(BlockPath path, const TetBlock& corners, const double* ref
 // The metrics a quality report rates besides the aspect ratio, values only (a report needs no
 // gradient): quality[j] is bit for bit the scalar tet() of that metric without a gradient.
 // reference_volume[j] is read by scaled_volume alone (the others may be given null).
-enum class TetValueMetric { mean_ratio, inverse_condition, edge_ratio, scaled_volume, min_dihedral };
+enum class TetValueMetric { inverse_condition, edge_ratio, scaled_volume, min_dihedral };
 void tet_values_block(BlockPath path, TetValueMetric metric, const TetBlock& corners, const double* reference_volume,
                       double* quality);
 
