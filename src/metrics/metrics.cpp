@@ -238,6 +238,22 @@ void map_block(const ElementMaps& maps, int count, Ids&& ids, TetBlock& x) {
     for (int j = 0; j < count; ++j) map_lane(maps.of(ids(j)), j, x);
 }
 
+// The chain rule back through map_block() for the lanes' gradients.
+template <class Ids>
+void unmap_block(const ElementMaps& maps, int count, Ids&& ids, TetBlock& g) {
+    if (!maps) return;
+    if (maps.has_targets()) {
+        const LaneTargets lanes(maps, count, ids);
+        return unmap_tets(best_block_path(), lanes.map, lanes.roots(), g);
+    }
+    for (int j = 0; j < count; ++j) {
+        double lane[12];
+        for (int i = 0; i < 12; ++i) lane[i] = g.at[i][j];
+        unmap_gradient<4>(maps.of(ids(j)), lane);
+        for (int i = 0; i < 12; ++i) g.at[i][j] = lane[i];
+    }
+}
+
 // Gathers the corners of the tetrahedra [first, last) kTetBlock at a time and calls
 // rate(corners, b, count) for the block of elements b, ..., b + count - 1. Padding lanes of a
 // last, partial block hold a degenerate element at the origin, which rates 0 without trouble. An
@@ -382,6 +398,35 @@ public:
             }
         }
         QualityMetric::evaluate_listed(mesh, xyz, elements, quality);
+    }
+
+    void element_values(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
+                        double* quality, double* gradient) const override {
+        if constexpr (kHasBlocks) {
+            if (mesh.kind() == ElementKind::Tetrahedron && elements.size() >= static_cast<std::size_t>(kTetBlock)) {
+                require_gradient();
+                const ElementMaps maps(mesh);
+                // element_value()'s reference volume: a target's for a size metric, else the mesh's.
+                const bool targets = kTargetSize && mesh.has_targets();
+                alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
+                TetBlock g;
+                for_each_listed_block(mesh, xyz, elements, [&](const TetBlock& x, const ElementId* ids, int count) {
+                    for (int j = 0; j < kTetBlock; ++j)
+                        reference_volume[j] = j >= count ? 1.0
+                                              : targets ? mesh.target_volumes()[static_cast<std::size_t>(ids[j])]
+                                                        : scale_.reference_volume;
+                    kernel_.tet_block(path_, x, reference_volume, q, &g);
+                    unmap_block(maps, count, [ids](int j) { return ids[j]; }, g);
+                    const auto at = static_cast<std::size_t>(ids - elements.data());
+                    for (int j = 0; j < count; ++j) {
+                        quality[at + j] = q[j];
+                        for (int i = 0; i < 12; ++i) gradient[12 * (at + j) + i] = g.at[i][j];
+                    }
+                });
+                return;
+            }
+        }
+        QualityMetric::element_values(mesh, xyz, elements, quality, gradient);
     }
 
     void accumulate_gradient(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
@@ -588,6 +633,12 @@ double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xy
     };
     return mesh.kind() == ElementKind::Tetrahedron ? rate(std::integral_constant<int, 4>{})
                                                    : rate(std::integral_constant<int, 3>{});
+}
+
+void QualityMetric::element_values(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
+                                   double* quality, double* gradient) const {
+    const std::size_t stride = 3 * static_cast<std::size_t>(mesh.corners());
+    for (std::size_t i = 0; i < elements.size(); ++i) quality[i] = element_value(mesh, xyz, elements[i], gradient + stride * i);
 }
 
 void QualityMetric::evaluate_listed(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,

@@ -1,7 +1,6 @@
 #include "paloverde/solvers/local_solver.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -90,9 +89,13 @@ Vec3 min_norm_point(const std::vector<Vec3>& points) {
 // projected on its tangent space, and each trial point back onto the surface before it is rated.
 class VertexAscent {
 public:
+    // `by_element`: scratch of one quality per element of the mesh, for the line search's trials
+    // (the metric's listed pass scatters by element id), shared by the ascents of one thread.
     VertexAscent(const Mesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
-                 const detail::SlidingBoundary* sliding = nullptr)
-        : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding) {}
+                 std::vector<double>& by_element, const detail::SlidingBoundary* sliding = nullptr)
+        : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding), by_element_(by_element) {
+        by_element_.resize(static_cast<std::size_t>(mesh.num_elements()));
+    }
 
     bool improve(std::span<double> xyz, VertexId v) {
         const auto elements = mesh_.elements_of(v);
@@ -157,29 +160,38 @@ public:
 
 private:
     // Qualities of v's elements into q_ (or trial_q_), and with `gradient` each one's gradient
-    // with respect to v (on its tangent space when it slides). Returns their minimum.
+    // with respect to v (on its tangent space when it slides). Returns their minimum. The metric
+    // rates the star in one call (a star of tetrahedra in blocks: the same bits as one by one).
     double evaluate(std::span<const double> xyz, VertexId v, bool gradient, bool slides) {
         const auto elements = mesh_.elements_of(v);
-        const int corners = mesh_.corners();
         double worst = std::numeric_limits<double>::infinity();
-        for (std::size_t i = 0; i < elements.size(); ++i) {
-            const auto element = mesh_.element(elements[i]);
-            int slot = 0;
-            for (int j = 0; j < corners; ++j)
-                if (element[j] == v) slot = j;
-            double q;
-            if (gradient) {
-                q = metric_.element_value(mesh_, xyz, elements[i], all_gradients_.data());
-                gradient_[i] = {all_gradients_[3 * slot], all_gradients_[3 * slot + 1], all_gradients_[3 * slot + 2]};
-                if (slides) gradient_[i] = sliding_->tangent(v, gradient_[i]);
-                q_[i] = q;
-            } else {
-                q = metric_.element_value(mesh_, xyz, elements[i]);
-                trial_q_[i] = q;
+        if (!gradient) {
+            metric_.evaluate_listed(mesh_, xyz, elements, by_element_.data());
+            for (std::size_t i = 0; i < elements.size(); ++i) {
+                trial_q_[i] = by_element_[static_cast<std::size_t>(elements[i])];
+                worst = std::min(worst, trial_q_[i]);
             }
-            worst = std::min(worst, q);
+            return worst;
+        }
+        const std::size_t stride = 3 * static_cast<std::size_t>(mesh_.corners());
+        star_gradients_.resize(stride * elements.size());
+        metric_.element_values(mesh_, xyz, elements, q_.data(), star_gradients_.data());
+        for (std::size_t i = 0; i < elements.size(); ++i) {
+            const double* g = star_gradients_.data() + stride * i + 3 * corner_of(elements[i], v);
+            gradient_[i] = {g[0], g[1], g[2]};
+            if (slides) gradient_[i] = sliding_->tangent(v, gradient_[i]);
+            worst = std::min(worst, q_[i]);
         }
         return worst;
+    }
+
+    // Where v is among element e's corners.
+    int corner_of(ElementId e, VertexId v) const {
+        const auto element = mesh_.element(e);
+        int slot = 0;
+        for (int j = 0; j < mesh_.corners(); ++j)
+            if (element[j] == v) slot = j;
+        return slot;
     }
 
     const Mesh& mesh_;
@@ -189,7 +201,8 @@ private:
     std::vector<double> q_, trial_q_;
     std::vector<Vec3> gradient_, active_;
     std::vector<std::uint8_t> positive_;
-    std::array<double, 12> all_gradients_{};
+    std::vector<double> star_gradients_;
+    std::vector<double>& by_element_;
 };
 
 // The metric scale. A part's is the whole mesh's: its mean element volume summed over the ranks,
@@ -369,6 +382,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     // One pass over the colors; within a color every vertex's update reads only vertices of
     // other colors, so the parallel loop gives the same result for any thread count. After each
     // color, ghosts take their owners' new positions.
+    std::vector<std::vector<double>> qualities_by_thread(static_cast<std::size_t>(omp_get_max_threads()));
     auto sweep = [&](auto&& visit) {
         int moved = 0;
         for (std::size_t c = 0; c < static_cast<std::size_t>(coloring.count); ++c) {
@@ -377,7 +391,9 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
-                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_, sliding);
+                std::vector<double>& by_element = qualities_by_thread[static_cast<std::size_t>(omp_get_thread_num())];
+                VertexAscent shape(mesh, *metric, options_, by_element, sliding),
+                    untangle(mesh, *volume, options_, by_element, sliding);
                 detail::VertexEnergy energy(mesh, reference, scale, epsilon, sliding);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)

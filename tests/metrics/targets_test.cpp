@@ -351,9 +351,10 @@ std::vector<double> uniform_metric(const pv::Mesh& mesh, std::array<double, 6> m
     return out;
 }
 
-// The batch passes (blocks of tetrahedra, their corners carried by their targets together) give
-// the one-element calls' values and gradients bit for bit, with targets from a reference, kept
-// from the mesh, or from a metric field; on a range off the multiples of the block size.
+// The batch passes (blocks of tetrahedra, their corners carried by their targets together) and
+// the listed call a local smoother rates a star with give the one-element calls' values and
+// gradients bit for bit, with targets from a reference, kept from the mesh, or from a metric
+// field; on a range off the multiples of the block size.
 BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
     pv::Mesh reference = random_tets(200, 5);
     for (int setup = 0; setup < 3; ++setup) {
@@ -388,6 +389,11 @@ BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
             target.weight = weight.data();
             target.gradient = batch.data();
             metric->accumulate_gradient(mesh, xyz, first, last, target);
+            // A star's call: every third element, listed.
+            std::vector<pv::ElementId> listed;
+            for (pv::ElementId e = first; e < last; e += 3) listed.push_back(e);
+            std::vector<double> listed_quality(listed.size()), listed_gradient(12 * listed.size());
+            metric->element_values(mesh, xyz, listed, listed_quality.data(), listed_gradient.data());
             std::size_t mismatches = 0;
             for (pv::ElementId e = first; e < last; ++e) {
                 double g[12];
@@ -395,6 +401,11 @@ BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
                 mismatches += std::memcmp(&q, &quality[e - first], sizeof q) != 0;
                 for (int i = 0; i < 4; ++i)
                     for (int d = 0; d < 3; ++d) single[3 * static_cast<std::size_t>(mesh.element(e)[i]) + d] += g[3 * i + d];
+                if ((e - first) % 3 == 0) {
+                    const std::size_t at = static_cast<std::size_t>(e - first) / 3;
+                    mismatches += std::memcmp(&q, &listed_quality[at], sizeof q) != 0;
+                    mismatches += std::memcmp(g, &listed_gradient[12 * at], sizeof g) != 0;
+                }
             }
             BOOST_TEST_CONTEXT("targets " << setup << ", " << name) {
                 BOOST_TEST(mismatches == 0u);

@@ -73,6 +73,12 @@ public:
     virtual double element_value(const Mesh& mesh, std::span<const double> coordinates, ElementId e,
                          double* gradient = nullptr) const;
 
+    // The listed elements' values and gradients, in list order: quality[i], and gradient[3 k i ..
+    // 3 k (i + 1)) (k corners) for elements[i]; the same bits as element_value(). For a vertex's
+    // star: the built-in metrics rate a star of tetrahedra in blocks, not one call per element.
+    virtual void element_values(const Mesh& mesh, std::span<const double> coordinates,
+                                std::span<const ElementId> elements, double* quality, double* gradient) const;
+
     // Qualities of elements [first, last) of `mesh` at the vertex positions `coordinates` (the
     // mesh's own or trial positions of the same layout): quality[e - first].
     virtual void evaluate(const Mesh& mesh, std::span<const double> coordinates, ElementId first,
