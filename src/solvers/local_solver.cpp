@@ -94,6 +94,10 @@ public:
     VertexAscent(const Mesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
                  std::vector<double>& by_element, const detail::SlidingBoundary* sliding = nullptr)
         : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding), by_element_(by_element) {
+        // The trials' listed pass would read per-element reference volumes, which element_values()
+        // (as element_value()) does not: the values and gradients of a star must agree.
+        if (!metric.scale().element_reference_volume.empty())
+            throw Error("a vertex ascent's metric must rate against the mesh's reference volume, not per-element ones");
         by_element_.resize(static_cast<std::size_t>(mesh.num_elements()));
     }
 
