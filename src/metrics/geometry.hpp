@@ -46,6 +46,9 @@ inline void plane_basis(const P& n, P& a, P& b) {
 // Corner pairs of the edges.
 inline constexpr int kTetEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 inline constexpr int kTriEdges[3][2] = {{0, 1}, {0, 2}, {1, 2}};
+// The corners of a tetrahedron, each with its three neighbours in an order that keeps the
+// orientation (even permutations): where the scaled Jacobian is taken.
+inline constexpr int kTetJacobianCorners[4][4] = {{0, 1, 2, 3}, {1, 2, 0, 3}, {2, 0, 1, 3}, {3, 0, 2, 1}};
 
 // Tetrahedron (a, b, c, d), positive when d lies on the side of abc that (b-a)x(c-a) points to
 // (the VTK, Gmsh and CGAL convention).

@@ -13,14 +13,14 @@
 #include "paloverde/mesh/cell_types.hpp"
 #include "paloverde/mesh/mesh.hpp"
 #include "scaled_jacobian.hpp"
+#include "tet_blocks.hpp"
 
 namespace paloverde::metrics {
 
 namespace {
 
-// The corners of a tetrahedron, each with its three neighbours in an order that keeps the
-// orientation (even permutations), and of a triangle with its two.
-constexpr int kTetCorners[4][4] = {{0, 1, 2, 3}, {1, 2, 0, 3}, {2, 0, 1, 3}, {3, 0, 2, 1}};
+// The corners of a triangle, each with its two neighbours in an order that keeps the orientation
+// (a tetrahedron's: kTetJacobianCorners).
 constexpr int kTriCorners[3][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}};
 
 // det(e1, e2, e3) / (|e1| |e2| |e3|) at corner c of x; 0 where an edge has no length.
@@ -92,7 +92,7 @@ public:
             for (int i = 0; i < 4; ++i)
                 for (int j = i + 1; j < 4; ++j) length[i][j] = length[j][i] = norm(load(x, j) - load(x, i));
             double worst = INFINITY;
-            for (const auto& c : kTetCorners) {
+            for (const auto& c : kTetJacobianCorners) {
                 const P o = load(x, c[0]);
                 const P e1 = load(x, c[1]) - o, e2 = load(x, c[2]) - o, e3 = load(x, c[3]) - o;
                 const double lengths = length[c[0]][c[1]] * length[c[0]][c[2]] * length[c[0]][c[3]];
@@ -110,6 +110,7 @@ public:
                   double* quality) const override {
         const int k = mesh.corners();
         const auto maps = mesh.corner_maps();
+        if (k == 4 && maps.empty()) return evaluate_tet_blocks(mesh, xyz, first, last, quality);
         const auto& ideal = ideal_corner_jacobians();
         double x[12];
         for (ElementId e = first; e < last; ++e) {
@@ -118,7 +119,7 @@ public:
                 for (int d = 0; d < 3; ++d) x[3 * i + d] = xyz[3 * static_cast<std::size_t>(corners[i]) + d];
             const std::uint8_t map = maps.empty() ? 0 : maps[e];
             if (k == 4) {
-                quality[e - first] = map == 0 ? value(mesh.kind(), x) : corner_jacobian(x, kTetCorners[0]) / ideal[map];
+                quality[e - first] = map == 0 ? value(mesh.kind(), x) : corner_jacobian(x, kTetJacobianCorners[0]) / ideal[map];
                 continue;
             }
             // A surface mesh's triangle turns about its own input normal.
@@ -143,6 +144,21 @@ public:
     }
 
 private:
+    // A mesh of tetrahedra alone: kTetBlock at a time, bit for bit value()'s.
+    static void evaluate_tet_blocks(const Mesh& mesh, std::span<const double> xyz, ElementId first, ElementId last,
+                                    double* quality) {
+        const BlockPath path = best_block_path();
+        const VertexId* conn = mesh.connectivity().data();
+        TetBlock x;
+        double q[kTetBlock];
+        for (ElementId b = first; b < last; b += kTetBlock) {
+            const int count = static_cast<int>(std::min<ElementId>(kTetBlock, last - b));
+            gather_tets(conn + 4 * static_cast<std::size_t>(b), xyz.data(), count, x);
+            tet_values_block(path, TetValueMetric::scaled_jacobian, x, nullptr, q);
+            std::copy(q, q + count, quality + (b - first));
+        }
+    }
+
     double triangle(const double* x, const P& n) const {
         double worst = INFINITY;
         for (const auto& c : kTriCorners) worst = std::min(worst, corner_jacobian(x, c, n));

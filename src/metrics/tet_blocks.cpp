@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <numbers>
 #include <utility>
 
 #include "kernels.hpp"
@@ -378,6 +379,35 @@ template <class Sqrt>
     for (int j = 0; j < kTetBlock; ++j) quality[j] = MinDihedralAngle::degrees(volume[j], std::atan2(sine[j], cosine[j]));
 }
 
+// The scaled Jacobian of scaled_jacobian.cpp (a tetrahedron alone): each edge's length from the
+// later corner minus the earlier, as the scalar code measures it, then its corners in its order.
+template <class Sqrt>
+[[gnu::always_inline]] inline void scaled_jacobian(const TetBlock& x, double* quality) {
+    alignas(64) double length[4][4][kTetBlock];
+    for (int j = 0; j < kTetBlock; ++j) {
+        const std::array<P, 4> c = corners_of(x, j);
+        for (int a = 0; a < 4; ++a)
+            for (int b = a + 1; b < 4; ++b) {
+                const P d = c[b] - c[a];
+                length[a][b][j] = dot(d, d);
+            }
+    }
+    for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) Sqrt::run(length[a][b], length[a][b]);
+    for (int j = 0; j < kTetBlock; ++j) {
+        const std::array<P, 4> c = corners_of(x, j);
+        auto l = [&](int a, int b) { return a < b ? length[a][b][j] : length[b][a][j]; };
+        double worst = INFINITY;
+        for (const auto& k : kTetJacobianCorners) {
+            const P e1 = c[k[1]] - c[k[0]], e2 = c[k[2]] - c[k[0]], e3 = c[k[3]] - c[k[0]];
+            const double lengths = l(k[0], k[1]) * l(k[0], k[2]) * l(k[0], k[3]);
+            const double corner = lengths > 0.0 ? dot(e1, cross(e2, e3)) / lengths : 0.0;
+            worst = corner < worst ? corner : worst;  // std::min's choice
+        }
+        quality[j] = std::numbers::sqrt2 * worst;
+    }
+}
+
 template <class Sqrt>
 [[gnu::always_inline]] inline void values(TetValueMetric metric, const TetBlock& x, const double* reference_volume,
                                           double* quality) {
@@ -386,6 +416,7 @@ template <class Sqrt>
         case TetValueMetric::edge_ratio: return edge_ratio<Sqrt>(x, quality);
         case TetValueMetric::scaled_volume: return scaled_volume(x, reference_volume, quality);
         case TetValueMetric::min_dihedral: return min_dihedral<Sqrt>(x, quality);
+        case TetValueMetric::scaled_jacobian: return scaled_jacobian<Sqrt>(x, quality);
     }
 }
 

@@ -58,7 +58,7 @@ void tet_energy_block(BlockPath path, const TetBlock& corners, const double* ref
 // The metrics a quality report rates besides the aspect ratio, values only (a report needs no
 // gradient): quality[j] is bit for bit the scalar tet() of that metric without a gradient.
 // reference_volume[j] is read by scaled_volume alone (the others may be given null).
-enum class TetValueMetric { inverse_condition, edge_ratio, scaled_volume, min_dihedral };
+enum class TetValueMetric { inverse_condition, edge_ratio, scaled_volume, min_dihedral, scaled_jacobian };
 void tet_values_block(BlockPath path, TetValueMetric metric, const TetBlock& corners, const double* reference_volume,
                       double* quality);
 

@@ -94,7 +94,7 @@ void check_value_blocks(const std::vector<std::vector<double>>& elements, double
     const std::pair<const char*, pm::TetValueMetric> kernels[] = {
         {"inverse_condition", pm::TetValueMetric::inverse_condition},
         {"edge_ratio", pm::TetValueMetric::edge_ratio},       {"scaled_volume", pm::TetValueMetric::scaled_volume},
-        {"min_dihedral_deg", pm::TetValueMetric::min_dihedral}};
+        {"min_dihedral_deg", pm::TetValueMetric::min_dihedral}, {"scaled_jacobian", pm::TetValueMetric::scaled_jacobian}};
     for (const auto& [name, kernel] : kernels) {
         auto metric = pv::make_metric(name);
         pv::MetricScale scale;
@@ -219,7 +219,8 @@ BOOST_AUTO_TEST_CASE(value_block_kernels_equal_the_scalar_kernels) {
     const auto mesh = pv::read_mesh(pv::test::shared_data("tetwild/octopus-vol.mesh")).mesh;
     check_value_blocks(mesh_elements(mesh), pv::MetricScale::of(mesh).reference_volume);
     // The batch call takes those kernels, on an odd range (blocks off the multiples of 16).
-    for (const std::string name : {"mean_ratio", "inverse_condition", "edge_ratio", "scaled_volume", "min_dihedral_deg"}) {
+    for (const std::string name :
+         {"mean_ratio", "inverse_condition", "edge_ratio", "scaled_volume", "min_dihedral_deg", "scaled_jacobian"}) {
         auto metric = pv::make_metric(name);
         metric->set_scale(pv::MetricScale::of(mesh));
         const pv::ElementId first = 3, last = mesh.num_elements() - 2;
