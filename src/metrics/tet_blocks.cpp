@@ -151,9 +151,9 @@ template <class Sqrt>
 
 // The lanes' 3 x 3 maps side by side, so that the loops over lanes vectorize.
 [[gnu::always_inline]] inline void lay_out(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
-    for (int j = 0; j < kTetBlock; ++j)
-        for (int k = 0; k < 3; ++k)
-            for (int i = 0; i < 3; ++i) m[k][i][j] = (*maps[j])[k][i];
+    for (int k = 0; k < 3; ++k)
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < kTetBlock; ++j) m[k][i][j] = (*maps[j])[k][i];
 }
 
 [[gnu::always_inline]] inline void map_loop(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
