@@ -48,7 +48,7 @@ int main(int argc, char** argv) {
     // Every rank runs the command, and its errors are thrown on every rank: rank 0 tells.
     const Silence others(!root);
     CLI::App app{"Paloverde: untangle and improve meshes by moving vertices: tetrahedra, hexahedra, wedges and "
-                 "pyramids (mixed too), planar triangles and quadrilaterals, and surfaces of triangles in 3D (kept on themselves)"};
+                 "pyramids (mixed too), planar triangles and quadrilaterals, and surfaces of triangles and quadrilaterals in 3D (kept on themselves)"};
     app.require_subcommand(1);
     int exit_code = kDone;
     add_quality_command(app, exit_code);
