@@ -210,8 +210,9 @@ BOOST_AUTO_TEST_CASE(a_focused_shape_phase_gives_the_serial_answer) {
 // a fresh one: on tire with min_progress a hundred times smaller than the default, which hands
 // over later) takes the serial steps on any number of ranks. The shape phase before
 // it damps vertices again where their own barrier terms fall (damped_vertex_ascent): decided by
-// each vertex's owner, it takes the serial steps too.
-BOOST_AUTO_TEST_CASE(the_newton_finish_gives_the_serial_answer) {
+// each vertex's owner, it takes the serial steps too. Slow (tests/CMakeLists.txt): the sanitizers
+// see the finish's two parts on the ranks in the next case.
+BOOST_AUTO_TEST_CASE(the_newton_finish_gives_the_serial_answer, *boost::unit_test::label("slow")) {
     pv::GlobalSolverOptions options;
     options.termination.min_progress = 1e-8;
     const auto [serial, distributed] = serial_and_distributed(pv::test::shared_mesh("mesquite/tets/tire.vtk"), options);
@@ -242,7 +243,9 @@ BOOST_AUTO_TEST_CASE(a_fresh_barrier_after_the_worst_rose_far_above_t_gives_the_
 
 // The mean's polish (here always, after the finish): which vertices stand still is decided by
 // their owners from the whole mesh's qualities, and its steps are the serial ones, bit for bit.
-BOOST_AUTO_TEST_CASE(the_means_polish_gives_the_serial_answer) {
+// Slow (tests/CMakeLists.txt): the sanitizers see the polish on the ranks in the queues of
+// distributed_run and in partitioned_run_test's runs under the launcher (config_mpirun_np2).
+BOOST_AUTO_TEST_CASE(the_means_polish_gives_the_serial_answer, *boost::unit_test::label("slow")) {
     pv::GlobalSolverOptions options;
     options.polish = pv::GlobalSolverOptions::Polish::Always;
     const auto [serial, distributed] = serial_and_distributed(pv::test::shared_mesh("mesquite/tets/tire.vtk"), options);
@@ -686,14 +689,8 @@ void check_no_worse_than_fixed(const pv::Mesh& input, Options options, const pv:
     BOOST_TEST(pv::test::worst_of_all(slid, "aspect_ratio") >= pv::test::worst_of_all(fixed, "aspect_ratio"));
 }
 
-// The global solver's sliding run takes the serial steps to the serial mesh, bit for bit, on any
-// number of ranks; every boundary vertex ends on the input's boundary, corners in place. Flat
-// faces (cube-clip-5), curved ones with creases (tire), a mesh whose elements are flipped on
-// reading (house2), planar triangles (tri_20258).
-BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
-                     boost::unit_test::data::make({"mesquite/tets/cube-clip-5.vtk", "mesquite/tets/tire.vtk",
-                                                   "stellar/house2.node", "mesquite/tris/tri_20258.vtk"}),
-                     name) {
+// The checks of the_global_solver_slides_to_the_serial_mesh, on `name`.
+void check_slides_to_the_serial_mesh(const char* name) {
     const auto input = pv::test::shared_mesh(name);
     pv::GlobalSolverOptions options;
     options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
@@ -708,6 +705,23 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
     BOOST_TEST(slid.boundary->volume_after == serial.boundary->volume_after);
     check_no_worse_than_fixed<pv::GlobalSolver>(input, options, slid);
     if (rank() == 0) pv::test::check_on_the_input_boundary(input, gathered, slid);
+}
+
+// The global solver's sliding run takes the serial steps to the serial mesh, bit for bit, on any
+// number of ranks; every boundary vertex ends on the input's boundary, corners in place. Curved
+// faces with creases (tire), a mesh whose elements are flipped on reading (house2), planar
+// triangles (tri_20258); flat faces (cube-clip-5) in the next case.
+BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
+                     boost::unit_test::data::make({"mesquite/tets/tire.vtk", "stellar/house2.node",
+                                                   "mesquite/tris/tri_20258.vtk"}),
+                     name) {
+    check_slides_to_the_serial_mesh(name);
+}
+
+// Slow (tests/CMakeLists.txt): the sanitizers see the other meshes slide on the ranks, above.
+BOOST_AUTO_TEST_CASE(the_global_solver_slides_cube_clip_5_to_the_serial_mesh,
+                     *boost::unit_test::label("slow")) {
+    check_slides_to_the_serial_mesh("mesquite/tets/cube-clip-5.vtk");
 }
 
 // A surface mesh slides on itself, on every rank the whole surface (gathered, ordered by

@@ -99,8 +99,11 @@ BOOST_AUTO_TEST_CASE(global_shape_run_resumed_from_a_checkpoint_ends_as_the_unin
     check_global_shape_run_resumes(options, "checkpoint_global_shape", {23, 51, 104});
 }
 
-// Newton directions carry their damping factor across iterations: it is in the checkpoint.
-BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run) {
+// Newton directions carry their damping factor across iterations: it is in the checkpoint. Slow
+// (tests/CMakeLists.txt): the sanitizers see Newton steps resumed in
+// global_run_resumed_around_a_restarted_barrier_ends_as_the_uninterrupted_run (the finish).
+BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run,
+                     *boost::unit_test::label("slow")) {
     pv::GlobalSolverOptions options;
     options.direction = pv::GlobalSolverOptions::Direction::Newton;
     options.termination.max_iterations = 40;
@@ -110,8 +113,10 @@ BOOST_AUTO_TEST_CASE(global_newton_run_resumed_from_a_checkpoint_ends_as_the_uni
 // The Newton finish, resumed from a checkpoint of the conjugate gradients before it and from ones
 // taken in each of its parts. On tire, with min_progress a hundred times smaller than the default
 // (so that the conjugate gradients hand over later, at iteration 256), the finish on their barrier
-// hands over to a fresh one at 306, which runs until the budget of 440.
-BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_newton_finish_ends_as_the_uninterrupted_run) {
+// hands over to a fresh one at 306, which runs until the budget of 440. Slow (tests/CMakeLists.txt):
+// the sanitizers see both parts of the finish resumed in the next case.
+BOOST_AUTO_TEST_CASE(global_run_resumed_in_its_newton_finish_ends_as_the_uninterrupted_run,
+                     *boost::unit_test::label("slow")) {
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 440;
     options.termination.min_progress = 1e-8;

@@ -125,7 +125,10 @@ BOOST_AUTO_TEST_CASE(a_global_run_in_steps_resumed_from_any_checkpoint_ends_as_t
     check_resumed_from_every_checkpoint<pv::GlobalSolver>("global", global_options(), 12);
 }
 
-BOOST_AUTO_TEST_CASE(a_local_run_in_steps_resumed_from_any_checkpoint_ends_as_the_uninterrupted_run) {
+// Slow (tests/CMakeLists.txt): the sanitizers see a run in steps resumed in the case above, and the
+// local smoother resumed in checkpoint_test's local_run_resumed_in_either_phase_ends_as_the_uninterrupted_run.
+BOOST_AUTO_TEST_CASE(a_local_run_in_steps_resumed_from_any_checkpoint_ends_as_the_uninterrupted_run,
+                     *boost::unit_test::label("slow")) {
     check_resumed_from_every_checkpoint<pv::LocalSolver>("local", local_options(), 4);
 }
 

@@ -36,29 +36,11 @@ double smallest_dihedral(const pv::Mesh& mesh) {
     return *std::min_element(angles.begin(), angles.end());
 }
 
-}  // namespace
-
-BOOST_AUTO_TEST_SUITE(global_sliding)
-
-// The cube's faces are flat and its edges straight: a face vertex keeps the coordinate of its
-// face's plane, an edge vertex the two of its edge, a corner all three; the volume stays.
-BOOST_AUTO_TEST_CASE(cube_faces_stay_flat_edges_straight_and_corners_in_place) {
-    const auto input = tangled_cube();
-    auto fixed_mesh = input, slide_mesh = input;
-    const auto fixed = pv::GlobalSolver(global(Boundary::Fixed)).improve(fixed_mesh);
-    const auto slide = pv::GlobalSolver(global(Boundary::Slide)).improve(slide_mesh);
-    check_cube_slid(input, slide_mesh, fixed, slide);
-}
-
 // Curved and faceted meshes, renumbered (the default) or not: every boundary vertex on the
 // input's boundary, the worst of all elements no lower than with the boundary fixed on the
 // budget the sliding run gives its own boundary-fixed run (half: on the whole budget, the Newton
 // finish takes tri_20258's worst triangle, which no boundary vertex touches, higher).
-BOOST_DATA_TEST_CASE(boundary_vertices_end_on_the_input_boundary,
-                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
-                                  "mesquite/tris/tri_20258.vtk"}) *
-                         bdata::make({true, false}),
-                     name, renumber) {
+void check_slid_on_the_input_boundary(const char* name, bool renumber) {
     const auto input = shared_mesh(name);
     auto fixed_mesh = input, slide_mesh = input;
     auto fixed_options = global(Boundary::Fixed), slide_options = global(Boundary::Slide);
@@ -77,8 +59,7 @@ BOOST_DATA_TEST_CASE(boundary_vertices_end_on_the_input_boundary,
 
 // What sliding is for: the smallest dihedral angle over all tets (boundary ones, which a fixed
 // boundary cannot improve, included) rises above the boundary-fixed run's.
-BOOST_DATA_TEST_CASE(sliding_raises_the_smallest_dihedral_angle_of_all_tets,
-                     bdata::make({"mesquite/tets/cube-clip-5.vtk", "stellar/house2.node"}), name) {
+void check_sliding_raises_the_smallest_dihedral_angle(const char* name) {
     auto fixed_mesh = shared_mesh(name), slide_mesh = fixed_mesh;
     const auto fixed = pv::GlobalSolver(global(Boundary::Fixed)).improve(fixed_mesh);
     const auto slide = pv::GlobalSolver(global(Boundary::Slide)).improve(slide_mesh);
@@ -89,8 +70,9 @@ BOOST_DATA_TEST_CASE(sliding_raises_the_smallest_dihedral_angle_of_all_tets,
     BOOST_TEST(smallest_dihedral(slide_mesh) > smallest_dihedral(fixed_mesh));
 }
 
-// Steepest ascent and a focused shape phase keep the sliding vertices on the boundary too.
-BOOST_DATA_TEST_CASE(steepest_ascent_and_focus_slide_on_the_boundary, bdata::make({0, 1}), variant) {
+// Steepest ascent (variant 0) or a focused shape phase (1) keeps the sliding vertices on the
+// boundary too.
+void check_variant_slides_on_the_boundary(int variant) {
     const auto input = shared_mesh("mesquite/tets/tire.vtk");
     auto mesh = input;
     auto options = global(Boundary::Slide);
@@ -101,7 +83,60 @@ BOOST_DATA_TEST_CASE(steepest_ascent_and_focus_slide_on_the_boundary, bdata::mak
     BOOST_TEST(slide.boundary->moved > 0);
 }
 
-BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides) {
+}  // namespace
+
+BOOST_AUTO_TEST_SUITE(global_sliding)
+
+// The cube's faces are flat and its edges straight: a face vertex keeps the coordinate of its
+// face's plane, an edge vertex the two of its edge, a corner all three; the volume stays. Slow
+// (tests/CMakeLists.txt): the sanitizers see the global solver slide in the cases below, and
+// untangle in global_solver_test.
+BOOST_AUTO_TEST_CASE(cube_faces_stay_flat_edges_straight_and_corners_in_place, *boost::unit_test::label("slow")) {
+    const auto input = tangled_cube();
+    auto fixed_mesh = input, slide_mesh = input;
+    const auto fixed = pv::GlobalSolver(global(Boundary::Fixed)).improve(fixed_mesh);
+    const auto slide = pv::GlobalSolver(global(Boundary::Slide)).improve(slide_mesh);
+    check_cube_slid(input, slide_mesh, fixed, slide);
+}
+
+BOOST_DATA_TEST_CASE(boundary_vertices_end_on_the_input_boundary,
+                     bdata::make({"stellar/house2.node"}) * bdata::make({true, false}), name, renumber) {
+    check_slid_on_the_input_boundary(name, renumber);
+}
+
+// Slow (tests/CMakeLists.txt): the sanitizers see house2 slide above, renumbered and not; tire in
+// steepest_ascent_slides_on_the_boundary; triangles in morph_test and sliding_boundary_test.
+BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
+BOOST_DATA_TEST_CASE(boundary_vertices_of_larger_meshes_end_on_the_input_boundary,
+                     bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk",
+                                  "mesquite/tris/tri_20258.vtk"}) *
+                         bdata::make({true, false}),
+                     name, renumber) {
+    check_slid_on_the_input_boundary(name, renumber);
+}
+
+BOOST_DATA_TEST_CASE(sliding_raises_the_smallest_dihedral_angle_of_all_tets, bdata::make({"stellar/house2.node"}),
+                     name) {
+    check_sliding_raises_the_smallest_dihedral_angle(name);
+}
+
+// Slow (tests/CMakeLists.txt): the sanitizers see house2, above.
+BOOST_AUTO_TEST_CASE(sliding_raises_the_smallest_dihedral_angle_of_cube_clip_5s_tets,
+                     *boost::unit_test::label("slow")) {
+    check_sliding_raises_the_smallest_dihedral_angle("mesquite/tets/cube-clip-5.vtk");
+}
+
+BOOST_AUTO_TEST_CASE(steepest_ascent_slides_on_the_boundary) { check_variant_slides_on_the_boundary(0); }
+
+// Slow (tests/CMakeLists.txt): the sanitizers see a focused shape phase in checkpoint_test's
+// global_focused_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run, and sliding above.
+BOOST_AUTO_TEST_CASE(a_focused_shape_phase_slides_on_the_boundary, *boost::unit_test::label("slow")) {
+    check_variant_slides_on_the_boundary(1);
+}
+
+// Slow (tests/CMakeLists.txt): the sanitizers see the global solver on two threads in
+// global_solver_test's result_does_not_depend_on_the_thread_count, and sliding above.
+BOOST_AUTO_TEST_CASE(threads_do_not_change_where_the_boundary_slides, *boost::unit_test::label("slow")) {
     auto one = shared_mesh("mesquite/tets/tire.vtk"), two = one;
     auto options = global(Boundary::Slide);
     pv::GlobalSolver(options).improve(one);

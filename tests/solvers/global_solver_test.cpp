@@ -266,8 +266,10 @@ BOOST_AUTO_TEST_CASE(result_does_not_depend_on_the_thread_count) {
 // A focused shape phase works on the elements near the worst and the vertices around them: fewer
 // vertices than the mesh's free ones, a new focus as the worst climbs, never a worse iterate,
 // never an inverted element, and a result near the whole mesh's (the same barrier, minus terms
-// that weigh almost nothing).
-BOOST_AUTO_TEST_CASE(a_focused_shape_phase_moves_the_vertices_near_the_worst_elements) {
+// that weigh almost nothing). Slow (tests/CMakeLists.txt): the sanitizers see a focused shape phase
+// in checkpoint_test's global_focused_run_resumed_from_a_checkpoint_ends_as_the_uninterrupted_run.
+BOOST_AUTO_TEST_CASE(a_focused_shape_phase_moves_the_vertices_near_the_worst_elements,
+                     *boost::unit_test::label("slow")) {
     const auto input = shared_mesh("mesquite/tets/cube-clip-5.vtk");
     pv::GlobalSolverOptions options;
     options.termination.max_iterations = 120;
@@ -308,7 +310,8 @@ BOOST_AUTO_TEST_CASE(steepest_ascent_and_other_objectives_also_never_make_things
 
 // Truncated Newton directions in the shape phase: never a worse worst element, never an inverted
 // one, the same mesh on one thread as on two. Slow (tests/CMakeLists.txt): the sanitizers see
-// Newton directions in newton_directions_after_untangling.
+// Newton directions in distributed_test's newton_directions_give_the_serial_answer, and Newton
+// steps in the Newton finish.
 BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
 BOOST_DATA_TEST_CASE(newton_directions_never_make_things_worse,
                      bdata::make({"mesquite/tets/tire.vtk", "mesquite/tets/cube-clip-5.vtk", "stellar/house2.node",
@@ -398,8 +401,9 @@ BOOST_DATA_TEST_CASE(the_newton_finish_goes_on_with_the_shape_phases_barrier_and
 // On cube-clip-5 the best worst quality after 100 iterations is 0.2319 against 0.1166 and the shape
 // phase hands over far sooner (iteration 114 on 0.2320 against 325 on 0.2283); the Newton finish
 // then carries both runs to within 1e-4 of each other (0.2337638 against 0.2338321), so the end is
-// only required not to be lower by more than that.
-BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again) {
+// only required not to be lower by more than that. Slow (tests/CMakeLists.txt): the sanitizers see
+// runs with the ascent and without it in the test before this one.
+BOOST_AUTO_TEST_CASE(damped_vertices_whose_own_elements_would_fall_are_damped_again, *boost::unit_test::label("slow")) {
     auto mesh = shared_mesh("mesquite/tets/cube-clip-5.vtk"), without = mesh;
     const std::vector<double> before(mesh.coordinates().begin(), mesh.coordinates().end());
     pv::GlobalSolverOptions options;
@@ -457,8 +461,9 @@ BOOST_AUTO_TEST_CASE(a_creeping_shape_phase_hands_over_before_it_stalls) {
 // shrinks (docs/global_solver.md, "A barrier that let its worst element go"). On cub_wedge_like
 // one mu used to hold for 60 iterations, 36 of them in a row with the worst under 1%; the phase's
 // first mu only where the worst also rose away from t (the automatic start weighs many elements
-// alike on purpose; the next test).
-BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go) {
+// alike on purpose; the next test). Slow (tests/CMakeLists.txt): the sanitizers see the default run
+// and its rules in a_creeping_shape_phase_hands_over_before_it_stalls (tire).
+BOOST_AUTO_TEST_CASE(mu_shrinks_where_the_barrier_let_its_worst_element_go, *boost::unit_test::label("slow")) {
     const DefaultRun run("mesquite/tets/cub_wedge_like.vtk");
     const auto& summary = run.summary;
     const pv::TerminationCriterion& limits = run.options.termination;
@@ -514,7 +519,9 @@ BOOST_AUTO_TEST_CASE(the_first_mu_shrinks_once_the_worst_rose_away_from_t) {
 // hand over after a single progress window (kQuickHandoverProgress, kQuickGain): on cub_wedge_like
 // one mu held from iteration 55 to 89, the worst within 2e-5 from 75 on; the shape phase now
 // hands over at 87 instead of 113, and the local smoother's worst comes at 94 instead of 120.
-BOOST_AUTO_TEST_CASE(a_shape_phase_whose_steps_gain_little_hands_over_after_one_window) {
+// Slow (tests/CMakeLists.txt): as mu_shrinks_where_the_barrier_let_its_worst_element_go.
+BOOST_AUTO_TEST_CASE(a_shape_phase_whose_steps_gain_little_hands_over_after_one_window,
+                     *boost::unit_test::label("slow")) {
     const DefaultRun run("mesquite/tets/cub_wedge_like.vtk");
     const auto& summary = run.summary;
     const pv::TerminationCriterion& limits = run.options.termination;
@@ -706,8 +713,10 @@ BOOST_AUTO_TEST_CASE(the_polish_brings_the_mean_back_above_the_inputs_with_the_w
 }
 
 // polish always: the polish runs after shape phases that raised the mean already, raises it
-// further while the worst element stands still, and ends when the mean stops rising.
-BOOST_AUTO_TEST_CASE(polish_always_raises_the_mean_until_it_stalls) {
+// further while the worst element stands still, and ends when the mean stops rising. Slow
+// (tests/CMakeLists.txt): the sanitizers see the polish in checkpoint_test's
+// global_run_resumed_in_its_polish_ends_as_the_uninterrupted_run.
+BOOST_AUTO_TEST_CASE(polish_always_raises_the_mean_until_it_stalls, *boost::unit_test::label("slow")) {
     const auto input = shared_mesh("mesquite/tets/tire.vtk");
     const auto without = with_polish(input, pv::GlobalSolverOptions::Polish::Auto).second;
     BOOST_TEST((first_in(without, "polish") == without.history.end()));  // auto: the mean rose already
@@ -724,8 +733,9 @@ BOOST_AUTO_TEST_CASE(polish_always_raises_the_mean_until_it_stalls) {
     BOOST_TEST(summary.message.find("the mean quality stopped rising") != std::string::npos);
 }
 
-// A tangled mesh: untangled with conjugate gradients as before, then Newton steps.
-BOOST_AUTO_TEST_CASE(newton_directions_after_untangling) {
+// A tangled mesh: untangled with conjugate gradients as before, then Newton steps. Slow
+// (tests/CMakeLists.txt): as newton_directions_never_make_things_worse; untangling in the cases above.
+BOOST_AUTO_TEST_CASE(newton_directions_after_untangling, *boost::unit_test::label("slow")) {
     auto mesh = pv::test::perturbed_shared_mesh("mesquite/tets/cube-clip-5.vtk", 0.3, 1);
     pv::GlobalSolverOptions options;
     options.direction = pv::GlobalSolverOptions::Direction::Newton;

@@ -70,7 +70,9 @@ BOOST_AUTO_TEST_CASE(the_first_run_of_a_motion_skips_the_newton_finish) {
     for (const auto& r : s.history) BOOST_TEST(r.phase.find("finish") == std::string::npos);
 }
 
-BOOST_AUTO_TEST_CASE(the_deforming_domain_job_rates_against_the_undeformed_mesh) {
+// Slow (tests/CMakeLists.txt): the sanitizers see the job's queue made in config_test, and motions
+// followed in the other cases here.
+BOOST_AUTO_TEST_CASE(the_deforming_domain_job_rates_against_the_undeformed_mesh, *boost::unit_test::label("slow")) {
     const pv::Mesh given = turned_ring(120.0);
     pv::Mesh mesh = given;
     const pv::QueueResult result = pv::wrappers::deforming_domain().run(mesh);

@@ -203,7 +203,10 @@ BOOST_AUTO_TEST_SUITE(surface)
 // torus's triangles, none turns over, and the worst triangle rises at least half way back to the
 // unperturbed mesh's. Its slivers fold their neighbours by more than the feature angle: the
 // creases they make must not hold them (BoundarySurface takes a triangle creased on every side,
-// and a short crease with a loose end, for a fold on surface meshes).
+// and a short crease with a loose end, for a fold on surface meshes). Slow (tests/CMakeLists.txt):
+// the sanitizers see both solvers on a torus in
+// a_tangled_torus_of_quadrilaterals_with_targets_is_untangled.
+BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
 BOOST_DATA_TEST_CASE(a_torus_is_mended_on_its_own_surface, boost::unit_test::data::make({"global", "local"}), solver) {
     const pv::Mesh regular = torus(32, 16, 0.0), input = torus(32, 16, 0.35);
     pv::Mesh mesh = input;
@@ -300,8 +303,10 @@ BOOST_AUTO_TEST_CASE(a_sphere_of_quadrilaterals_is_mended_on_itself) {
 
 // A torus of quadrilaterals with one ring of them cut into triangles (a mixed surface), made
 // poorer along itself: every vertex on the input's cells, nothing turned over, the worst corner
-// and the minimum scaled Jacobian raised.
-BOOST_AUTO_TEST_CASE(a_mixed_surface_is_mended_on_itself) {
+// and the minimum scaled Jacobian raised. Slow (tests/CMakeLists.txt): the sanitizers see
+// surfaces of triangles and of quadrilaterals in a_cube_surface_keeps_its_creases_and_corners
+// and a_sphere_of_quadrilaterals_is_mended_on_itself.
+BOOST_AUTO_TEST_CASE(a_mixed_surface_is_mended_on_itself, *boost::unit_test::label("slow")) {
     const pv::Mesh points = torus(24, 12, 0.25);  // its vertices; its cells are made here
     std::vector<pv::CellType> types;
     std::vector<pv::VertexId> cells;
@@ -387,7 +392,11 @@ BOOST_DATA_TEST_CASE(a_graded_cylinder_keeps_its_rows_with_size_and_aspect_kept,
 
 // A torus tangled along itself (vertices slid past their neighbours, two triangles turned over
 // at each), smoothed by either solver: the turned-over triangles are rated inverted, untangled
-// with every vertex sliding on the tangled input's triangles, and then improved.
+// with every vertex sliding on the tangled input's triangles, and then improved. Slow
+// (tests/CMakeLists.txt): the sanitizers see a tangled torus untangled by both solvers in
+// a_tangled_torus_of_quadrilaterals_with_targets_is_untangled, tangled triangles in
+// a_tangle_beside_creases_leaves_them_in_place.
+BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
 BOOST_DATA_TEST_CASE(a_tangled_torus_is_untangled_on_its_surface, boost::unit_test::data::make({"global", "local"}),
                      solver) {
     const pv::Mesh input = pv::test::tangled_torus(32, 16);
@@ -399,6 +408,8 @@ BOOST_DATA_TEST_CASE(a_tangled_torus_is_untangled_on_its_surface, boost::unit_te
 }
 
 // The same on a torus of quadrilaterals: the two cells at each crossed edge fold, and come back.
+// Slow (tests/CMakeLists.txt): the sanitizers see it with targets, in the next case.
+BOOST_TEST_DECORATOR(*boost::unit_test::label("slow"))
 BOOST_DATA_TEST_CASE(a_tangled_torus_of_quadrilaterals_is_untangled, boost::unit_test::data::make({"global", "local"}),
                      solver) {
     const pv::Mesh input = pv::test::tangled_torus(32, 16, true);
@@ -457,8 +468,10 @@ BOOST_DATA_TEST_CASE(a_tangle_beside_creases_leaves_them_in_place, boost::unit_t
 
 // A tangle that cannot be undone (its vertices fixed, or no untangling budget) is reported: the
 // run says so, hands back its mesh with the fewest turned over, on the surface, and the command
-// line exits with 1.
-BOOST_AUTO_TEST_CASE(a_tangle_that_cannot_be_undone_is_reported) {
+// line exits with 1. Slow (tests/CMakeLists.txt): the sanitizers see surface untangling in
+// a_tangle_beside_creases_leaves_them_in_place, and a tangle that cannot be undone reported in
+// global_solver_test's an_inverted_tet_with_every_vertex_fixed_cannot_be_untangled.
+BOOST_AUTO_TEST_CASE(a_tangle_that_cannot_be_undone_is_reported, *boost::unit_test::label("slow")) {
     const pv::Mesh tangled = pv::test::tangled_torus(32, 16);
     std::vector<std::uint8_t> fixed(static_cast<std::size_t>(tangled.num_vertices()), 0);
     for (const auto& [i, j] : pv::test::torus_slides(32, 16))
