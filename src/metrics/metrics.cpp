@@ -402,9 +402,10 @@ public:
 
     void element_values(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
                         double* quality, double* gradient) const override {
-        if constexpr (kHasBlocks) {
-            if (mesh.kind() == ElementKind::Tetrahedron && elements.size() >= static_cast<std::size_t>(kTetBlock)) {
-                require_gradient();
+        if constexpr (kHasBlocks || kHasValueBlocks) {
+            if (mesh.kind() == ElementKind::Tetrahedron && elements.size() >= static_cast<std::size_t>(kTetBlock) &&
+                (kHasBlocks || !gradient)) {
+                if (gradient) require_gradient();
                 const ElementMaps maps(mesh);
                 // element_value()'s reference volume: a target's for a size metric, else the mesh's.
                 const bool targets = kTargetSize && mesh.has_targets();
@@ -415,13 +416,20 @@ public:
                         reference_volume[j] = j >= count ? 1.0
                                               : targets ? mesh.target_volumes()[static_cast<std::size_t>(ids[j])]
                                                         : scale_.reference_volume;
-                    kernel_.tet_block(path_, x, reference_volume, q, &g);
-                    unmap_block(maps, count, [ids](int j) { return ids[j]; }, g);
                     const auto at = static_cast<std::size_t>(ids - elements.data());
-                    for (int j = 0; j < count; ++j) {
-                        quality[at + j] = q[j];
-                        for (int i = 0; i < 12; ++i) gradient[12 * (at + j) + i] = g.at[i][j];
+                    if constexpr (kHasBlocks) {
+                        if (gradient) {
+                            kernel_.tet_block(path_, x, reference_volume, q, &g);
+                            unmap_block(maps, count, [ids](int j) { return ids[j]; }, g);
+                            for (int j = 0; j < count; ++j)
+                                for (int i = 0; i < 12; ++i) gradient[12 * (at + j) + i] = g.at[i][j];
+                        } else {
+                            rate_block_at(x, reference_volume, q);
+                        }
+                    } else {
+                        rate_block_at(x, reference_volume, q);
                     }
+                    std::copy(q, q + count, quality + at);
                 });
                 return;
             }
@@ -638,7 +646,8 @@ double QualityMetric::element_value(const Mesh& mesh, std::span<const double> xy
 void QualityMetric::element_values(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,
                                    double* quality, double* gradient) const {
     const std::size_t stride = 3 * static_cast<std::size_t>(mesh.corners());
-    for (std::size_t i = 0; i < elements.size(); ++i) quality[i] = element_value(mesh, xyz, elements[i], gradient + stride * i);
+    for (std::size_t i = 0; i < elements.size(); ++i)
+        quality[i] = element_value(mesh, xyz, elements[i], gradient ? gradient + stride * i : nullptr);
 }
 
 void QualityMetric::evaluate_listed(const Mesh& mesh, std::span<const double> xyz, std::span<const ElementId> elements,

@@ -89,17 +89,9 @@ Vec3 min_norm_point(const std::vector<Vec3>& points) {
 // projected on its tangent space, and each trial point back onto the surface before it is rated.
 class VertexAscent {
 public:
-    // `by_element`: scratch of one quality per element of the mesh, for the line search's trials
-    // (the metric's listed pass scatters by element id), shared by the ascents of one thread.
     VertexAscent(const Mesh& mesh, const QualityMetric& metric, const LocalSolverOptions& options,
-                 std::vector<double>& by_element, const detail::SlidingBoundary* sliding = nullptr)
-        : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding), by_element_(by_element) {
-        // The trials' listed pass would read per-element reference volumes, which element_values()
-        // (as element_value()) does not: the values and gradients of a star must agree.
-        if (!metric.scale().element_reference_volume.empty())
-            throw Error("a vertex ascent's metric must rate against the mesh's reference volume, not per-element ones");
-        by_element_.resize(static_cast<std::size_t>(mesh.num_elements()));
-    }
+                 const detail::SlidingBoundary* sliding = nullptr)
+        : mesh_(mesh), metric_(metric), options_(options), sliding_(sliding) {}
 
     bool improve(std::span<double> xyz, VertexId v) {
         const auto elements = mesh_.elements_of(v);
@@ -170,11 +162,8 @@ private:
         const auto elements = mesh_.elements_of(v);
         double worst = std::numeric_limits<double>::infinity();
         if (!gradient) {
-            metric_.evaluate_listed(mesh_, xyz, elements, by_element_.data());
-            for (std::size_t i = 0; i < elements.size(); ++i) {
-                trial_q_[i] = by_element_[static_cast<std::size_t>(elements[i])];
-                worst = std::min(worst, trial_q_[i]);
-            }
+            metric_.element_values(mesh_, xyz, elements, trial_q_.data(), nullptr);
+            for (std::size_t i = 0; i < elements.size(); ++i) worst = std::min(worst, trial_q_[i]);
             return worst;
         }
         const std::size_t stride = 3 * static_cast<std::size_t>(mesh_.corners());
@@ -206,7 +195,6 @@ private:
     std::vector<Vec3> gradient_, active_;
     std::vector<std::uint8_t> positive_;
     std::vector<double> star_gradients_;
-    std::vector<double>& by_element_;
 };
 
 // The metric scale. A part's is the whole mesh's: its mean element volume summed over the ranks,
@@ -386,7 +374,6 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
     // One pass over the colors; within a color every vertex's update reads only vertices of
     // other colors, so the parallel loop gives the same result for any thread count. After each
     // color, ghosts take their owners' new positions.
-    std::vector<std::vector<double>> qualities_by_thread(static_cast<std::size_t>(omp_get_max_threads()));
     auto sweep = [&](auto&& visit) {
         int moved = 0;
         for (std::size_t c = 0; c < static_cast<std::size_t>(coloring.count); ++c) {
@@ -395,9 +382,7 @@ Summary LocalSolver::sweep_colors(detail::SolverRun& run, const Domain& domain, 
             const auto count = static_cast<std::ptrdiff_t>(members.size());
 #pragma omp parallel reduction(+ : moved) if (count >= 256)
             {
-                std::vector<double>& by_element = qualities_by_thread[static_cast<std::size_t>(omp_get_thread_num())];
-                VertexAscent shape(mesh, *metric, options_, by_element, sliding),
-                    untangle(mesh, *volume, options_, by_element, sliding);
+                VertexAscent shape(mesh, *metric, options_, sliding), untangle(mesh, *volume, options_, sliding);
                 detail::VertexEnergy energy(mesh, reference, scale, epsilon, sliding);
 #pragma omp for schedule(dynamic, 64)
                 for (std::ptrdiff_t i = 0; i < count; ++i)

@@ -233,7 +233,8 @@ BOOST_AUTO_TEST_CASE(value_block_kernels_equal_the_scalar_kernels) {
     }
 }
 
-// A star's call (the listed elements' values and gradients) against the one-element calls.
+// A star's call (the listed elements' values, with and without gradients) against the one-element
+// calls.
 BOOST_AUTO_TEST_CASE(listed_values_and_gradients_equal_the_one_element_calls) {
     const auto mesh = pv::read_mesh(pv::test::shared_data("tetwild/octopus-vol.mesh")).mesh;
     std::vector<pv::ElementId> listed;
@@ -241,13 +242,14 @@ BOOST_AUTO_TEST_CASE(listed_values_and_gradients_equal_the_one_element_calls) {
     for (const std::string name : {"aspect_ratio", "mean_ratio", "untangle_hybrid", "shape_size", "inverse_condition"}) {
         auto metric = pv::make_metric(name);
         metric->prepare(mesh);
-        std::vector<double> quality(listed.size()), gradient(12 * listed.size());
+        std::vector<double> quality(listed.size()), values(listed.size()), gradient(12 * listed.size());
         metric->element_values(mesh, mesh.coordinates(), listed, quality.data(), gradient.data());
+        metric->element_values(mesh, mesh.coordinates(), listed, values.data(), nullptr);
         std::size_t mismatches = 0;
         for (std::size_t i = 0; i < listed.size(); ++i) {
             double g[12];
             const double q = metric->element_value(mesh, mesh.coordinates(), listed[i], g);
-            mismatches += !same(q, quality[i]);
+            mismatches += !same(q, quality[i]) + !same(q, values[i]);
             for (int k = 0; k < 12; ++k) mismatches += !same(g[k], gradient[12 * i + k]);
         }
         BOOST_TEST_CONTEXT(name) { BOOST_TEST(mismatches == 0u); }

@@ -392,8 +392,9 @@ BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
             // A star's call: every third element, listed.
             std::vector<pv::ElementId> listed;
             for (pv::ElementId e = first; e < last; e += 3) listed.push_back(e);
-            std::vector<double> listed_quality(listed.size()), listed_gradient(12 * listed.size());
+            std::vector<double> listed_quality(listed.size()), listed_values(listed.size()), listed_gradient(12 * listed.size());
             metric->element_values(mesh, xyz, listed, listed_quality.data(), listed_gradient.data());
+            metric->element_values(mesh, xyz, listed, listed_values.data(), nullptr);
             std::size_t mismatches = 0;
             for (pv::ElementId e = first; e < last; ++e) {
                 double g[12];
@@ -404,6 +405,7 @@ BOOST_AUTO_TEST_CASE(batch_passes_with_targets_equal_the_one_element_calls) {
                 if ((e - first) % 3 == 0) {
                     const std::size_t at = static_cast<std::size_t>(e - first) / 3;
                     mismatches += std::memcmp(&q, &listed_quality[at], sizeof q) != 0;
+                    mismatches += std::memcmp(&q, &listed_values[at], sizeof q) != 0;
                     mismatches += std::memcmp(g, &listed_gradient[12 * at], sizeof g) != 0;
                 }
             }

@@ -74,8 +74,9 @@ public:
                          double* gradient = nullptr) const;
 
     // The listed elements' values and gradients, in list order: quality[i], and gradient[3 k i ..
-    // 3 k (i + 1)) (k corners) for elements[i]; the same bits as element_value(). For a vertex's
-    // star: the built-in metrics rate a star of tetrahedra in blocks, not one call per element.
+    // 3 k (i + 1)) (k corners) for elements[i] (`gradient` null: the values alone); the same bits
+    // as element_value(). For a vertex's star: the built-in metrics rate a star of tetrahedra in
+    // blocks, not one call per element.
     virtual void element_values(const Mesh& mesh, std::span<const double> coordinates,
                                 std::span<const ElementId> elements, double* quality, double* gradient) const;
 
