@@ -417,17 +417,13 @@ public:
                                               : targets ? mesh.target_volumes()[static_cast<std::size_t>(ids[j])]
                                                         : scale_.reference_volume;
                     const auto at = static_cast<std::size_t>(ids - elements.data());
-                    if constexpr (kHasBlocks) {
-                        if (gradient) {
-                            kernel_.tet_block(path_, x, reference_volume, q, &g);
-                            unmap_block(maps, count, [ids](int j) { return ids[j]; }, g);
-                            for (int j = 0; j < count; ++j)
-                                for (int i = 0; i < 12; ++i) gradient[12 * (at + j) + i] = g.at[i][j];
-                        } else {
-                            rate_block_at(x, reference_volume, q);
-                        }
-                    } else {
+                    if (!gradient) {
                         rate_block_at(x, reference_volume, q);
+                    } else if constexpr (kHasBlocks) {  // (a gradient comes here only with a block kernel)
+                        kernel_.tet_block(path_, x, reference_volume, q, &g);
+                        unmap_block(maps, count, [ids](int j) { return ids[j]; }, g);
+                        for (int j = 0; j < count; ++j)
+                            for (int i = 0; i < 12; ++i) gradient[12 * (at + j) + i] = g.at[i][j];
                     }
                     std::copy(q, q + count, quality + at);
                 });
