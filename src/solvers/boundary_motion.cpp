@@ -394,15 +394,21 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             << " (in one, the worst element fell below half of the reference's, or stayed inverted); last step: "
             << last.message;
     } else {
-        // The boundary where it was given, from the furthest valid step.
+        // The boundary where it was given, from the furthest valid step; with none, the first
+        // run's untangling goes on with the whole budget.
         const double seconds = seconds_left();
-        if (done > 0.0 && (max_seconds == 0.0 || seconds > 0.0)) {
-            place(xyz(), valid, reference, given, driven, 1.0);
-            carry_free_vertices(part, driven, valid, xyz());
+        const bool runs_again = max_seconds == 0.0 || seconds > 0.0;
+        if (runs_again) {
+            if (done > 0.0) {
+                place(xyz(), valid, reference, given, driven, 1.0);
+                carry_free_vertices(part, driven, valid, xyz());
+            } else {
+                std::copy(first.begin(), first.end(), xyz().begin());
+            }
             last = run(seconds);
             add_work(total, last);
         }
-        if (done == 0.0 || last.after.inverted >= first_run.after.inverted) {
+        if (!runs_again || last.after.inverted >= first_run.after.inverted) {
             std::copy(first.begin(), first.end(), xyz().begin());
             last = first_run;
         }

@@ -26,8 +26,15 @@ bool has_boundary_motion(MeshPart part);
 // own). `first`: the run from the whole motion at once, which steps replace when it leaves inverted
 // elements or a poor worst element; it skips the solver's finishing stage (the global solver's
 // Newton finish, whose iterations cost many shape iterations each), work that steps would throw
-// away. A first run that is kept ends where its shape phase stops.
+// away. A first run that is kept ends where its shape phase stops. Its untangling gets
+// first_run_untangling of the solver's budget.
 using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint, bool first)>;
+
+// The untangling budget (iterations, or sweeps) of a motion's first run, from the solver's: a fifth
+// of it. Untangling that takes longer marks a motion too large for one run, which the steps follow
+// sooner than a first run that uses the whole budget and fails; a motion that no step follows
+// either goes on from the first run with the whole budget (follow_boundary_motion).
+constexpr int first_run_untangling(int budget) { return std::max(1, budget / 5); }
 
 // The checkpoints of a run in steps: the solver's settings, its name and its options as text
 // (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).
@@ -44,7 +51,7 @@ struct MotionCheckpoints {
 // worst quality of the step before (any valid one at the smallest step); the better of the first
 // run and the steps is kept. A motion that cannot be followed ends with the boundary where it was
 // given and the fewer inverted elements of the first run and of a last run from the furthest
-// valid step, reason CannotUntangle and a message that says how far the motion was followed.
+// valid step (from the first run's mesh when no step was valid), reason CannotUntangle and a message that says how far the motion was followed.
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.

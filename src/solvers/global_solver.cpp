@@ -172,7 +172,11 @@ Summary GlobalSolver::improve(MeshPart part) {
                                               [&](double seconds, const CheckpointOptions& checkpoint, bool first) {
                                                   GlobalSolverOptions each = options_;
                                                   each.checkpoint = checkpoint;
-                                                  if (first) each.finish = GlobalSolverOptions::Finish::None;
+                                                  if (first) {
+                                                      each.finish = GlobalSolverOptions::Finish::None;
+                                                      each.untangle_termination.max_iterations =
+                                                          detail::first_run_untangling(each.untangle_termination.max_iterations);
+                                                  }
                                                   GlobalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(part);

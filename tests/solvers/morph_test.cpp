@@ -70,6 +70,39 @@ BOOST_AUTO_TEST_CASE(the_first_run_of_a_motion_skips_the_newton_finish) {
     for (const auto& r : s.history) BOOST_TEST(r.phase.find("finish") == std::string::npos);
 }
 
+BOOST_AUTO_TEST_CASE(the_first_run_untangles_on_a_fifth_of_the_budget) {
+    // A turn one run does not untangle in 50 iterations: the first run (whose records end where
+    // the next run's numbering starts again) stops after 10, and the steps follow the motion.
+    const pv::Mesh given = turned_ring(500.0);
+    for (const bool global : {true, false}) {
+        pv::Mesh mesh = given;
+        std::vector<pv::IterationRecord> records;
+        auto observe = [&](const pv::IterationRecord& r) { records.push_back(r); };
+        pv::Summary s;
+        if (global) {
+            pv::GlobalSolverOptions options;
+            options.untangle_termination.max_iterations = 50;
+            pv::GlobalSolver solver(options);
+            solver.set_observer(observe);
+            s = solver.improve(mesh);
+        } else {
+            pv::LocalSolverOptions options;
+            options.untangle_termination.max_iterations = 50;
+            pv::LocalSolver solver(options);
+            solver.set_observer(observe);
+            s = solver.improve(mesh);
+        }
+        BOOST_TEST_INFO((global ? "global: " : "local: ") << s.message);
+        BOOST_TEST(s.valid());
+        BOOST_TEST(s.message.find("steps") != std::string::npos);
+        std::size_t first_run = 1;
+        while (first_run < records.size() && records[first_run].iteration > records[first_run - 1].iteration) ++first_run;
+        BOOST_TEST_REQUIRE(first_run < records.size());
+        BOOST_TEST(records[first_run - 1].iteration <= 10);
+        BOOST_TEST(records[first_run - 1].phase.find("untangle") != std::string::npos);
+    }
+}
+
 // Slow (tests/CMakeLists.txt): the sanitizers see the job's queue made in config_test, and motions
 // followed in the other cases here.
 BOOST_AUTO_TEST_CASE(the_deforming_domain_job_rates_against_the_undeformed_mesh, *boost::unit_test::label("slow")) {
