@@ -341,7 +341,10 @@ bool TargetOptions::uses(TargetSource source) const {
 std::string TargetOptions::list(TargetSource source) const {
     std::string out;
     for (std::size_t i = 0; i < kFactorNames.size(); ++i)
-        if (factor_of(*this, i) == source) out += (out.empty() ? "" : ",") + std::string(kFactorNames[i]);
+        if (factor_of(*this, i) == source) {
+            if (!out.empty()) out += ',';
+            out += kFactorNames[i];
+        }
     return out;
 }
 

@@ -14,6 +14,7 @@
 #include <numbers>
 #include <utility>
 
+#include "cube_root.hpp"
 #include "kernels.hpp"
 
 #if defined(__x86_64__)
@@ -216,8 +217,7 @@ template <class Sqrt, bool Gradient, bool Sized>
     for (int j = 0; j < kTetBlock; ++j) measure<Gradient>(x, j, volume, edge_sum, &dvolume);
     Sqrt::run(edge_sum, root);
     for (int j = 0; j < kTetBlock; ++j) root[j] = MeanRatio::floored_volume(volume[j], edge_sum[j], root[j]);
-    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
-    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
+    cube_roots<kTetBlock>(root);
     for (int j = 0; j < kTetBlock; ++j) {
         const double l = edge_sum[j];
         const bool valid = l > 0.0;
@@ -267,8 +267,7 @@ template <class Sqrt, bool Gradient>
         chi[j] = v[j] >= 0.0 ? 0.5 * (v[j] + r[j]) : 0.5 * epsilon * epsilon / (r[j] - v[j]);
         root[j] = 9.0 * (reference_volume[j] * chi[j]) * (reference_volume[j] * chi[j]);
     }
-    // cbrt has no vector version that rounds like the scalar one: a scalar loop.
-    for (int j = 0; j < kTetBlock; ++j) root[j] = std::cbrt(root[j]);
+    cube_roots<kTetBlock>(root);
     for (int j = 0; j < kTetBlock; ++j) {
         const double per_edge_sum = 1.0 / (12.0 * root[j]);
         const double f1 = edge_sum[j] * per_edge_sum;
