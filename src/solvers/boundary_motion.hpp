@@ -51,7 +51,8 @@ struct MotionCheckpoints {
 // worst quality of the step before (any valid one at the smallest step); the better of the first
 // run and the steps is kept. A motion that cannot be followed ends with the boundary where it was
 // given and the fewer inverted elements of the first run and of a last run from the furthest
-// valid step (from the first run's mesh when no step was valid), reason CannotUntangle and a message that says how far the motion was followed.
+// valid step (from the first run's mesh when no step was valid), reason CannotUntangle and a
+// message that says how far the motion was followed.
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.
