@@ -150,16 +150,40 @@ template <class Sqrt>
     else hybrid_loop<Sqrt, false>(x, reference_volume, alpha, quality, nullptr);
 }
 
-// The lanes' 3 x 3 maps side by side, so that the loops over lanes vectorize.
-[[gnu::always_inline]] inline void lay_out(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
-    for (int k = 0; k < 3; ++k)
-        for (int i = 0; i < 3; ++i)
-            for (int j = 0; j < kTetBlock; ++j) m[k][i][j] = (*maps[j])[k][i];
-}
+// The lanes' 3 x 3 maps side by side, entry by entry across the lanes (m[k][i][lane]), so that
+// the loops over lanes vectorize: lane by lane with scalar loads, or with AVX-512 gathers (one
+// instruction per entry for 8 lanes; maps-only passes about a tenth faster on a Xeon, the same
+// values).
+struct LayOutScalar {
+    [[gnu::always_inline]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
+        for (int k = 0; k < 3; ++k)
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < kTetBlock; ++j) m[k][i][j] = (*maps[j])[k][i];
+    }
+};
+#ifdef PALOVERDE_X86
+struct LayOut512 {
+    [[gnu::target("avx512f")]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
+        for (int j = 0; j < kTetBlock; j += 8) {
+            const __m512i at = _mm512_loadu_si512(maps + j);
+            for (int k = 0; k < 3; ++k)
+                for (int i = 0; i < 3; ++i) {
+                    const auto offset = static_cast<long long>(sizeof(double)) * (3 * k + i);
+                    const __m512i entry = _mm512_add_epi64(at, _mm512_set1_epi64(offset));
+                    // The masked form with every lane set (see Sqrt512); addresses whole in `entry`.
+                    const __m512d values = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), static_cast<__mmask8>(0xFF),
+                                                                    entry, nullptr, 1);
+                    _mm512_store_pd(&m[k][i][j], values);
+                }
+        }
+    }
+};
+#endif
 
+template <class LayOut = LayOutScalar>
 [[gnu::always_inline]] inline void map_loop(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
     alignas(64) double m[3][3][kTetBlock];
-    lay_out(maps, m);
+    LayOut::run(maps, m);
     for (int j = 0; j < kTetBlock; ++j) {
         double e[3][3];
         for (int k = 0; k < 3; ++k)
@@ -172,7 +196,7 @@ template <class Sqrt>
             }
     }
     if (!roots) return;
-    lay_out(roots, m);
+    LayOut::run(roots, m);
     for (int j = 0; j < kTetBlock; ++j)
         for (int i = 0; i < 4; ++i) {
             const double y[3] = {x.at[3 * i][j], x.at[3 * i + 1][j], x.at[3 * i + 2][j]};
@@ -180,17 +204,18 @@ template <class Sqrt>
         }
 }
 
+template <class LayOut = LayOutScalar>
 [[gnu::always_inline]] inline void unmap_loop(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
     alignas(64) double m[3][3][kTetBlock];
     if (roots) {
-        lay_out(roots, m);
+        LayOut::run(roots, m);
         for (int j = 0; j < kTetBlock; ++j)
             for (int i = 0; i < 4; ++i) {
                 const double gz[3] = {g.at[3 * i][j], g.at[3 * i + 1][j], g.at[3 * i + 2][j]};
                 for (int c = 0; c < 3; ++c) g.at[3 * i + c][j] = m[0][c][j] * gz[0] + m[1][c][j] * gz[1] + m[2][c][j] * gz[2];
             }
     }
-    lay_out(maps, m);
+    LayOut::run(maps, m);
     for (int j = 0; j < kTetBlock; ++j) {
         double gy[4][3], total[3] = {0.0, 0.0, 0.0};
         for (int i = 0; i < 4; ++i)
@@ -477,10 +502,10 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
     energy<Sqrt512>(x, reference_volume, epsilon, theta, quality, gradient);
 }
 [[PALOVERDE_AVX512]] void map_avx512(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
-    map_loop(maps, roots, x);
+    map_loop<LayOut512>(maps, roots, x);
 }
 [[PALOVERDE_AVX512]] void unmap_avx512(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
-    unmap_loop(maps, roots, g);
+    unmap_loop<LayOut512>(maps, roots, g);
 }
 [[PALOVERDE_AVX512]] void shape_size_avx512(const TetBlock& x, const double* reference_volume, double* quality,
                                              TetBlock* gradient) {
