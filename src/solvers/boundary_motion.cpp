@@ -300,6 +300,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
     double done = 0.0, step = 0.5, floor = 0.0;
     int steps = 0;
+    bool refused_last = false;  // the last step run was refused
     std::optional<SolverState> resumed;
     if (checkpointer.resumes()) {
         resumed = checkpointer.resume(total);
@@ -323,6 +324,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         step = state.number("step");
         floor = state.number("floor");
         steps = static_cast<int>(state.number("steps"));
+        refused_last = state.number("refused_last") != 0.0;
     } else {
         if (writes_now()) {
             runs.forget();
@@ -346,7 +348,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             runs.forget();
             SolverState state;
             state.numbers = {{"first_run_done", 1.0}, {"done", done}, {"step", step}, {"floor", floor}, {"steps", steps},
-                             {"seconds", total.seconds}};
+                             {"refused_last", refused_last ? 1.0 : 0.0}, {"seconds", total.seconds}};
             state.vertex_fields = {{"first", first}, {"valid", valid}};
             store_outcome(state, "first_run", first_run);
             checkpointer.save(total, state, seconds_since(start));
@@ -367,11 +369,15 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             valid.assign(xyz().begin(), xyz().end());
             done = next;
             ++steps;
-            // Never past the end: a step halved after this one must try a nearer fraction.
-            step = std::min(2.0 * step, 1.0 - done);
+            // Never past the end: a step halved after this one must try a nearer fraction. A step
+            // that follows a refused one keeps its size: the motion just proved hard there, and a
+            // doubled step would likely be refused again (a run as costly as a kept one).
+            step = std::min((refused_last ? 1.0 : 2.0) * step, 1.0 - done);
+            refused_last = false;
             floor = 0.5 * last.worst_after;
         } else {
             step /= 2.0;
+            refused_last = true;
         }
     }
     std::ostringstream why;

@@ -5,7 +5,8 @@
 // when that fails or loses too much quality, it starts again from the reference, which is valid,
 // and moves the boundary there in fractions of the whole motion (the classic incremental scheme),
 // each fraction carried, untangled and improved before the next, its size chosen as it goes:
-// halved when a fraction fails, doubled after one that is kept (docs/morphing.md).
+// halved when a fraction fails, doubled after one that is kept (unless it followed a failed one:
+// docs/morphing.md).
 #include <algorithm>
 #include <functional>
 #include <string>
