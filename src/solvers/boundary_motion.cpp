@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <filesystem>
 #include <optional>
 #include <sstream>
 #include <vector>
@@ -193,45 +192,6 @@ Summary run_first(MeshPart part, const std::vector<double>& given, const std::ve
     return solve();
 }
 
-// The checkpoints of the motion's runs: FILE.run beside the motion's FILE, for the run under way
-// (the first run, or a step's). A run's checkpoint is forgotten (removed) before the motion's
-// next checkpoint is written, so one found beside the motion's belongs to the run it names.
-class RunCheckpoints {
-public:
-    RunCheckpoints(MeshPart part, const CheckpointOptions& motion)
-        : motion_(motion), root_(part.root()) {
-        if (!motion.resume.empty()) {
-            // Rank 0's file system decides (it reads the file).
-            const bool found = root_ && std::filesystem::exists(motion.resume + kSuffix);
-            resumable_ = part.reducer().max(found ? 1.0 : 0.0) > 0.0;
-            std::error_code ignored;
-            const bool same = !motion.file.empty() && std::filesystem::weakly_canonical(motion.file, ignored) ==
-                                                          std::filesystem::weakly_canonical(motion.resume, ignored);
-            // Every rank must decide alike whether to write (collective).
-            same_file_ = part.reducer().max(same ? 1.0 : 0.0) > 0.0;
-        }
-    }
-    // The motion's checkpoint is written to the file it was resumed from.
-    bool writes_where_it_resumes() const { return same_file_; }
-    // The options of a run: its file beside the motion's; resuming from the one beside the
-    // motion's resumed checkpoint, when `resume` and there is one.
-    CheckpointOptions options(bool resume) const {
-        CheckpointOptions run = motion_;
-        run.file = motion_.file.empty() ? "" : motion_.file + kSuffix;
-        run.resume = resume && resumable_ ? motion_.resume + kSuffix : "";
-        return run;
-    }
-    void forget() const {
-        std::error_code ignored;
-        if (root_ && !motion_.file.empty()) std::filesystem::remove(motion_.file + kSuffix, ignored);
-    }
-
-private:
-    static constexpr const char* kSuffix = ".run";
-    CheckpointOptions motion_;
-    bool root_, resumable_ = false, same_file_ = false;
-};
-
 // The worst quality in `metric` of the mesh at `at`, the part's coordinates left as they are. A
 // run is good enough when it keeps at least half the worst quality of where it started from (the
 // reference, then the last step): a run that loses more has left elements pressed against the
@@ -270,7 +230,7 @@ bool has_boundary_motion(MeshPart part) {
 }
 
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
-                               const MotionCheckpoints& checkpoints, const MotionRun& solve) {
+                               const CheckpointSettings& checkpoints, const MotionRun& solve) {
     auto start = Clock::now();
     // What is left of max_seconds (> 0), or 0 when spent or when there is no limit.
     auto seconds_left = [&] { return max_seconds > 0.0 ? std::max(0.0, max_seconds - part.reducer().max(seconds_since(start))) : 0.0; };
@@ -285,17 +245,8 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + step_option.text(), part,
                               CheckpointKind::Motion);
     // Each run's own checkpoints go beside the motion's, which says what run that is.
-    const RunCheckpoints runs(part, checkpoints.options);
-    // The run the motion's checkpoint was written before, resumed from its own checkpoint if it wrote one.
-    bool resume_run = checkpointer.resumes();
-    auto run = [&](double seconds, bool is_first = false) {
-        const Summary summary = solve(seconds, runs.options(resume_run), is_first);
-        resume_run = false;
-        return summary;
-    };
-    // Whether to write the motion's checkpoint before the next run: not where a resumed run reads
-    // it from, when that run's own checkpoint is beside it and still to be read.
-    auto writes_now = [&] { return checkpointer.writes() && !(resume_run && runs.writes_where_it_resumes()); };
+    RunCheckpoints runs(part, checkpoints.options);
+    auto run = [&](double seconds, bool is_first = false) { return solve(seconds, runs.next_run(), is_first); };
     Summary total, first_run;           // every run's work; the first run's
     std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
     double done = 0.0, step = 0.5, floor = 0.0;
@@ -326,7 +277,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         steps = static_cast<int>(state.number("steps"));
         refused_last = state.number("refused_last") != 0.0;
     } else {
-        if (writes_now()) {
+        if (runs.writes_now()) {
             runs.forget();
             SolverState state;
             state.numbers = {{"first_run_done", 0.0}};
@@ -344,7 +295,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     bool out_of_time = false;
     while (done < 1.0 && step >= smallest_fraction) {
         // Where the steps stand before the next one, which starts from `valid`.
-        if (writes_now()) {
+        if (runs.writes_now()) {
             runs.forget();
             SolverState state;
             state.numbers = {{"first_run_done", 1.0}, {"done", done}, {"step", step}, {"floor", floor}, {"steps", steps},

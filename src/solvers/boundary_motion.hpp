@@ -15,6 +15,7 @@
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
 #include "paloverde/solvers/termination.hpp"
+#include "checkpointer.hpp"
 
 namespace paloverde::detail {
 
@@ -37,14 +38,6 @@ using MotionRun = std::function<Summary(double seconds, const CheckpointOptions&
 // either goes on from the first run with the whole budget (follow_boundary_motion).
 constexpr int first_run_untangling(int budget) { return std::max(1, budget / 5); }
 
-// The checkpoints of a run in steps: the solver's settings, its name and its options as text
-// (checkpointer.hpp's fingerprint; smallest_motion_step is added to it).
-struct MotionCheckpoints {
-    CheckpointOptions options;
-    std::string solver;
-    std::string options_text;
-};
-
 // Runs `solve` (one whole run of a solver on the part; from the interior carried along when that
 // inverts fewer elements than the interior as given) and, if it leaves inverted elements or less
 // than half the reference's worst quality, follows the motion in steps down to
@@ -57,14 +50,14 @@ struct MotionCheckpoints {
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.
-// With a checkpoint file FILE, the motion's state is written there before the first run and before
-// every step (what the first run left, the last accepted step's mesh, the fraction reached, the
+// With a checkpoint file FILE (`checkpoints`, whose fingerprint takes smallest_motion_step
+// too), the motion's state is written there before the first run and before every step (what the first run left, the last accepted step's mesh, the fraction reached, the
 // step size, the Summary so far), and the run under way writes its own to FILE.run as a single
 // run does (every_iterations, every_seconds, at a stop). With resume, the motion goes on from its
 // checkpoint, the run it was written before from that run's own if there is one, and it ends as
 // the uninterrupted run, bit for bit. Collective.
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
-                               const MotionCheckpoints& checkpoints, const MotionRun& solve);
+                               const CheckpointSettings& checkpoints, const MotionRun& solve);
 
 // A solver's options with its time limits (shape and untangling) at most `seconds`, > 0.
 template <class Options>

@@ -5,6 +5,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <limits>
@@ -30,8 +31,21 @@ namespace {
 constexpr char kMagic[8] = {'P', 'A', 'L', 'O', 'V', 'C', 'K', 'P'};
 constexpr std::uint64_t kVersion = 1;
 constexpr std::size_t kHeaderBytes = 32;
-// After the solver's name, in a motion's checkpoint.
-constexpr std::string_view kMotionMark = "/motion";
+// After the solver's name: the kind of run (none for a single run).
+constexpr std::string_view kMotionMark = "/motion", kSlidingMark = "/sliding";
+
+std::string_view mark_of(CheckpointKind kind) {
+    return kind == CheckpointKind::Motion ? kMotionMark : kind == CheckpointKind::Sliding ? kSlidingMark : "";
+}
+
+std::string_view described(CheckpointKind kind) {
+    switch (kind) {
+        case CheckpointKind::Motion: return "a run that followed a moved boundary in steps (morphing)";
+        case CheckpointKind::Sliding: return "a run whose boundary slid (boundary: slide)";
+        case CheckpointKind::SingleRun: break;
+    }
+    return "a single solver run";
+}
 // Before a text's name, in the lists that hold texts.
 constexpr std::string_view kTextPrefix = "text:";
 
@@ -412,7 +426,7 @@ bool Checkpointer::due(int iterations) {
 }
 
 void Checkpointer::encode(CheckpointWriter& w, const Summary& summary, const SolverState& state, double elapsed) const {
-    w.text(kind_ == CheckpointKind::Motion ? solver_ + std::string(kMotionMark) : solver_);
+    w.text(solver_ + std::string(mark_of(kind_)));
     w.u64(mesh_hash_);
     w.u64(options_hash_);
     w.u64(static_cast<std::uint64_t>(part_.ranks()));
@@ -483,18 +497,22 @@ SolverState Checkpointer::resume(Summary& summary) {
     // Every rank parses the same bytes, so every rank fails alike.
     Reader r(content, path);
     std::string solver = r.text();
-    const bool of_motion = solver.ends_with(kMotionMark);
-    if (of_motion) solver.resize(solver.size() - kMotionMark.size());
+    CheckpointKind kind = CheckpointKind::SingleRun;
+    for (const CheckpointKind k : {CheckpointKind::Motion, CheckpointKind::Sliding})
+        if (solver.ends_with(mark_of(k))) {
+            kind = k;
+            solver.resize(solver.size() - mark_of(k).size());
+        }
     if (solver != solver_)
         throw FileError(path, 0, "this checkpoint was written by the " + solver + " solver, not the " + solver_ + " solver");
-    if (of_motion && kind_ != CheckpointKind::Motion)
+    if (kind == CheckpointKind::Motion && kind_ != CheckpointKind::Motion)
         throw FileError(path, 0, "this checkpoint is of a run that followed a moved boundary in steps (morphing), and "
                                  "this run has no motion to follow: resume it on the moved mesh with its reference, as "
                                  "the checkpointed run was given");
-    if (!of_motion && kind_ == CheckpointKind::Motion)
-        throw FileError(path, 0, "this checkpoint is of a single solver run, and this run follows a moved boundary in "
-                                 "steps (morphing), whose checkpoints are of their own kind: resume a single run on the "
-                                 "mesh it was written for, or start this one afresh");
+    if (kind != kind_)
+        throw FileError(path, 0, "this checkpoint is of " + std::string(described(kind)) + ", and this run is " +
+                                     std::string(described(kind_)) + ", whose checkpoints are of their own kind: resume "
+                                     "with the mesh and options of the checkpointed run, or start this one afresh");
     const std::uint64_t mesh_hash = r.u64(), options_hash = r.u64(), ranks = r.u64(), vertices = r.u64();
     if (ranks != static_cast<std::uint64_t>(part_.ranks()))
         throw FileError(path, 0, "this checkpoint was written by a run on " + std::to_string(ranks) +
@@ -554,6 +572,32 @@ SolverState Checkpointer::resume(Summary& summary) {
     saved_iterations_ = summary.iterations;
     saved_at_ = Clock::now();
     return state;
+}
+
+RunCheckpoints::RunCheckpoints(MeshPart part, const CheckpointOptions& whole)
+    : whole_(whole), root_(part.root()), run_pending_(!whole.resume.empty()) {
+    if (whole.resume.empty()) return;
+    // Rank 0's file system decides (it reads the file).
+    const bool found = root_ && std::filesystem::exists(whole.resume + kSuffix);
+    resumable_ = part.reducer().max(found ? 1.0 : 0.0) > 0.0;
+    std::error_code ignored;
+    const bool same = !whole.file.empty() && std::filesystem::weakly_canonical(whole.file, ignored) ==
+                                                 std::filesystem::weakly_canonical(whole.resume, ignored);
+    // Every rank must decide alike whether to write (collective).
+    same_file_ = part.reducer().max(same ? 1.0 : 0.0) > 0.0;
+}
+
+CheckpointOptions RunCheckpoints::next_run() {
+    CheckpointOptions run = whole_;
+    run.file = whole_.file.empty() ? "" : whole_.file + kSuffix;
+    run.resume = run_pending_ && resumable_ ? whole_.resume + kSuffix : "";
+    run_pending_ = false;
+    return run;
+}
+
+void RunCheckpoints::forget() const {
+    std::error_code ignored;
+    if (root_ && !whole_.file.empty()) std::filesystem::remove(whole_.file + kSuffix, ignored);
 }
 
 }  // namespace detail

@@ -55,9 +55,10 @@ struct SolverState {
 void store_outcome(SolverState& state, const std::string& prefix, const Summary& summary);
 Summary restored_outcome(const SolverState& state, const std::string& prefix);
 
-// A single solver run, or a run that follows a moved boundary in steps (boundary_motion.hpp):
-// each resumes only its own kind.
-enum class CheckpointKind { SingleRun, Motion };
+// A single solver run, a run that follows a moved boundary in steps (boundary_motion.hpp), or a
+// run whose boundary slides (sliding_boundary.hpp: the boundary fixed, then sliding): each
+// resumes only its own kind.
+enum class CheckpointKind { SingleRun, Motion, Sliding };
 
 // Options of one solver as text (every field that changes the result), for the fingerprint.
 class OptionsText {
@@ -110,6 +111,38 @@ private:
     std::uint64_t vertices_ = 0;        // over all processes
     int saved_iterations_ = 0;          // at the last checkpoint written or read
     Clock::time_point saved_at_;
+};
+
+// A solver's checkpoint settings, its name and its options as text (the fingerprint), for a run
+// made of runs.
+struct CheckpointSettings {
+    CheckpointOptions options;
+    std::string solver;
+    std::string options_text;
+};
+
+// The checkpoints of a run made of solver runs one after another (a motion's first run and
+// steps; a sliding run's boundary-fixed run and sliding one): the whole's own in FILE, written
+// before each run, and the run under way's in FILE.run, written as a single run writes its own
+// (every_iterations, every_seconds, at a stop). A run's checkpoint is forgotten (removed) before
+// the whole's next one is written, so one found beside the whole's belongs to the run that
+// checkpoint was written before. Collective.
+class RunCheckpoints {
+public:
+    RunCheckpoints(MeshPart part, const CheckpointOptions& whole);
+    // The options of the next run: its file beside the whole's; the first run after the whole
+    // resumed goes on from the checkpoint beside the one it resumed from, if there is one.
+    CheckpointOptions next_run();
+    // Whether the whole's checkpoint is to be written now: it writes checkpoints, and not over the
+    // one it resumed from while the run resumed beside it has yet to read its own.
+    bool writes_now() const { return !whole_.file.empty() && !(run_pending_ && same_file_); }
+    // Removes the run's checkpoint (before the whole's next one is written).
+    void forget() const;
+
+private:
+    static constexpr const char* kSuffix = ".run";
+    CheckpointOptions whole_;
+    bool root_, run_pending_, resumable_ = false, same_file_ = false;
 };
 
 }  // namespace paloverde::detail

@@ -44,12 +44,9 @@ void GlobalSolverOptions::validate() const {
     if (local_untangle_rounds < 0) throw OptionError("local_untangle_rounds must be >= 0");
     if (max_failed_searches < 1) throw OptionError("max_failed_searches must be >= 1");
     surface.validate();
-    if (boundary == Boundary::Slide) {
-        detail::validate_sliding(checkpoint);
-        if (direction == Direction::Newton)
-            throw OptionError("direction newton does not go with boundary: slide yet (its Hessian solves know nothing "
-                              "of the surface the boundary slides on); use conjugate_gradient or steepest_ascent");
-    }
+    if (boundary == Boundary::Slide && direction == Direction::Newton)
+        throw OptionError("direction newton does not go with boundary: slide yet (its Hessian solves know nothing "
+                          "of the surface the boundary slides on); use conjugate_gradient or steepest_ascent");
     checkpoint.validate();
 }
 namespace {
@@ -191,9 +188,12 @@ Summary GlobalSolver::run_once(MeshPart part) {
     // The sliding run is a shape phase from the valid mesh the first run left: untangling would
     // not keep the boundary on the surface.
     return detail::fixed_then_sliding(part, options_.surface, options_.termination, options_.improve_shape,
-                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {
+                                      {options_.checkpoint, "global", options_text(options_)},
+                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding,
+                                          const CheckpointOptions& checkpoint) {
                                           GlobalSolverOptions run = options_;
                                           run.termination = budget;
+                                          run.checkpoint = checkpoint;
                                           if (sliding) run.untangle = false;
                                           return improve_part(run, observer(), part, sliding);
                                       });

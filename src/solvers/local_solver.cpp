@@ -30,7 +30,6 @@ void LocalSolverOptions::validate() const {
         throw OptionError("metric '" + metric + "' has no gradient; choose aspect_ratio, mean_ratio, "
                           "inverse_condition or edge_ratio");
     surface.validate();
-    if (boundary == Boundary::Slide) detail::validate_sliding(checkpoint);
     if (threads < 0) throw OptionError("threads must be >= 0 (0: the OpenMP default)");
     if (ascent_steps < 1) throw OptionError("ascent_steps must be >= 1");
     if (!(active_tolerance >= 0.0 && active_tolerance < 1.0)) throw OptionError("active_tolerance must lie in [0, 1)");
@@ -257,9 +256,12 @@ Summary LocalSolver::run_once(MeshPart whole_or_part) {
     }
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
-                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding) {
+                                      {options_.checkpoint, std::string(name()), options_text(options_)},
+                                      [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding,
+                                          const CheckpointOptions& checkpoint) {
                                           LocalSolverOptions run = options_;
                                           run.termination = budget;
+                                          run.checkpoint = checkpoint;
                                           LocalSolver solver(run);
                                           solver.set_observer(observer());
                                           return solver.improve_part(whole_or_part, sliding);

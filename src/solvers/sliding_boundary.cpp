@@ -48,12 +48,6 @@ BoundarySurface surface_of(const MeshPart& part, const SurfaceOptions& options) 
 
 }  // namespace
 
-void validate_sliding(const CheckpointOptions& checkpoint) {
-    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
-        throw OptionError("checkpoints do not go with boundary: slide yet (a sliding run is two runs: the boundary "
-                          "fixed, then sliding); keep the boundary fixed to checkpoint");
-}
-
 TerminationCriterion fixed_run_budget(const TerminationCriterion& termination) {
     TerminationCriterion half = termination;
     half.max_iterations = (termination.max_iterations + 1) / 2;
@@ -276,6 +270,62 @@ BoundaryMotion SlidingBoundary::motion() const {
     m.volume_before = volume_before_;
     m.volume_after = volume_of(part_);
     return m;
+}
+
+Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const TerminationCriterion& termination,
+                           bool slide, const CheckpointSettings& checkpoints, const SlidingRun& run) {
+    // The input's boundary, which the boundary-fixed run leaves where it is.
+    SlidingBoundary sliding(part, surface);
+    // The surface the boundary slides on changes the result too.
+    OptionsText surface_text;
+    surface_text("surface.feature_angle", surface.feature_angle)("surface.domain", surface.domain.name());
+    if (const SurfaceDomain& d = surface.domain; d.analytic()) {
+        for (int c = 0; c < 3; ++c) surface_text("surface.point", d.point[c])("surface.direction", d.direction[c]);
+        surface_text("surface.radius", d.radius);
+    }
+    Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + surface_text.text(),
+                              part, CheckpointKind::Sliding);
+    RunCheckpoints runs(part, checkpoints.options);
+    Mesh& mesh = part.mesh();
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    std::optional<Summary> fixed;  // the boundary-fixed run's, once it is done
+    if (checkpointer.resumes()) {
+        Summary work;
+        const SolverState state = checkpointer.resume(work);
+        if (state.number("fixed_run_done") != 0.0) {
+            fixed = restored_outcome(state, "fixed_run");
+            fixed->iterations = work.iterations;
+            fixed->untangle_iterations = work.untangle_iterations;
+            fixed->quality_passes = work.quality_passes;
+            fixed->gradient_passes = work.gradient_passes;
+            fixed->history = std::move(work.history);
+            fixed->seconds = state.number("seconds");
+            const std::vector<double>& left = state.vertex_field("fixed_run_mesh", n);
+            std::copy(left.begin(), left.end(), mesh.coordinates().begin());
+        }
+    }
+    if (!fixed) {
+        if (runs.writes_now()) {
+            runs.forget();
+            SolverState state;
+            state.numbers = {{"fixed_run_done", 0.0}};
+            checkpointer.save(Summary{}, state, 0.0);
+        }
+        fixed = run(fixed_run_budget(termination), nullptr, runs.next_run());
+    }
+    const auto budget = sliding_budget(termination, *fixed, part.reducer());
+    if (!budget || !slide) return sliding.join(std::move(*fixed), std::nullopt);
+    if (runs.writes_now()) {
+        runs.forget();
+        SolverState state;
+        state.numbers = {{"fixed_run_done", 1.0}, {"seconds", fixed->seconds}};
+        state.vertex_fields = {{"fixed_run_mesh", {mesh.coordinates().begin(), mesh.coordinates().end()}}};
+        store_outcome(state, "fixed_run", *fixed);
+        checkpointer.save(*fixed, state, fixed->seconds);
+    }
+    sliding.release();
+    Summary slid = run(*budget, &sliding, runs.next_run());
+    return sliding.join(std::move(*fixed), std::move(slid));
 }
 
 }  // namespace paloverde::detail

@@ -16,6 +16,7 @@
 // A part of a distributed run slides on the whole mesh's boundary (gathered on every rank; the
 // faces where the part was cut are not boundary), so a vertex slides, and projects, exactly as
 // it would serially. An owner and its ghosts project the same point the same way.
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "paloverde/solvers/checkpoint.hpp"
 #include "paloverde/solvers/summary.hpp"
 #include "paloverde/solvers/termination.hpp"
+#include "checkpointer.hpp"
 #include "vertex_slide.hpp"
 
 namespace paloverde::detail {
@@ -39,10 +41,6 @@ void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoin
 // Collective.
 void check_domain(const MeshPart& part, const SurfaceDomain& domain, bool boundary_slides);
 
-// The options a solver's boundary: slide comes with (throws OptionError): no checkpoints (a
-// sliding run is two runs, which one checkpoint cannot resume). The feature angle is the
-// solver's own surface.validate().
-void validate_sliding(const CheckpointOptions& checkpoint);
 // The boundary-fixed run's share of the shape budget `termination`: half its iterations and
 // seconds, so that a run which would use them all (a focused global run creeping up) still
 // leaves the sliding run its turn.
@@ -97,22 +95,20 @@ private:
     bool normals_set_ = false;  // the mesh's surface normals are this run's (Mesh::surface_normals)
 };
 
-// A solver's boundary: slide run on `part`: `run(termination, nullptr)` with the boundary fixed on
-// half the budget, then, where it leaves budget and a valid mesh (and `slide` is true: a run that
-// improves shapes at all), `run(termination left, &sliding)` with the boundary vertices released;
-// one Summary of the two. Collective.
-template <class Run>
+// One run of a solver, its shape budget `budget`, with its vertices sliding (`sliding`) or the
+// boundary fixed (nullptr), and `checkpoint` for its own checkpoints.
+using SlidingRun = std::function<Summary(const TerminationCriterion& budget, SlidingBoundary* sliding,
+                                         const CheckpointOptions& checkpoint)>;
+
+// A solver's boundary: slide run on `part`: `run(termination, nullptr, ...)` with the boundary
+// fixed on half the budget, then, where it leaves budget and a valid mesh (and `slide` is true: a
+// run that improves shapes at all), `run(termination left, &sliding, ...)` with the boundary
+// vertices released; one Summary of the two. With a checkpoint file FILE (`checkpoints`), which
+// run is under way is written there before each (before the sliding one, with the fixed run's
+// outcome and mesh), and the run writes its own to FILE.run (RunCheckpoints); resumed, it goes on
+// in the run it was written before and ends as the uninterrupted run, bit for bit. Collective.
 Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const TerminationCriterion& termination,
-                           bool slide, Run run) {
-    // The input's boundary, which the boundary-fixed run leaves where it is.
-    SlidingBoundary sliding(part, surface);
-    Summary fixed = run(fixed_run_budget(termination), static_cast<SlidingBoundary*>(nullptr));
-    const auto budget = sliding_budget(termination, fixed, part.reducer());
-    if (!budget || !slide) return sliding.join(std::move(fixed), std::nullopt);
-    sliding.release();
-    Summary slid = run(*budget, &sliding);
-    return sliding.join(std::move(fixed), std::move(slid));
-}
+                           bool slide, const CheckpointSettings& checkpoints, const SlidingRun& run);
 
 // Whether `part` is a surface mesh: triangles in 3D that do not lie in one plane. Collective.
 bool is_surface_mesh(const MeshPart& part);

@@ -21,7 +21,9 @@
 #include "paloverde/parallel/partition.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
+#include "paloverde/solvers/stop.hpp"
 #include "paloverde/wrappers.hpp"
+#include "support/io_checks.hpp"
 #include "support/sliding_checks.hpp"
 #include "support/surface_meshes.hpp"
 #include "support/solver_checks.hpp"
@@ -722,6 +724,52 @@ BOOST_DATA_TEST_CASE(the_global_solver_slides_to_the_serial_mesh,
 BOOST_AUTO_TEST_CASE(the_global_solver_slides_cube_clip_5_to_the_serial_mesh,
                      *boost::unit_test::label("slow")) {
     check_slides_to_the_serial_mesh("mesquite/tets/cube-clip-5.vtk");
+}
+
+// A sliding run stopped in its sliding run (three records after rank 0 saw the second checkpoint
+// of the pair, written before that run) resumes on as many ranks to the serial mesh, bit for bit.
+BOOST_AUTO_TEST_CASE(a_sliding_run_stopped_while_sliding_resumes_on_the_parts_to_the_serial_mesh) {
+    const auto input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
+    pv::GlobalSolverOptions options;
+    options.boundary = pv::GlobalSolverOptions::Boundary::Slide;
+    options.termination.max_iterations = 24;
+    pv::Mesh serial = input;
+    const pv::Summary uninterrupted = pv::GlobalSolver(options).improve(serial);
+    BOOST_TEST_REQUIRE(uninterrupted.message.find("then sliding") != std::string::npos);
+
+    const std::filesystem::path file = pv::test::scratch("sliding.ckpt");
+    if (rank() == 0) std::filesystem::remove(file);
+    auto writing = options;
+    writing.checkpoint.file = file.string();
+    // Rank 0 watches the file: a stop requested on one rank stops them all at once.
+    std::string last;
+    int written = 0, records = 0;
+    auto stopped_part = scatter(input);
+    pv::GlobalSolver stopping(writing);
+    stopping.set_observer([&](const pv::IterationRecord&) {
+        if (rank() != 0 || !std::filesystem::exists(file)) return;
+        const std::string bytes = pv::test::read_text(file);
+        if (bytes != last) last = bytes, ++written;
+        if (written >= 2 && ++records == 3) pv::request_stop();
+    });
+    pv::clear_stop_request();
+    const pv::Summary stopped = stopping.improve(stopped_part);
+    pv::clear_stop_request();
+    BOOST_TEST_REQUIRE(to_string(stopped.reason) == "interrupted");
+
+    auto resuming = options;
+    resuming.checkpoint.resume = file.string();
+    auto part = scatter(input);
+    const pv::Summary resumed = pv::GlobalSolver(resuming).improve(part);
+    BOOST_TEST(resumed.message == uninterrupted.message);
+    BOOST_TEST(resumed.iterations == uninterrupted.iterations);
+    BOOST_TEST(resumed.history.size() == uninterrupted.history.size());
+    BOOST_TEST(resumed.worst_after == uninterrupted.worst_after);
+    pv::Mesh gathered = input;
+    part.gather_coordinates(rank() == 0 ? &gathered : nullptr);
+    if (rank() == 0) BOOST_TEST(relative_difference(gathered, serial) == 0.0);
+    MPI_Barrier(MPI_COMM_WORLD);
+    if (rank() == 0) std::filesystem::remove(file), std::filesystem::remove(file.string() + ".run");
 }
 
 // A surface mesh slides on itself, on every rank the whole surface (gathered, ordered by

@@ -17,6 +17,9 @@
 
 namespace pv = paloverde;
 namespace fs = std::filesystem;
+using pv::test::CheckpointCopies;
+using pv::test::check_refused;
+using pv::test::check_same_end;
 using pv::test::Outcome;
 using pv::test::run;
 using pv::test::StopRequestCleared;
@@ -41,80 +44,17 @@ pv::LocalSolverOptions local_options() {
     return options;
 }
 
-// The same end: coordinates bit for bit, the counters, the history, the message and the reports.
-void check_same_end(const Outcome& a, const Outcome& b) {
-    BOOST_TEST(pv::test::same_coordinates(a.mesh, b.mesh));
-    pv::test::check_same_run(a.summary, b.summary);
-    BOOST_TEST(a.summary.message == b.summary.message);
-    BOOST_TEST(a.summary.before.inverted == b.summary.before.inverted);
-    BOOST_TEST(a.summary.worst_before == b.summary.worst_before);
-    BOOST_TEST(a.summary.after.to_json() == b.summary.after.to_json());
-}
-
 fs::path run_file(const fs::path& motion) { return motion.string() + ".run"; }
-
-// An observer that copies the motion's checkpoint and its run's each time either changed, each
-// pair in a folder of its own; `steps` counts the motion's checkpoints.
-struct CheckpointCopies {
-    fs::path file, dir;
-    std::string last;
-    std::vector<fs::path> copies;  // the motion's checkpoint in each folder
-    int steps = 0;
-
-    pv::IterationObserver observer() {
-        return [this](const pv::IterationRecord&) {
-            if (!fs::exists(file)) return;
-            const std::string motion = pv::test::read_text(file);
-            const std::string bytes = motion + (fs::exists(run_file(file)) ? pv::test::read_text(run_file(file)) : "");
-            if (bytes == last) return;
-            steps += last.substr(0, motion.size()) != motion;
-            last = bytes;
-            const fs::path folder = dir / ("copy" + std::to_string(copies.size()));
-            fs::create_directory(folder);
-            copies.push_back(folder / "motion.ckpt");
-            fs::copy_file(file, copies.back());
-            if (fs::exists(run_file(file))) fs::copy_file(run_file(file), run_file(copies.back()));
-        };
-    }
-};
 
 // `options` with checkpoints of its runs every `every` iterations: resumed from every pair copied.
 template <class Solver, class Options>
 void check_resumed_from_every_checkpoint(const std::string& name, const Options& options, int every) {
-    const StopRequestCleared cleared;
-    const pv::test::ScratchDir dir("morph_checkpoint_" + name);
     const pv::Mesh input = stepped_motion();
     const Outcome uninterrupted = run<Solver>(input, options);
     BOOST_TEST_INFO(uninterrupted.summary.message);
     BOOST_TEST_REQUIRE(uninterrupted.summary.message.find("followed in") != std::string::npos);
-
-    CheckpointCopies copies{dir / "motion.ckpt", dir.path(), {}, {}, 0};
-    auto writing = options;
-    writing.checkpoint.file = copies.file.string();
-    writing.checkpoint.every_iterations = every;
-    // Writing checkpoints changes nothing.
-    check_same_end(run<Solver>(input, writing, copies.observer()), uninterrupted);
-    BOOST_TEST_REQUIRE(copies.steps >= 4);  // before the first run and 3 steps or more
-    BOOST_TEST_REQUIRE(copies.copies.size() > static_cast<std::size_t>(copies.steps));
-    for (std::size_t i = 0; i < copies.copies.size(); ++i) {
-        BOOST_TEST_CONTEXT(name << " resumed from copy " << i << (fs::exists(run_file(copies.copies[i])) ? ", in a run" : "")) {
-            auto resuming = options;
-            resuming.checkpoint.resume = copies.copies[i].string();
-            check_same_end(run<Solver>(input, resuming), uninterrupted);
-        }
-    }
-}
-
-// Resuming from `file` on `input` throws a FileError whose message has `words`; the mesh is left as it was.
-template <class Solver, class Options>
-void check_refused(const pv::Mesh& input, Options options, const fs::path& file, const std::string& words) {
-    options.checkpoint.resume = file.string();
-    pv::Mesh mesh = input;
-    BOOST_CHECK_EXCEPTION(Solver(options).improve(mesh), pv::FileError, [&](const pv::FileError& e) {
-        BOOST_TEST_MESSAGE(e.what());
-        return std::string(e.what()).find(words) != std::string::npos;
-    });
-    BOOST_TEST(pv::test::same_coordinates(mesh, input));
+    // Before the first run and 3 steps or more.
+    pv::test::check_resumed_from_every_copy<Solver>("morph_checkpoint_" + name, input, options, every, 4, uninterrupted);
 }
 
 }  // namespace
@@ -146,7 +86,7 @@ BOOST_AUTO_TEST_CASE(a_run_stopped_during_a_step_resumes_where_it_stopped) {
             pv::clear_stop_request();
             const fs::path folder = dir / ("stop" + std::to_string(step));
             fs::create_directory(folder);
-            CheckpointCopies copies{folder / "motion.ckpt", folder, {}, {}, 0};
+            CheckpointCopies copies(folder / "motion.ckpt", folder);
             auto writing = options;
             writing.checkpoint.file = copies.file.string();
             const auto copy = copies.observer();
@@ -156,7 +96,7 @@ BOOST_AUTO_TEST_CASE(a_run_stopped_during_a_step_resumes_where_it_stopped) {
             const Outcome stopped = run<pv::GlobalSolver>(input, writing, [&](const pv::IterationRecord& r) {
                 ++records;
                 copy(r);
-                if (copies.steps > step && ++in_step == 3) pv::request_stop();
+                if (copies.wholes > step && ++in_step == 3) pv::request_stop();
             });
             BOOST_TEST(to_string(stopped.summary.reason) == "interrupted");
             BOOST_TEST_REQUIRE(fs::exists(run_file(copies.file)));

@@ -170,10 +170,6 @@ BOOST_AUTO_TEST_CASE(what_sliding_does_not_take_is_refused) {
         options.surface.feature_angle = angle;
         BOOST_CHECK_THROW(pv::GlobalSolver{options}, pv::OptionError);
     }
-    // A sliding run is two runs; one checkpoint file cannot resume both yet.
-    auto checkpointed = global(Boundary::Slide);
-    checkpointed.checkpoint.file = "slide.ckpt";
-    BOOST_CHECK_THROW(pv::GlobalSolver{checkpointed}, pv::OptionError);
     auto newton = global(Boundary::Slide);
     newton.direction = pv::GlobalSolverOptions::Direction::Newton;
     try {

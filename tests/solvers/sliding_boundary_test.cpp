@@ -126,10 +126,6 @@ BOOST_AUTO_TEST_CASE(bad_feature_angles_are_refused) {
         options.surface.feature_angle = angle;
         BOOST_CHECK_THROW(pv::LocalSolver{options}, pv::OptionError);
     }
-    // A sliding run is two runs; one checkpoint file cannot resume both yet.
-    auto checkpointed = sliding();
-    checkpointed.checkpoint.file = "slide.ckpt";
-    BOOST_CHECK_THROW(pv::LocalSolver{checkpointed}, pv::OptionError);
 }
 
 // Two tets sharing only an edge: four boundary faces meet there, and no surface is defined.
