@@ -60,12 +60,14 @@ std::string listed(const std::vector<Id>& ids) {
 }
 
 // The boundary vertices (on a face, or a triangle's edge, of one element only), as
-// boundary_vertices() finds them, and the check that no face is in more than two elements: such a
-// mesh no vertex placement can make valid (untangling could not succeed, and the face would pass
-// for an interior one). Each vertex in turn lists the faces whose smallest vertex it is, from the
-// elements around it, and sorts that short list. Those elements lie scattered in a mesh in file
-// order, so their corners are asked for a few elements ahead; the loads overlap, where scattering
-// every face into rows wrote to a cache line of its own at nearly every face (twice as slow).
+// boundary_vertices() finds them, and the checks that no two elements have the same vertices
+// and that no face is in more than two elements: such a mesh no vertex placement can make valid
+// (untangling could not succeed, and the face would pass for an interior one). Each vertex in
+// turn lists the elements and the faces whose smallest vertex it is, from the elements around it,
+// and sorts those short lists (the elements as check_no_duplicate_elements does, so the same pair
+// is named). Those elements lie scattered in a mesh in file order, so their corners are asked for
+// a few elements ahead; the loads overlap, where scattering every face into rows wrote to a cache
+// line of its own at nearly every face (twice as slow).
 std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string& path) {
     const int k = mesh.corners();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
@@ -81,12 +83,15 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
     };
     std::int64_t most_around = 0;
     for (std::size_t v = 0; v < n; ++v) most_around = std::max(most_around, first_around[v + 1] - first_around[v]);
-    // At this vertex: the others of each face, packed increasing (at most three per element).
+    // At this vertex: the others of each face, packed increasing (at most three per element); the
+    // elements whose smallest vertex it is, by their other corners, then the element.
     std::vector<std::uint64_t> faces(3 * static_cast<std::size_t>(most_around));
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> own;
     for (std::size_t v = 0; v < n; ++v) {
         const auto vertex = static_cast<VertexId>(v);
         const auto begin = static_cast<std::size_t>(first_around[v]), end = static_cast<std::size_t>(first_around[v + 1]);
         std::size_t listed = 0;
+        own.clear();
         for (std::size_t i = begin; i < end; ++i) {
             if (i + ahead < around.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(around[i + ahead]));
             const VertexId* c = corners + k * static_cast<std::size_t>(around[i]);
@@ -112,12 +117,23 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
                 out[1] = key(larger[0], larger[2]);
                 out[2] = key(larger[1], larger[2]);
                 listed += static_cast<std::size_t>(count * (count - 1) / 2);
+                if (count == 3) own.emplace_back(out[0], key(larger[2], static_cast<VertexId>(around[i])));
             } else {
                 out[0] = key(larger[0], 0);
                 out[1] = key(larger[1], 0);
                 listed += static_cast<std::size_t>(count);
+                if (count == 2) {
+                    order(0, 1);
+                    own.emplace_back(key(larger[0], larger[1]), key(0, static_cast<VertexId>(around[i])));
+                }
             }
         }
+        std::sort(own.begin(), own.end());
+        for (std::size_t i = 0; i + 1 < own.size(); ++i)
+            if (own[i + 1].first == own[i].first && own[i + 1].second >> 32 == own[i].second >> 32)
+                throw FileError(path, 0, "elements " + std::to_string(own[i].second & 0xFFFFFFFFu) + " and " +
+                                             std::to_string(own[i + 1].second & 0xFFFFFFFFu) +
+                                             " have the same vertices (duplicate element)");
         const auto last = faces.begin() + static_cast<std::ptrdiff_t>(listed);
         std::sort(faces.begin(), last);
         for (auto i = faces.begin(); i != last;) {
@@ -296,7 +312,8 @@ MeshFile finish_mesh(RawMesh&& raw, const std::string& path, const ReadOptions& 
     MeshFile out;
     try {
         out.mesh = Mesh::from_cells(std::move(raw.coordinates), raw.cell_types, std::move(raw.cell_connectivity));
-        check_no_duplicate_elements(out.mesh);
+        // A mesh of simplices is checked with its boundary (manifold_boundary).
+        if (out.mesh.has_cells()) check_no_duplicate_elements(out.mesh);
     } catch (const MeshError& e) {
         throw FileError(path, 0, e.what());
     }

@@ -101,7 +101,7 @@ struct GlobalSolverOptions {
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the boundary
     // fixed, a shape phase in which they move too, on the input's boundary, along feature curves,
     // corners fixed (mesh/boundary_surface.hpp; docs/global_solver.md). Serial and distributed
-    // runs alike (a part slides on the whole mesh's boundary); no checkpoints, no newton
+    // runs alike (a part slides on the whole mesh's boundary), checkpoints too; no newton
     // directions, no Newton finish.
     enum class Boundary { Fixed, Slide };
     Boundary boundary = Boundary::Fixed;
