@@ -369,6 +369,17 @@ OptionsText& OptionsText::operator()(const char* key, const TerminationCriterion
     return (*this)((k + ".gradient_tolerance").c_str(), t.gradient_tolerance);
 }
 
+OptionsText& OptionsText::operator()(const char* key, const SurfaceOptions& s) {
+    const std::string k(key);
+    (*this)((k + ".feature_angle").c_str(), s.feature_angle)((k + ".domain").c_str(), s.domain.name());
+    if (!s.domain.analytic()) return *this;
+    for (int c = 0; c < 3; ++c) {
+        (*this)((k + ".domain.point").c_str(), s.domain.point[c]);
+        (*this)((k + ".domain.direction").c_str(), s.domain.direction[c]);
+    }
+    return (*this)((k + ".domain.radius").c_str(), s.domain.radius);
+}
+
 Checkpointer::Checkpointer(const CheckpointOptions& options, std::string solver, const std::string& options_text,
                            MeshPart whole_or_part, CheckpointKind kind)
     : options_(options), solver_(std::move(solver)), kind_(kind), part_(whole_or_part), saved_at_(Clock::now()) {

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "paloverde/mesh/boundary_surface.hpp"
 #include "paloverde/mesh/mesh.hpp"
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/parallel/reducer.hpp"
@@ -68,6 +69,8 @@ public:
     OptionsText& operator()(const char* key, const char* value) { return (*this)(key, std::string(value)); }
     // Every field but max_seconds (a time limit may change between a run and its resumption).
     OptionsText& operator()(const char* key, const TerminationCriterion& t);
+    // The surface sliding vertices keep to: what a run in which they slide depends on too.
+    OptionsText& operator()(const char* key, const SurfaceOptions& s);
     const std::string& text() const { return text_; }
 
 private:

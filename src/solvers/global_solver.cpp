@@ -129,7 +129,9 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
     detail::SolverRun run(part, name, options.shape_metric);
     if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options.checkpoint, name, options_text(options), part);
+    // A run whose vertices slide depends on the surface they keep to.
+    const std::string surface = sliding ? detail::OptionsText()("surface", options.surface).text() : "";
+    detail::Checkpointer checkpointer(options.checkpoint, name, options_text(options) + surface, part);
     // The dihedral quality's six angles are terms of their own (docs/metrics.md): at a tie of two
     // angles the smaller one alone is a kink where the ascent stalls.
     const Mesh& mesh = part.mesh();
@@ -151,7 +153,7 @@ Summary improve_surface(const GlobalSolverOptions& options, const IterationObser
     // little and so leaves every other triangle as it was: the mean is raised after it.
     if (run.polish == GlobalSolverOptions::Polish::Auto) run.polish = GlobalSolverOptions::Polish::Always;
     const bool open_edges_slide = options.boundary == GlobalSolverOptions::Boundary::Slide;
-    return detail::on_surface(part, options.surface, options.checkpoint, open_edges_slide,
+    return detail::on_surface(part, options.surface, open_edges_slide,
                               [&](detail::SlidingBoundary* sliding) { return improve_part(run, observer, part, sliding); });
 }
 

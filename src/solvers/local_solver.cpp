@@ -250,8 +250,8 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
 Summary LocalSolver::run_once(MeshPart whole_or_part) {
     if (detail::is_surface_mesh(whole_or_part)) {
         // Untangling slides too: each vertex of a turned-over triangle moves on its patch or curve.
-        return detail::on_surface(whole_or_part, options_.surface, options_.checkpoint,
-                                  options_.boundary == LocalSolverOptions::Boundary::Slide,
+        const bool open_edges_slide = options_.boundary == LocalSolverOptions::Boundary::Slide;
+        return detail::on_surface(whole_or_part, options_.surface, open_edges_slide,
                                   [&](detail::SlidingBoundary* sliding) { return improve_part(whole_or_part, sliding); });
     }
     if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
@@ -272,7 +272,10 @@ Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundar
     detail::SolverRun run(whole_or_part, std::string(name()), options_.metric);
     if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
-    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_), whole_or_part);
+    // A run whose vertices slide depends on the surface they keep to.
+    const std::string surface = sliding ? detail::OptionsText()("surface", options_.surface).text() : "";
+    detail::Checkpointer checkpointer(options_.checkpoint, std::string(name()), options_text(options_) + surface,
+                                      whole_or_part);
     const Mesh& mesh = whole_or_part.mesh();
     // A rank moves only the vertices it owns, and sums over the elements it counts.
     std::vector<ElementId> counted;

@@ -128,10 +128,8 @@ void check_domain(const MeshPart& part, const SurfaceDomain& domain, bool bounda
     throw MeshError(domain.off_message(static_cast<GlobalId>(id), worst) + ": a planar mesh keeps to its own plane");
 }
 
-void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint) {
+void refuse_on_surfaces(const MeshPart& part) {
     const Mesh& mesh = part.mesh();
-    if (!checkpoint.file.empty() || !checkpoint.resume.empty())
-        throw OptionError("checkpoints do not go with surface meshes yet");
     if (!mesh.reference_coordinates().empty())
         throw OptionError("a moved boundary (a reference mesh or a displacement) does not go with surface meshes yet");
 }
@@ -276,15 +274,9 @@ Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const T
                            bool slide, const CheckpointSettings& checkpoints, const SlidingRun& run) {
     // The input's boundary, which the boundary-fixed run leaves where it is.
     SlidingBoundary sliding(part, surface);
-    // The surface the boundary slides on changes the result too.
-    OptionsText surface_text;
-    surface_text("surface.feature_angle", surface.feature_angle)("surface.domain", surface.domain.name());
-    if (const SurfaceDomain& d = surface.domain; d.analytic()) {
-        for (int c = 0; c < 3; ++c) surface_text("surface.point", d.point[c])("surface.direction", d.direction[c]);
-        surface_text("surface.radius", d.radius);
-    }
-    Checkpointer checkpointer(checkpoints.options, checkpoints.solver, checkpoints.options_text + surface_text.text(),
-                              part, CheckpointKind::Sliding);
+    Checkpointer checkpointer(checkpoints.options, checkpoints.solver,
+                              checkpoints.options_text + OptionsText()("surface", surface).text(), part,
+                              CheckpointKind::Sliding);
     RunCheckpoints runs(part, checkpoints.options);
     Mesh& mesh = part.mesh();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());

@@ -31,9 +31,8 @@
 
 namespace paloverde::detail {
 
-// What surface meshes do not go with yet (OptionError): checkpoints, a reference mesh or
-// a displacement.
-void refuse_on_surfaces(const MeshPart& part, const CheckpointOptions& checkpoint);
+// What surface meshes do not go with yet (OptionError): a reference mesh or a displacement.
+void refuse_on_surfaces(const MeshPart& part);
 
 // Refuses an analytic domain (SurfaceOptions::domain) that does not go with the mesh (OptionError),
 // and a planar mesh off its plane domain (MeshError naming the vertex farthest off). A surface
@@ -120,12 +119,12 @@ std::vector<Vec3> input_surface_normals(const MeshPart& part);
 // A solver's run on a surface mesh: one shape run, `run(&sliding)`, in which every vertex that is
 // not fixed slides on the input surface (on its patch, along its crease or, where
 // `open_edges_slide`, along its open edge; corners stay), each triangle rated about the surface's
-// normal. Without checkpoints, targets or a moved boundary (OptionError, naming what to drop).
-// The Summary reports the motion. Collective: a part slides on the whole surface.
+// normal. Without a moved boundary (OptionError, naming what to drop); the run's checkpoints are
+// its own, as a single run's. The Summary reports the motion. Collective: a part slides on the
+// whole surface.
 template <class Run>
-Summary on_surface(MeshPart part, const SurfaceOptions& surface, const CheckpointOptions& checkpoint,
-                   bool open_edges_slide, Run run) {
-    refuse_on_surfaces(part, checkpoint);
+Summary on_surface(MeshPart part, const SurfaceOptions& surface, bool open_edges_slide, Run run) {
+    refuse_on_surfaces(part);
     SlidingBoundary sliding(part, surface, open_edges_slide);
     sliding.release();
     Summary summary = run(&sliding);

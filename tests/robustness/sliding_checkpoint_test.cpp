@@ -1,9 +1,9 @@
 // Checkpoints of a run whose boundary slides (solvers/sliding_boundary.hpp: the boundary fixed,
 // then sliding): the sliding run's own, before each of its two runs, and the run under way's
 // beside it (FILE.run); in a motion followed in steps, one level down (the motion's FILE, the
-// step's sliding run in FILE.run, its run under way in FILE.run.run). Resumed from any of them it
-// ends bit for bit as the uninterrupted run; a checkpoint of the other kind of run, or of another
-// surface, is refused.
+// step's sliding run in FILE.run, its run under way in FILE.run.run); and a surface mesh's single
+// run, every vertex sliding. Resumed from any of them it ends bit for bit as the uninterrupted
+// run; a checkpoint of the other kind of run, or of another surface, is refused.
 #include <boost/test/unit_test.hpp>
 #include <filesystem>
 #include <string>
@@ -13,6 +13,7 @@
 #include "paloverde/solvers/local_solver.hpp"
 #include "robustness_support.hpp"
 #include "support/ring_meshes.hpp"
+#include "support/surface_meshes.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -80,6 +81,37 @@ BOOST_AUTO_TEST_CASE(a_sliding_motion_in_steps_resumed_from_any_checkpoint_ends_
     BOOST_TEST_INFO(uninterrupted.summary.message);
     BOOST_TEST_REQUIRE(uninterrupted.summary.message.find("followed in") != std::string::npos);
     check_resumed_from_every_checkpoint<pv::GlobalSolver>("motion", input, options, 12, 4);
+}
+
+// A tangled torus untangled and improved on its own surface (one run, every vertex sliding):
+// checkpoints while untangling and in the shape phase.
+BOOST_AUTO_TEST_CASE(a_surface_run_resumed_from_any_checkpoint_ends_as_the_uninterrupted_run) {
+    const pv::Mesh input = pv::test::tangled_torus(32, 16);
+    pv::GlobalSolverOptions global;
+    global.termination.max_iterations = 20;
+    global.threads = 1;
+    const Outcome by_global = run<pv::GlobalSolver>(input, global);
+    BOOST_TEST_REQUIRE(by_global.summary.before.inverted > 0);
+    BOOST_TEST_REQUIRE(by_global.summary.untangle_iterations > 0);
+    pv::test::check_resumed_from_every_copy<pv::GlobalSolver>("sliding_checkpoint_surface_global", input, global, 6, 3,
+                                                              by_global, false);
+    pv::LocalSolverOptions local;
+    local.termination.max_iterations = 6;
+    local.threads = 1;
+    const Outcome by_local = run<pv::LocalSolver>(input, local);
+    BOOST_TEST_REQUIRE(by_local.summary.before.inverted > 0);
+    pv::test::check_resumed_from_every_copy<pv::LocalSolver>("sliding_checkpoint_surface_local", input, local, 2, 3,
+                                                             by_local, false);
+    // The surface's options are the run's.
+    const pv::test::ScratchDir dir("sliding_checkpoint_surface_refused");
+    auto writing = global;
+    writing.checkpoint.file = (dir / "run.ckpt").string();
+    writing.checkpoint.every_iterations = 5;
+    run<pv::GlobalSolver>(input, writing);
+    BOOST_TEST_REQUIRE(fs::exists(dir / "run.ckpt"));
+    auto other = global;
+    other.surface.feature_angle = 30.0;
+    check_refused<pv::GlobalSolver>(input, other, dir / "run.ckpt", "other global solver options");
 }
 
 // Stopped (as Ctrl-C would) in the boundary-fixed run and in the sliding one: that run wrote its
