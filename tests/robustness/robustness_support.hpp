@@ -149,9 +149,10 @@ void check_refused(const Mesh& input, Options options, const std::filesystem::pa
 // `options` run on `input` with checkpoints every `every` iterations, into a scratch folder named
 // `name`, its files copied whenever they changed (FILE at least `wholes` times; and, for a run made
 // of runs (`inner`), the inner runs' files alone too), then resumed from every copy: each run, and
-// the one writing them, ends as `uninterrupted`.
+// the one writing them, ends as `uninterrupted`. Returns the most files a copy held (how many levels
+// of runs were resumed from: FILE, FILE.run, FILE.run.run).
 template <class Solver, class Options>
-void check_resumed_from_every_copy(const std::string& name, const Mesh& input, const Options& options, int every,
+int check_resumed_from_every_copy(const std::string& name, const Mesh& input, const Options& options, int every,
                                    int wholes, const Outcome& uninterrupted, bool inner = true) {
     const StopRequestCleared cleared;
     const ScratchDir dir(name);
@@ -163,7 +164,12 @@ void check_resumed_from_every_copy(const std::string& name, const Mesh& input, c
     check_same_end(run<Solver>(input, writing, copies.observer()), uninterrupted);
     BOOST_TEST_REQUIRE(copies.wholes >= wholes);
     if (inner) BOOST_TEST_REQUIRE(copies.copies.size() > static_cast<std::size_t>(copies.wholes));
+    int levels = 0;
     for (std::size_t i = 0; i < copies.copies.size(); ++i) {
+        const auto files = checkpoint_files(copies.copies[i]);
+        levels = std::max(levels, static_cast<int>(std::count_if(files.begin(), files.end(), [](const auto& f) {
+                                      return std::filesystem::exists(f);
+                                  })));
         BOOST_TEST_CONTEXT(name << " resumed from copy " << i
                                 << (std::filesystem::exists(copies.copies[i].string() + ".run") ? ", in a run" : "")) {
             auto resuming = options;
@@ -171,6 +177,7 @@ void check_resumed_from_every_copy(const std::string& name, const Mesh& input, c
             check_same_end(run<Solver>(input, resuming), uninterrupted);
         }
     }
+    return levels;
 }
 
 }  // namespace paloverde::test
