@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <omp.h>
 #include <sstream>
 
 #include "core/exact_sums.hpp"
@@ -74,35 +76,77 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
         s[k]->max = reducer.max(range[k].high);
         width[k] = (s[k]->max - s[k]->min) / bins;
     }
-    // Pass 2, by thread: exact sums and integer counts, added together (exactly: in any order).
-    // The terms are bounded by this process's range, so they sum exactly in pieces on two grids,
-    // and only those far below the bound (or not finite) take the slower digit-by-digit sum.
+    // Pass 2, by thread, a block at a time: exact sums and integer counts, added together (exactly:
+    // in any order). The terms are bounded by this process's range, so they sum exactly in pieces
+    // on two grids, several to an instruction; only those far below the bound (or not finite) take
+    // the slower digit-by-digit sum. All counted elements are summed so, the frozen ones (usually
+    // few) one by one besides, and the movable ones' sums are all's minus the frozen ones'.
     const auto b = static_cast<std::size_t>(bins);
     const double bound = std::max(std::abs(range[0].low), std::abs(range[0].high));
     std::vector<std::int64_t> counts(3 * b, 0);
     std::vector<ExactSum> sums(4 + 3 * b);  // sum and squares of movable, then of frozen; the histograms
+    // A movable element's bin is its bin among all where the two ranges agree (the usual case: the
+    // frozen elements lie within the movable ones' range). A bin is (qe - min) / width, divided:
+    // a product with the width's inverse could round an element into the next bin.
+    const bool movable_bins_as_all = s[1]->min == s[0]->min && width[1] == width[0];
+    const auto bin_of = [&](int k, double qe) {
+        const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
+        return static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1));
+    };
 #pragma omp parallel if (n >= kParallelElements)
     {
+        constexpr std::ptrdiff_t kBlock = 256;
         std::vector<std::int64_t> my_counts(3 * b, 0);
-        std::array<detail::BoundedSum, 4> my_sums{detail::BoundedSum(bound), detail::BoundedSum(bound * bound),
-                                                  detail::BoundedSum(bound), detail::BoundedSum(bound * bound)};
-        const auto bin_of = [&](int k, double qe) {
-            const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
-            return static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1));
+        detail::BoundedSum all(bound), all_squares(bound * bound);
+        // The frozen elements' sum and squares, and both negated (the movable ones' share).
+        std::array<detail::BoundedSum, 4> frozen{detail::BoundedSum(bound), detail::BoundedSum(bound * bound),
+                                                 detail::BoundedSum(bound), detail::BoundedSum(bound * bound)};
+        alignas(32) double terms[2][kBlock];
+        int bin[2][kBlock];
+        const auto bins_of = [&](const double* x, std::ptrdiff_t count, int k, int* out) {
+            if (!(width[k] > 0.0)) return std::fill(out, out + count, 0);
+            const double low = s[k]->min, w = width[k];
+            for (std::ptrdiff_t i = 0; i < count; ++i) out[i] = static_cast<int>((x[i] - low) / w);
+            for (std::ptrdiff_t i = 0; i < count; ++i) out[i] = std::clamp(out[i], 0, bins - 1);
         };
-#pragma omp for schedule(static) nowait
-        for (std::ptrdiff_t e = 0; e < n; ++e) {
-            const int g = group[static_cast<std::size_t>(e)];
-            if (!g) continue;
-            const double qe = q[static_cast<std::size_t>(e)];
-            my_sums[2 * static_cast<std::size_t>(g - 1)].add_exact(qe);
-            my_sums[2 * static_cast<std::size_t>(g - 1) + 1].add_exact(qe * qe);
-            ++my_counts[bin_of(0, qe)];
-            ++my_counts[bin_of(g, qe)];
+        const int threads = omp_get_num_threads(), t = omp_get_thread_num();
+        for (std::ptrdiff_t first = n * t / threads, end = n * (t + 1) / threads; first < end; first += kBlock) {
+            const std::ptrdiff_t count = std::min(kBlock, end - first);
+            const double* x = q.data() + first;
+            const std::uint8_t* g = group.data() + first;
+            // An element not counted here adds +0: its bits masked off (0 * x would be NaN for an
+            // infinite x).
+            for (std::ptrdiff_t i = 0; i < count; ++i) {
+                const std::uint64_t in = 0 - std::uint64_t{g[i] != 0};
+                terms[0][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i]) & in);
+                terms[1][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i] * x[i]) & in);
+            }
+            all.add_all_exact(terms[0], static_cast<std::size_t>(count));
+            all_squares.add_all_exact(terms[1], static_cast<std::size_t>(count));
+            bins_of(x, count, 0, bin[0]);
+            if (!movable_bins_as_all) bins_of(x, count, 1, bin[1]);
+            for (std::ptrdiff_t i = 0; i < count; ++i) {
+                if (!g[i]) continue;
+                ++my_counts[static_cast<std::size_t>(bin[0][i])];
+                if (g[i] == 1) {
+                    ++my_counts[b + static_cast<std::size_t>(bin[movable_bins_as_all ? 0 : 1][i])];
+                    continue;
+                }
+                ++my_counts[bin_of(2, x[i])];
+                frozen[0].add_exact(x[i]);
+                frozen[1].add_exact(x[i] * x[i]);
+                frozen[2].add_exact(-x[i]);
+                frozen[3].add_exact(-(x[i] * x[i]));
+            }
         }
 #pragma omp critical(paloverde_assess_sums)
         {
-            for (std::size_t i = 0; i < 4; ++i) my_sums[i].add_to(sums[i]);
+            all.add_to(sums[0]);
+            frozen[2].add_to(sums[0]);
+            all_squares.add_to(sums[1]);
+            frozen[3].add_to(sums[1]);
+            frozen[0].add_to(sums[2]);
+            frozen[1].add_to(sums[3]);
             for (std::size_t i = 0; i < counts.size(); ++i) counts[i] += my_counts[i];
         }
     }

@@ -1,6 +1,6 @@
-// BoundedSum::add_all: the splitting of add(), several terms per instruction. The pieces of the
-// terms lie on a common grid and their sums are exact, so adding them in lanes gives the bits
-// that adding them one by one gives.
+// BoundedSum::add_all and add_all_exact: the splitting of add() and add_exact(), several terms per
+// instruction. The pieces of the terms lie on a common grid and their sums are exact, so adding
+// them in lanes gives the bits that adding them one by one gives.
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -24,14 +24,23 @@ struct Pieces {
 struct Grid {
     double bound, pivot_high, pivot_low;
 
+    // Exact: a term whose low piece is not exact (bits below the finer grid) counts as outside
+    // too, as in add_exact().
+    template <bool Exact>
     void split(double x, Pieces& p) const {
         if (!(std::abs(x) <= bound)) {
             p.outside = true;
             return;
         }
         const double high = (pivot_high + x) - pivot_high;
+        const double rest = x - high;
+        const double low = (pivot_low + rest) - pivot_low;
+        if (Exact && low != rest) {
+            p.outside = true;
+            return;
+        }
         p.high += high;
-        p.low += (pivot_low + (x - high)) - pivot_low;
+        p.low += low;
     }
 };
 
@@ -51,7 +60,7 @@ struct Vectors<4> {
     typedef long long Mask __attribute__((vector_size(32)));
 };
 
-template <int Width>
+template <int Width, bool Exact>
 [[gnu::always_inline]] inline Pieces simd_pieces(const Grid& g, const double* x, std::size_t count) {
     using V = typename Vectors<Width>::V;
     using Mask = typename Vectors<Width>::Mask;
@@ -68,9 +77,17 @@ template <int Width>
             const Mask in = (V)((Mask)v & magnitude) <= bound;  // all ones, or 0 (also for NaN)
             inside &= in;
             const V y = (V)((Mask)v & in);  // the term, or 0 outside the bound
-            const V h = (ph + y) - ph;
+            V h = (ph + y) - ph;
+            const V rest = y - h;
+            V l = (pl + rest) - pl;
+            if constexpr (Exact) {
+                const Mask exact = l == rest;
+                inside &= exact;
+                h = (V)((Mask)h & exact);
+                l = (V)((Mask)l & exact);
+            }
             high[lane] += h;
-            low[lane] += (pl + (y - h)) - pl;
+            low[lane] += l;
         }
     Pieces p;
     for (int lane = 0; lane < 2; ++lane)
@@ -79,24 +96,29 @@ template <int Width>
             p.low += low[lane][k];
             p.outside = p.outside || inside[k] == 0;
         }
-    for (; i < count; ++i) g.split(x[i], p);
+    for (; i < count; ++i) g.template split<Exact>(x[i], p);
     return p;
 }
 
 #ifdef PALOVERDE_X86
-Pieces pieces_sse2(const Grid& g, const double* x, std::size_t count) { return simd_pieces<2>(g, x, count); }
+template <bool Exact>
+Pieces pieces_sse2(const Grid& g, const double* x, std::size_t count) {
+    return simd_pieces<2, Exact>(g, x, count);
+}
+template <bool Exact>
 [[gnu::target("avx2")]] Pieces pieces_avx2(const Grid& g, const double* x, std::size_t count) {
-    return simd_pieces<4>(g, x, count);
+    return simd_pieces<4, Exact>(g, x, count);
 }
 #endif
 
+template <bool Exact>
 Pieces pieces(const Grid& g, const double* x, std::size_t count, BoundedSum::Simd simd) {
 #ifdef PALOVERDE_X86
     static const bool avx2 = __builtin_cpu_supports("avx2");
-    return avx2 && simd == BoundedSum::Simd::best ? pieces_avx2(g, x, count) : pieces_sse2(g, x, count);
+    return avx2 && simd == BoundedSum::Simd::best ? pieces_avx2<Exact>(g, x, count) : pieces_sse2<Exact>(g, x, count);
 #else
     (void)simd;
-    return simd_pieces<2>(g, x, count);
+    return simd_pieces<2, Exact>(g, x, count);
 #endif
 }
 
@@ -106,13 +128,30 @@ void BoundedSum::add_all(const double* x, std::size_t count, Simd simd) {
     if (count == 0) return;
     // The pieces of up to kFlush terms sum exactly: make room for these.
     if (count_ + static_cast<int>(count) > kFlush) flush();
-    const Pieces p = pieces(Grid{bound_, pivot_[0], pivot_[1]}, x, count, simd);
+    const Pieces p = pieces<false>(Grid{bound_, pivot_[0], pivot_[1]}, x, count, simd);
     partial_[0] += p.high;
     partial_[1] += p.low;
     count_ += static_cast<int>(count);
     if (p.outside)
         for (std::size_t i = 0; i < count; ++i)
             if (!(std::abs(x[i]) <= bound_)) exact_.add(x[i]);
+    if (count_ == kFlush) flush();
+}
+
+void BoundedSum::add_all_exact(const double* x, std::size_t count, Simd simd) {
+    if (count == 0) return;
+    if (count_ + static_cast<int>(count) > kFlush) flush();
+    const Grid grid{bound_, pivot_[0], pivot_[1]};
+    const Pieces p = pieces<true>(grid, x, count, simd);
+    partial_[0] += p.high;
+    partial_[1] += p.low;
+    count_ += static_cast<int>(count);
+    if (p.outside)
+        for (std::size_t i = 0; i < count; ++i) {
+            Pieces one;
+            grid.split<true>(x[i], one);
+            if (one.outside) exact_.add(x[i]);
+        }
     if (count_ == kFlush) flush();
 }
 

@@ -82,6 +82,8 @@ public:
     // can ask for.
     enum class Simd { best, sse2 };
     void add_all(const double* x, std::size_t count, Simd simd = Simd::best);
+    // Adds x[0], ..., x[count - 1] (count <= kFlush): add_exact() on each, in SIMD instructions.
+    void add_all_exact(const double* x, std::size_t count, Simd simd = Simd::best);
     // Adds this sum to an ExactSum, exactly.
     void add_to(ExactSum& sum) {
         flush();

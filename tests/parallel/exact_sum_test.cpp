@@ -154,6 +154,55 @@ BOOST_AUTO_TEST_CASE(bounded_sums_added_exactly_equal_exact_sums) {
     BOOST_TEST(std::isnan(nan_total.value()));
 }
 
+// add_all_exact() is add_exact() in SIMD instructions: the exact sum, bit for bit, with terms far
+// below the bound (bits under the finer grid: the exact path), past it, infinite or NaN, for any
+// run length and wherever the flushes fall.
+BOOST_AUTO_TEST_CASE(exact_bounded_sums_of_whole_buffers_are_the_exact_sums) {
+    std::mt19937_64 random(11);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-90, 2);
+    const double bound = 2.5;
+    std::vector<double> terms(20000);
+    for (double& t : terms) t = std::ldexp(mantissa(random), exponent(random));  // up to 4: some past the bound
+    using Simd = pv::detail::BoundedSum::Simd;
+    auto exact = [](const std::vector<double>& x) {
+        pv::ExactSum e;
+        for (double t : x) e.add(t);
+        return e.value();
+    };
+    auto one_by_one = [&](const std::vector<double>& x) {
+        pv::detail::BoundedSum s(bound);
+        for (double t : x) s.add_exact(t);
+        pv::ExactSum e;
+        s.add_to(e);
+        return e.value();
+    };
+    auto in_runs = [&](const std::vector<double>& x, Simd simd) {
+        pv::detail::BoundedSum s(bound);
+        for (std::size_t begin = 0; begin < x.size();) {
+            const std::size_t length = std::min<std::size_t>(x.size() - begin, random() % 300);
+            s.add_all_exact(x.data() + begin, length, simd);
+            begin += length;
+        }
+        pv::ExactSum e;
+        s.add_to(e);
+        return e.value();
+    };
+    for (int trial = 0; trial < 4; ++trial) {
+        for (const Simd simd : {Simd::best, Simd::sse2}) {
+            const double sum = exact(terms);
+            BOOST_TEST(one_by_one(terms) == sum);  // bit for bit
+            BOOST_TEST(in_runs(terms, simd) == sum);
+            std::vector<double> special(terms);
+            special[7] = std::numeric_limits<double>::infinity();
+            BOOST_TEST(in_runs(special, simd) == std::numeric_limits<double>::infinity());
+            special[9000] = std::nan("");
+            BOOST_TEST(std::isnan(in_runs(special, simd)));
+        }
+        std::shuffle(terms.begin(), terms.end(), random);
+    }
+}
+
 // add_all() splits many terms per SIMD instruction: it must give add()'s bits, with terms past
 // the bound, infinities and NaN among them, for any run length and wherever the flushes fall.
 BOOST_AUTO_TEST_CASE(bounded_sums_of_whole_buffers_equal_those_of_single_terms) {
