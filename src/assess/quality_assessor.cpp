@@ -307,20 +307,10 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     // Metrics rate elements (a cell's corners): their mean volume is the scale.
     totals.emplace_back().add(static_cast<double>(std::count_if(group.begin(), group.end(), [](std::uint8_t g) { return g != 0; })));
 
-    // The metric scale: the mean absolute element volume, summed exactly.
-    {
-        ExactSum volume;
-#pragma omp parallel if (mesh.num_elements() >= kParallelElements)
-        {
-            ExactSum mine;
-#pragma omp for schedule(static) nowait
-            for (std::size_t e = 0; e < m; ++e)
-                if (group[e]) mine.add(std::abs(q[e]));
-#pragma omp critical(paloverde_assess_volume)
-            volume += mine;
-        }
-        totals.push_back(volume);
-    }
+    // The metric scale: the mean absolute element volume, summed exactly. The volumes are not
+    // needed after it: q holds the terms (0 for an element not counted here).
+    for (std::size_t e = 0; e < m; ++e) q[e] = group[e] ? std::abs(q[e]) : 0.0;
+    totals.push_back(detail::exact_sum(q));
     reducer.sum(totals);
     report.elements = static_cast<ElementId>(totals[0].value());
     report.frozen_elements = static_cast<ElementId>(totals[1].value());

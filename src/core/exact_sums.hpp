@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <span>
 #include <utility>
 
 #include "core/blocked_sum.hpp"
@@ -168,6 +169,27 @@ std::array<ExactSum, K> bounded_block_sums(std::size_t n, const std::array<doubl
         }
 #pragma omp critical(paloverde_exact_sums)
         for (int k = 0; k < K; ++k) mine[k].add_to(total[k]);
+    }
+    return total;
+}
+
+// The exact sum of x, several terms to an instruction: bounded sums under the largest magnitude,
+// add_all_exact's (terms far below it, infinite or NaN take the slower exact path), so the result
+// is ExactSum's of the terms one by one, bit for bit.
+inline ExactSum exact_sum(std::span<const double> x) {
+    double bound = 0.0;
+    for (double t : x) bound = std::max(bound, std::abs(t));  // NaN leaves it: the exact path takes NaN
+    const auto n = static_cast<std::ptrdiff_t>(x.size());
+    constexpr std::ptrdiff_t kBlock = BoundedSum::kFlush;
+    ExactSum total;
+#pragma omp parallel if (x.size() > kParallelThreshold)
+    {
+        BoundedSum mine(bound);
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t first = 0; first < n; first += kBlock)
+            mine.add_all_exact(x.data() + first, static_cast<std::size_t>(std::min(kBlock, n - first)));
+#pragma omp critical(paloverde_exact_sums)
+        mine.add_to(total);
     }
     return total;
 }

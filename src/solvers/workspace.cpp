@@ -181,11 +181,10 @@ void Workspace::finish(std::span<const GlobalId> element_order, std::span<const 
     scale_.oriented_triangles = mesh_.kind() == ElementKind::Tetrahedron || mesh_.is_planar() || mesh_.has_surface_normals();
     scale_.plane_normal = mesh_.plane_normal();
     {
-        const std::vector<double> volume = absolute_volumes();
-        ExactSum sum;
+        std::vector<double> volume = absolute_volumes();
         for (ElementId e = 0; e < m; ++e)
-            if (is_counted(e)) sum.add(volume[e]);
-        const double total = reducer_->total(sum);
+            if (!is_counted(e)) volume[e] = 0.0;
+        const double total = reducer_->total(exact_sum(volume));
         const double count =
             reducer_->total(static_cast<double>(counted.empty() ? m : std::count(counted.begin(), counted.end(), 1)));
         scale_.reference_volume = total > 0.0 && std::isfinite(total) && count > 0.0 ? total / count : 1.0;
