@@ -1,6 +1,7 @@
 // ExactSum: the sum must not depend on the order of the terms or on how partial sums were split
 // and merged, and must be exact where rounding would lose everything.
 #include <boost/test/unit_test.hpp>
+#include <omp.h>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -201,6 +202,34 @@ BOOST_AUTO_TEST_CASE(exact_bounded_sums_of_whole_buffers_are_the_exact_sums) {
         }
         std::shuffle(terms.begin(), terms.end(), random);
     }
+}
+
+// exact_sum(x): the exact sum in lanes under x's largest magnitude, ExactSum's bits, on any number
+// of threads; empty, all zero, infinite and NaN too.
+BOOST_AUTO_TEST_CASE(an_exact_sum_of_an_array_is_exact) {
+    std::mt19937_64 random(13);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-80, 20);
+    std::vector<double> x(100000);
+    for (double& t : x) t = std::ldexp(mantissa(random), exponent(random));
+    auto one_by_one = [](const std::vector<double>& terms) {
+        pv::ExactSum e;
+        for (double t : terms) e.add(t);
+        return e.value();
+    };
+    const int threads_before = omp_get_max_threads();
+    for (const int threads : {1, 2}) {
+        omp_set_num_threads(threads);
+        BOOST_TEST(pv::detail::exact_sum(x).value() == one_by_one(x));  // bit for bit
+        BOOST_TEST(pv::detail::exact_sum(std::vector<double>{}).value() == 0.0);
+        BOOST_TEST(pv::detail::exact_sum(std::vector<double>(5000, 0.0)).value() == 0.0);
+        std::vector<double> special(x);
+        special[99] = -std::numeric_limits<double>::infinity();
+        BOOST_TEST(pv::detail::exact_sum(special).value() == -std::numeric_limits<double>::infinity());
+        special[4321] = std::nan("");
+        BOOST_TEST(std::isnan(pv::detail::exact_sum(special).value()));
+    }
+    omp_set_num_threads(threads_before);
 }
 
 // add_all() splits many terms per SIMD instruction: it must give add()'s bits, with terms past
