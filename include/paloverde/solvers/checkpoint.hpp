@@ -13,7 +13,10 @@
 //
 // A run that follows a moved boundary in steps (Mesh::reference_coordinates, docs/morphing.md)
 // writes the motion's state to `file` before each of its runs, and the run under way writes its
-// own to `file` + ".run"; resuming goes on from both, to the same end.
+// own to `file` + ".run"; resuming goes on from both, to the same end. A run whose boundary
+// slides (boundary: slide, two runs) does the same for its two runs, and a motion whose runs
+// slide nests the two (`file`, ".run", ".run.run"). A run whose vertices slide fingerprints the
+// surface's options too.
 //
 // A checkpoint records fingerprints of the mesh (connectivity, fixed flags, input coordinates)
 // and of the solver's options (all but `threads`, time limits and these checkpoint settings):

@@ -47,7 +47,8 @@ struct LocalSolverOptions {
     double improve_below = 0.1;
     // Boundary vertices: fixed (the fixed flags decide), or slide: after the run with the
     // boundary fixed, shape sweeps in which they move on the input's boundary, along feature
-    // curves, corners fixed (mesh/boundary_surface.hpp; docs/local_solver.md). No checkpoints.
+    // curves, corners fixed (mesh/boundary_surface.hpp; docs/local_solver.md). Checkpoints too
+    // (checkpoint.hpp).
     enum class Boundary { Fixed, Slide };
     Boundary boundary = Boundary::Fixed;
     SurfaceOptions surface;          // with slide: the feature angle
