@@ -7,7 +7,6 @@
 #include <iomanip>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <omp.h>
 #include <sstream>
 
 #include "core/exact_sums.hpp"
@@ -78,9 +77,9 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
     }
     // Pass 2, by thread, a block at a time: exact sums and integer counts, added together (exactly:
     // in any order). The terms are bounded by this process's range, so they sum exactly in pieces
-    // on two grids, several to an instruction; only those far below the bound (or not finite) take
-    // the slower digit-by-digit sum. All counted elements are summed so, the frozen ones (usually
-    // few) one by one besides, and the movable ones' sums are all's minus the frozen ones'.
+    // on two grids; only those far below the bound (or not finite) take the slower digit-by-digit
+    // sum. The movable elements' terms go several to an instruction, the frozen ones' (usually
+    // few) one by one.
     const auto b = static_cast<std::size_t>(bins);
     const double bound = std::max(std::abs(range[0].low), std::abs(range[0].high));
     std::vector<std::int64_t> counts(3 * b, 0);
@@ -93,14 +92,12 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
         const int bin = width[k] > 0.0 ? static_cast<int>((qe - s[k]->min) / width[k]) : 0;
         return static_cast<std::size_t>(k) * b + static_cast<std::size_t>(std::clamp(bin, 0, bins - 1));
     };
+    constexpr std::ptrdiff_t kBlock = 256;
 #pragma omp parallel if (n >= kParallelElements)
     {
-        constexpr std::ptrdiff_t kBlock = 256;
         std::vector<std::int64_t> my_counts(3 * b, 0);
-        detail::BoundedSum all(bound), all_squares(bound * bound);
-        // The frozen elements' sum and squares, and both negated (the movable ones' share).
-        std::array<detail::BoundedSum, 4> frozen{detail::BoundedSum(bound), detail::BoundedSum(bound * bound),
-                                                 detail::BoundedSum(bound), detail::BoundedSum(bound * bound)};
+        std::array<detail::BoundedSum, 4> my_sums{detail::BoundedSum(bound), detail::BoundedSum(bound * bound),
+                                                  detail::BoundedSum(bound), detail::BoundedSum(bound * bound)};
         alignas(32) double terms[2][kBlock];
         int bin[2][kBlock];
         const auto bins_of = [&](const double* x, std::ptrdiff_t count, int k, int* out) {
@@ -109,20 +106,20 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
             for (std::ptrdiff_t i = 0; i < count; ++i) out[i] = static_cast<int>((x[i] - low) / w);
             for (std::ptrdiff_t i = 0; i < count; ++i) out[i] = std::clamp(out[i], 0, bins - 1);
         };
-        const int threads = omp_get_num_threads(), t = omp_get_thread_num();
-        for (std::ptrdiff_t first = n * t / threads, end = n * (t + 1) / threads; first < end; first += kBlock) {
-            const std::ptrdiff_t count = std::min(kBlock, end - first);
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t first = 0; first < n; first += kBlock) {
+            const std::ptrdiff_t count = std::min(kBlock, n - first);
             const double* x = q.data() + first;
             const std::uint8_t* g = group.data() + first;
-            // An element not counted here adds +0: its bits masked off (0 * x would be NaN for an
-            // infinite x).
+            // A term of an element that is not movable is +0: its bits masked off (0 * x would be
+            // NaN for an infinite x).
             for (std::ptrdiff_t i = 0; i < count; ++i) {
-                const std::uint64_t in = 0 - std::uint64_t{g[i] != 0};
-                terms[0][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i]) & in);
-                terms[1][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i] * x[i]) & in);
+                const std::uint64_t movable = 0 - std::uint64_t{g[i] == 1};
+                terms[0][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i]) & movable);
+                terms[1][i] = std::bit_cast<double>(std::bit_cast<std::uint64_t>(x[i] * x[i]) & movable);
             }
-            all.add_all_exact(terms[0], static_cast<std::size_t>(count));
-            all_squares.add_all_exact(terms[1], static_cast<std::size_t>(count));
+            my_sums[0].add_all_exact(terms[0], static_cast<std::size_t>(count));
+            my_sums[1].add_all_exact(terms[1], static_cast<std::size_t>(count));
             bins_of(x, count, 0, bin[0]);
             if (!movable_bins_as_all) bins_of(x, count, 1, bin[1]);
             for (std::ptrdiff_t i = 0; i < count; ++i) {
@@ -133,20 +130,13 @@ void statistics(std::span<const double> q, std::span<const std::uint8_t> group, 
                     continue;
                 }
                 ++my_counts[bin_of(2, x[i])];
-                frozen[0].add_exact(x[i]);
-                frozen[1].add_exact(x[i] * x[i]);
-                frozen[2].add_exact(-x[i]);
-                frozen[3].add_exact(-(x[i] * x[i]));
+                my_sums[2].add_exact(x[i]);
+                my_sums[3].add_exact(x[i] * x[i]);
             }
         }
 #pragma omp critical(paloverde_assess_sums)
         {
-            all.add_to(sums[0]);
-            frozen[2].add_to(sums[0]);
-            all_squares.add_to(sums[1]);
-            frozen[3].add_to(sums[1]);
-            frozen[0].add_to(sums[2]);
-            frozen[1].add_to(sums[3]);
+            for (std::size_t i = 0; i < 4; ++i) my_sums[i].add_to(sums[i]);
             for (std::size_t i = 0; i < counts.size(); ++i) counts[i] += my_counts[i];
         }
     }
