@@ -88,26 +88,6 @@ BOOST_AUTO_TEST_CASE(statistics_split_movable_and_frozen_elements) {
     BOOST_TEST(q->all.rms == std::sqrt((a * a + b * b) / 2), boost::test_tools::tolerance(1e-14));
 }
 
-// The groups' sums are their own: a frozen element rated NaN (a corner at infinity in the
-// coordinates assessed) leaves the movable statistics as they are, and shows in the frozen and
-// overall ones.
-BOOST_AUTO_TEST_CASE(a_frozen_elements_nan_quality_leaves_the_movable_statistics_alone) {
-    const std::vector<double> xyz{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 2, 0, 0, 3, 0, 0, 2, 1, 0, 2, 0, 1};
-    pv::Mesh mesh(pv::ElementKind::Tetrahedron, xyz, {0, 1, 2, 3, 4, 5, 6, 7});
-    mesh.set_fixed({1, 1, 1, 1, 0, 1, 1, 1});
-    std::vector<double> far = xyz;
-    far[0] = INFINITY;
-    const pv::QualityAssessor assessor({"aspect_ratio"});
-    const auto finite = assessor.assess(mesh, xyz), infinite = assessor.assess(mesh, far);
-    const auto &before = finite.metrics.front(), &after = infinite.metrics.front();
-    BOOST_TEST(std::isnan(after.frozen.mean));
-    BOOST_TEST(std::isnan(after.all.mean));
-    BOOST_TEST(after.movable.count == 1);
-    BOOST_TEST(after.movable.mean == before.movable.mean);  // bit for bit
-    BOOST_TEST(after.movable.rms == before.movable.rms);
-    BOOST_TEST(after.movable.histogram == before.movable.histogram, boost::test_tools::per_element());
-}
-
 BOOST_AUTO_TEST_CASE(triangle_meshes_report_the_minimum_angle_not_the_dihedral) {
     const auto file = pv::read_mesh(pv::test::shared_data("mesquite/tris/tangled_tri.vtk"));
     const auto report = pv::QualityAssessor().assess(file.mesh);
