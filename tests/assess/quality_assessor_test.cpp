@@ -3,7 +3,6 @@
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
-#include <vector>
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/io/mesh_io.hpp"
