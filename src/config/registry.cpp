@@ -286,8 +286,8 @@ Tables::Tables() {
               "than the band below the worst quality.")
         .real("finish_band", &GlobalSolverOptions::finish_band,
               "The newton finish's focus band, as a fraction of focus_band, in (0, 1]; 1: the shape phase's band. A "
-              "third makes the finish of a large mesh many times faster (fandisk-9M: 27 s to half a second, the same "
-              "result).")
+              "third makes the finish of a large mesh many times faster, to the same result (docs/global_solver.md, "
+              "\"The Newton finish\").")
         .real("newton_tolerance", &GlobalSolverOptions::newton_tolerance,
               "direction newton and the newton finish: mu shrinks once the Newton decrement (gradient . direction) is below this times mu, > 0.")
         .integer("newton_cg_iterations", &GlobalSolverOptions::newton_cg_iterations,

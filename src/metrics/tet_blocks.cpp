@@ -152,8 +152,8 @@ template <class Sqrt>
 
 // The lanes' 3 x 3 maps side by side, entry by entry across the lanes (m[k][i][lane]), so that
 // the loops over lanes vectorize: lane by lane with scalar loads, or with AVX-512 gathers (one
-// instruction per entry for 8 lanes; maps-only passes about a tenth faster on a Xeon, the same
-// values).
+// instruction per entry for 8 lanes; maps-only passes measured about a tenth faster with them,
+// the same values).
 struct LayOutScalar {
     [[gnu::always_inline]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
         for (int k = 0; k < 3; ++k)
@@ -494,8 +494,8 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
                                          double* quality, TetBlock* gradient) {
     hybrid<Sqrt256>(x, reference_volume, alpha, quality, gradient);
 }
-// Full-width vectors asked for: GCC's tuning may otherwise keep AVX-512 loops at 256 bits. A
-// gradient pass costs about 16 ns per tet instead of AVX2's 19 on a Xeon with AVX-512.
+// Full-width vectors asked for: GCC's tuning may otherwise keep AVX-512 loops at 256 bits (a
+// gradient pass measured about 16 ns per tet at full width against AVX2's 19).
 #define PALOVERDE_AVX512 gnu::target("avx512f,prefer-vector-width=512")
 [[PALOVERDE_AVX512]] void energy_avx512(const TetBlock& x, const double* reference_volume, double epsilon,
                                          double theta, double* quality, TetBlock* gradient) {

@@ -64,7 +64,7 @@ struct GlobalSolverOptions {
     // (0, 1]. Where the conjugate gradients stall the qualities have piled up above the worst, and
     // the whole band holds far more vertices than the few worst elements the Newton steps work on:
     // a third of it makes the finish's steps far cheaper on a large mesh, to the same result
-    // (docs/global_solver.md, "The finish's focus").
+    // (docs/global_solver.md, "The Newton finish").
     double finish_band = 1.0 / 3.0;
     // Newton: mu shrinks once gradient . direction (the Newton decrement squared) falls below
     // newton_tolerance * mu; each direction takes at most newton_cg_iterations Hessian products.
