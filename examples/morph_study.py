@@ -6,8 +6,8 @@ displacement field on their boundary, and `paloverde morph` on each; one CSV row
                                              [--threads 1] [--work DIR] [--args "..."] [CASE ...]
 
 --args adds flags to every `paloverde morph` (docs/morphing.md's shape-only rows:
---args "--set targets.from_reference=[aspect,skew] --set queue[0].improve.finish=none
---iterations 2000" --csv docs/data/morph_shape_only.csv hole-30 hole-60 hole-90).
+--args "--set targets.from_reference=[aspect,skew] --iterations 800"
+--csv docs/data/morph_shape_only.csv hole-30 hole-60 hole-90).
 
 Cases: hole-30, hole-60, hole-90 (a block-shaped hole in a box of tetrahedra, turned about z),
 beam-45, beam-90 (a beam of tetrahedra bent in an arc, one end held), hexbeam-90 (the same beam of

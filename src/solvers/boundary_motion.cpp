@@ -246,7 +246,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
                               CheckpointKind::Motion);
     // Each run's own checkpoints go beside the motion's, which says what run that is.
     RunCheckpoints runs(part, checkpoints.options);
-    auto run = [&](double seconds, bool is_first = false) { return solve(seconds, runs.next_run(), is_first); };
+    auto run = [&](double seconds, MotionRunKind kind) { return solve(seconds, runs.next_run(), kind); };
     Summary total, first_run;           // every run's work; the first run's
     std::vector<double> first, valid;   // the first run's mesh (kept if the steps do no better); the furthest accepted step's
     double done = 0.0, step = 0.5, floor = 0.0;
@@ -283,7 +283,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             state.numbers = {{"first_run_done", 0.0}};
             checkpointer.save(total, state, seconds_since(start));
         }
-        total = run_first(part, given, reference, driven, [&] { return run(max_seconds, true); });
+        total = run_first(part, given, reference, driven, [&] { return run(max_seconds, MotionRunKind::First); });
         if (total.reason == TerminationReason::Interrupted) return total;
         floor = 0.5 * worst_at(part, total.quality_metric, reference);
         if (total.valid() && total.worst_after >= floor) return total;
@@ -312,7 +312,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         const double next = std::min(1.0, done + step);
         place(xyz(), valid, reference, given, driven, next);
         carry_free_vertices(part, driven, valid, xyz());
-        last = run(seconds);
+        last = run(seconds, next < 1.0 ? MotionRunKind::Step : MotionRunKind::Last);
         add_work(total, last);
         if (last.reason == TerminationReason::Interrupted) break;
         // At the smallest step, any valid result goes on.
@@ -362,7 +362,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
             } else {
                 std::copy(first.begin(), first.end(), xyz().begin());
             }
-            last = run(seconds);
+            last = run(seconds, MotionRunKind::Last);
             add_work(total, last);
         }
         if (!runs_again || last.after.inverted >= first_run.after.inverted) {

@@ -23,20 +23,34 @@ namespace paloverde::detail {
 // freely (fixed, or sliding on the boundary) has moved. Collective.
 bool has_boundary_motion(MeshPart part);
 
+// Which run of a motion a MotionRun is, for its budget.
+//   First: the run from the whole motion at once, which steps replace when it leaves inverted
+//     elements or a poor worst element. It skips the solver's finishing stage (the global
+//     solver's Newton finish, whose iterations cost many shape iterations each), work that steps
+//     would throw away; a first run that is kept ends where its shape phase stops. Its untangling
+//     gets first_run_untangling of the solver's budget.
+//   Step: a step short of the end, whose mesh is only where the next step starts from. Its shape
+//     phase gets step_improvement of the budget; the last step raises the worst element.
+//   Last: a step that reaches the end of the motion, or the run from the furthest valid step: the
+//     whole budget.
+enum class MotionRunKind { First, Step, Last };
+
 // One whole run of a solver on the part, its time limit `seconds` (0: the solver's own), with
 // `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its
-// own). `first`: the run from the whole motion at once, which steps replace when it leaves inverted
-// elements or a poor worst element; it skips the solver's finishing stage (the global solver's
-// Newton finish, whose iterations cost many shape iterations each), work that steps would throw
-// away. A first run that is kept ends where its shape phase stops. Its untangling gets
-// first_run_untangling of the solver's budget.
-using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint, bool first)>;
+// own).
+using MotionRun = std::function<Summary(double seconds, const CheckpointOptions& checkpoint, MotionRunKind kind)>;
 
 // The untangling budget (iterations, or sweeps) of a motion's first run, from the solver's: a fifth
 // of it. Untangling that takes longer marks a motion too large for one run, which the steps follow
 // sooner than a first run that uses the whole budget and fails; a motion that no step follows
 // either goes on from the first run with the whole budget (follow_boundary_motion).
 constexpr int first_run_untangling(int budget) { return std::max(1, budget / 5); }
+
+// The shape budget (iterations, or sweeps) of a step short of the end, from the solver's: a fifth
+// of it, but no fewer than 50 (or the whole budget where it is smaller). A step's mesh is only the
+// next step's start: a few iterations leave it too poor to untangle from, and the rest of the
+// budget would buy quality that the next step's motion undoes.
+constexpr int step_improvement(int budget) { return std::min(budget, std::max(budget / 5, 50)); }
 
 // Runs `solve` (one whole run of a solver on the part; from the interior carried along when that
 // inverts fewer elements than the interior as given) and, if it leaves inverted elements or less

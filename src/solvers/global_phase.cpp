@@ -21,7 +21,7 @@ const char* Stage::label() const {
     case StageKind::Shape:
     case StageKind::ShapeThenFinish: break;
     }
-    return "shape";
+    return close_start ? "shape_close_start" : "shape";
 }
 
 PhaseResult Phase::run(const SolverState* resume) {
@@ -86,8 +86,8 @@ std::optional<PhaseResult> Phase::start(double& objective) {
         objective_.update(work_.counted(q_, counted_), reducer_);
     }
     const Stats s = stats(q_);
-    best_worst_ = s.worst;
-    best_bad_ = s.bad;
+    best_worst_ = start_worst_ = s.worst;
+    best_bad_ = start_bad_ = s.bad;
     best_mean_ = s.mean;
     if (objective_.subproblem_scale() > 0.0) {
         first_t_ = objective_.subproblem_floor();
@@ -320,7 +320,8 @@ void Phase::keep_best() {
 PhaseResult Phase::end(TerminationReason reason, std::string message) {
     work_.unfocus();
     x_.swap(best_x_);  // the best iterate, which may be the current one
-    return {reason, std::move(message), false, best_mean_};
+    const bool gained = better_iterate(best_bad_, best_worst_, start_bad_, start_worst_);
+    return {reason, std::move(message), false, best_mean_, gained};
 }
 
 bool Phase::sound(const Stats& s, double objective) const {

@@ -72,6 +72,9 @@ struct Stage {
     double mean_goal = std::numeric_limits<double>::infinity();
     // The polish: why the shape phases before it stopped (GlobalSolverOptions::polish).
     TerminationReason shape_reason = TerminationReason::Converged;
+    // Shape: run again, on a barrier started just under the worst quality, after a shape phase
+    // that stalled below its start (ShapeStages::next_stage).
+    bool close_start = false;
 
     bool untangling() const { return kind == StageKind::Untangle; }
     bool finish() const { return kind == StageKind::Finish || kind == StageKind::FreshFinish; }
@@ -89,6 +92,9 @@ struct PhaseResult {
     bool recenter = false;
     // The mean quality of the iterate handed back (the polish, which keeps the best mean).
     double mean = std::numeric_limits<double>::quiet_NaN();
+    // The iterate handed back is better than the phase's start (fewer inverted elements, or a
+    // higher worst quality).
+    bool gained = true;
 };
 
 // What the solver's phases share: the run, its budget and where it reports.
@@ -252,6 +258,9 @@ private:
     std::uint32_t gap_round_ = 0;
     double best_worst_ = -std::numeric_limits<double>::infinity();
     long best_bad_ = 0;
+    // Where the phase started (PhaseResult::gained); a start unknown counts as beaten.
+    double start_worst_ = -std::numeric_limits<double>::infinity();
+    long start_bad_ = std::numeric_limits<long>::max();
     double best_mean_ = -std::numeric_limits<double>::infinity();  // the polish's best iterate
     std::optional<std::uint64_t> best_focus_;  // the focus generation best_x_ was last kept in
     double step_ = 0.05;  // largest vertex displacement of the next trial step, in reference lengths

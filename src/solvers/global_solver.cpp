@@ -168,14 +168,18 @@ Summary GlobalSolver::improve(MeshPart part) {
         // The time limit bounds the steps together: each run gets what is left of it.
         return detail::follow_boundary_motion(part, options_.smallest_motion_step, options_.termination.max_seconds,
                                               {options_.checkpoint, "global", options_text(options_)},
-                                              [&](double seconds, const CheckpointOptions& checkpoint, bool first) {
+                                              [&](double seconds, const CheckpointOptions& checkpoint,
+                                                  detail::MotionRunKind kind) {
                                                   GlobalSolverOptions each = options_;
                                                   each.checkpoint = checkpoint;
-                                                  if (first) {
+                                                  if (kind == detail::MotionRunKind::First) {
                                                       each.finish = GlobalSolverOptions::Finish::None;
                                                       each.untangle_termination.max_iterations =
                                                           detail::first_run_untangling(each.untangle_termination.max_iterations);
                                                   }
+                                                  if (kind == detail::MotionRunKind::Step)
+                                                      each.termination.max_iterations =
+                                                          detail::step_improvement(each.termination.max_iterations);
                                                   GlobalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(part);

@@ -233,12 +233,16 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
         return detail::follow_boundary_motion(whole_or_part, options_.smallest_motion_step,
                                               options_.termination.max_seconds,
                                               {options_.checkpoint, std::string(name()), options_text(options_)},
-                                              [&](double seconds, const CheckpointOptions& checkpoint, bool first) {
+                                              [&](double seconds, const CheckpointOptions& checkpoint,
+                                                  detail::MotionRunKind kind) {
                                                   LocalSolverOptions each = options_;
                                                   each.checkpoint = checkpoint;
-                                                  if (first)
+                                                  if (kind == detail::MotionRunKind::First)
                                                       each.untangle_termination.max_iterations =
                                                           detail::first_run_untangling(each.untangle_termination.max_iterations);
+                                                  if (kind == detail::MotionRunKind::Step)
+                                                      each.termination.max_iterations =
+                                                          detail::step_improvement(each.termination.max_iterations);
                                                   LocalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(whole_or_part);

@@ -12,6 +12,7 @@ void Phase::save_checkpoint(int iteration) {
                      {"finish", stage_.finish() ? 1.0 : 0.0},
                      {"fresh", stage_.fresh() ? 1.0 : 0.0},
                      {"polish", stage_.polish() ? 1.0 : 0.0},
+                     {"close_start", stage_.close_start ? 1.0 : 0.0},
                      {"shape_reason", static_cast<double>(stage_.shape_reason)},
                      {"mean_goal", stage_.mean_goal},
                      {"best_mean", best_mean_},
@@ -20,6 +21,8 @@ void Phase::save_checkpoint(int iteration) {
                      {"iteration", iteration},
                      {"best_worst", best_worst_},
                      {"best_bad", static_cast<double>(best_bad_)},
+                     {"start_worst", start_worst_},
+                     {"start_bad", static_cast<double>(start_bad_)},
                      {"step", step_},
                      {"first_gradient_norm", first_gradient_norm_},
                      {"restart", restart_ ? 1.0 : 0.0},
@@ -68,6 +71,10 @@ int Phase::restore(const SolverState& state, double& objective) {
     previous_preconditioned_ = state.vertex_field("previous_preconditioned", n);
     best_worst_ = state.number("best_worst");
     best_bad_ = static_cast<long>(state.number("best_bad"));
+    if (state.numbers.contains("start_worst")) {
+        start_worst_ = state.number("start_worst");
+        start_bad_ = static_cast<long>(state.number("start_bad"));
+    }
     if (state.numbers.contains("best_mean")) best_mean_ = state.number("best_mean");
     step_ = state.number("step");
     first_gradient_norm_ = state.number("first_gradient_norm");

@@ -12,8 +12,9 @@ namespace paloverde::detail {
 
 namespace {
 
-// The shape stages after untangling: the shape phase, the Newton finish on its barrier and on
-// fresh ones, and the mean's polish, from the best iterate of them all. next_stage() says which
+// The shape stages after untangling: the shape phase (once more from a close start where it
+// stalls below its start), the Newton finish on its barrier and on fresh ones, and the mean's
+// polish, from the best iterate of them all. next_stage() says which
 // follows which.
 class ShapeStages {
 public:
@@ -52,6 +53,7 @@ private:
         if (saved("finish"))  // (checkpoints from before the finish had two parts have no "fresh": theirs was fresh)
             return !resume->numbers.contains("fresh") || resume->number("fresh") != 0.0 ? StageKind::FreshFinish
                                                                                       : StageKind::Finish;
+        if (saved("close_start")) close_start_ = close_start_objective();
         if (saved("polish")) {
             const auto shape_reason = static_cast<TerminationReason>(resume->number("shape_reason"));
             result_ = {shape_reason,
@@ -74,6 +76,15 @@ private:
             const bool stalled =
                 ended.reason == TerminationReason::Converged || ended.reason == TerminationReason::NoImprovingStep;
             const int left = budget() - shape_iterations();
+            // Stalled below where it started: the barrier's first t lay so far under the worst
+            // element (the band's width below it, as after untangling, where the worst is near 0
+            // and the band holds many elements) that it weighed the worst like the rest of the
+            // band, and the steps traded it for them until none was left. Once more from the best
+            // iterate, on a barrier whose t starts just under the worst.
+            if (stalled && !ended.gained && !close_start_ && left > 0 && objective_->is_continuation()) {
+                close_start_ = close_start_objective();
+                return kind;
+            }
             if (kind != StageKind::ShapeThenFinish || !stalled || left <= 0) return polish_or_none();
             // First with the shape phase's own barrier (its mu): where the conjugate gradients
             // stalled near a max-min point, Newton steps converge from there. That part may take
@@ -137,7 +148,11 @@ private:
         const SlidingVertices* sliding = sliding_ ? &*sliding_ : nullptr;
         switch (kind) {
         case StageKind::Shape:
-        case StageKind::ShapeThenFinish: return phase(*objective_, Stage{.kind = kind}, sliding, resume);
+        case StageKind::ShapeThenFinish:
+            return close_start_ ? phase(*close_start_,
+                                        Stage{.kind = kind, .iterations_before = shape_iterations(), .close_start = true},
+                                        sliding, resume)
+                                : phase(*objective_, Stage{.kind = kind}, sliding, resume);
         case StageKind::Finish: return phase(*objective_, stage, nullptr, resume);
         case StageKind::FreshFinish: {
             auto fresh = make_objective(options_.objective, options_.objective_options);
@@ -152,6 +167,16 @@ private:
     PhaseResult phase(ObjectiveFunction& objective, Stage stage, const SlidingVertices* sliding,
                       const SolverState* resume) {
         return Phase(context_, xyz_, *metric_, objective, options_.termination, stage, sliding).run(resume);
+    }
+
+    // The shape phase's barrier, started so that about kCloseStartActive elements weigh like the
+    // worst (in practice its floor decides: t a thousandth of the qualities' size under the worst).
+    std::unique_ptr<ObjectiveFunction> close_start_objective() const {
+        constexpr double kCloseStartActive = 5.0;
+        ObjectiveOptions close = options_.objective_options;
+        close.initial_mu = 0.0;
+        close.barrier_initial_active = kCloseStartActive;
+        return make_objective(options_.objective, close);
     }
 
     // Runs the polish and adds what it did to the shape stages' message.
@@ -185,6 +210,8 @@ private:
     std::unique_ptr<ObjectiveFunction> objective_;  // the shape phase's, which the finish's first part goes on with
     std::optional<SlidingVertices> sliding_;
     bool finish_ = false;  // the Newton finish follows the shape phase
+    // The barrier of the shape phase run again with a close start (at most once; next_stage).
+    std::unique_ptr<ObjectiveFunction> close_start_;
     PhaseResult result_{TerminationReason::TargetReached, ""};
     std::optional<double> mean_before_;                             // the polish: the mean it starts from
     double mean_goal_ = std::numeric_limits<double>::infinity();  // polish always: until the mean stops rising

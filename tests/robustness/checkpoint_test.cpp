@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "paloverde/core/error.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "robustness_support.hpp"
@@ -69,10 +70,9 @@ BOOST_AUTO_TEST_SUITE(checkpoint)
 // the same), then resumed from copies of the checkpoint taken at the iterations `at`. Returns the
 // phase of each copy's iteration.
 std::map<int, std::string> check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const char* name,
-                                                          const std::vector<int>& at) {
+                                                          const std::vector<int>& at, const pv::Mesh& input) {
     const StopRequestCleared cleared;
     const pv::test::ScratchDir dir(name);
-    const auto input = pv::test::shared_mesh("mesquite/tets/tire.vtk");
     pv::GlobalSolverOptions options = given;
     const auto reference = run<pv::GlobalSolver>(input, options);
     CheckpointCopies copies{dir / "run.ckpt", {}, {}};
@@ -88,6 +88,10 @@ std::map<int, std::string> check_global_shape_run_resumes(const pv::GlobalSolver
     for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir.path())) ++files;
     BOOST_TEST(files == 1 + at.size());
     return copies.phase;
+}
+std::map<int, std::string> check_global_shape_run_resumes(const pv::GlobalSolverOptions& given, const char* name,
+                                                          const std::vector<int>& at) {
+    return check_global_shape_run_resumes(given, name, at, pv::test::shared_mesh("mesquite/tets/tire.vtk"));
 }
 
 // The copy at 51 holds the checkpoint of iteration 50, nine steps into a stretch in which the
@@ -136,6 +140,19 @@ BOOST_AUTO_TEST_CASE(global_run_resumed_around_a_restarted_barrier_ends_as_the_u
     const auto phase = check_global_shape_run_resumes(options, "checkpoint_global_restart", {11, 32});
     BOOST_TEST(phase.at(11) == "finish");
     BOOST_TEST(phase.at(32) == "finish_fresh");
+}
+
+// A shape phase run again with a close start (the mixed mesh with a budget of 100: the shape
+// phase stalls at 62, the second run goes to 77, a fresh Newton finish to the budget's end),
+// resumed from a checkpoint taken in that second run and from one in the finish after it.
+BOOST_AUTO_TEST_CASE(global_run_resumed_in_a_shape_phase_run_again_ends_as_the_uninterrupted_run) {
+    pv::GlobalSolverOptions options;
+    options.termination.max_iterations = 100;
+    auto input = pv::test::shared_mesh("mesquite/mixed/mixed-hex-pyr-tet.vtk");
+    pv::set_targets(input, pv::TargetOptions::from("aspect"));  // as the command line's keep: auto
+    const auto phase = check_global_shape_run_resumes(options, "checkpoint_global_close_start", {71, 91}, input);
+    BOOST_TEST(phase.at(71) == "shape_close_start");
+    BOOST_TEST(phase.at(91) == "finish_fresh");
 }
 
 // The mean's polish (always; on tire with a budget of 260 from iteration 182, after the finish):

@@ -9,11 +9,12 @@
 #include <utility>
 #include <vector>
 
+#include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/perturb.hpp"
-#include "paloverde/assess/quality_assessor.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "support/solver_checks.hpp"
@@ -585,6 +586,34 @@ BOOST_AUTO_TEST_CASE(near_the_budgets_end_the_finish_starts_on_a_fresh_barrier) 
     BOOST_TEST(fresh->iteration == handover->iteration);
     BOOST_TEST((first_in(summary, "finish") == h.end()));
     BOOST_TEST(summary.worst_after > fresh->best_worst_quality);
+    check_never_worse(summary);
+}
+
+// A shape phase that stalls without ever beating its start runs once more, from its best iterate,
+// on a barrier whose t starts just under the worst element. On the mixed mesh, right after
+// untangling, the worst element (0.0044) lies far under the rest of the band the shape phase's
+// barrier starts under; its steps trade it away (to 2e-6) and stall. The second run starts with t
+// tens of times closer to it, and the run ends above where the shape phase began.
+BOOST_AUTO_TEST_CASE(a_shape_phase_stalled_below_its_start_runs_again_with_t_close_under_the_worst) {
+    auto mesh = shared_mesh("mesquite/mixed/mixed-hex-pyr-tet.vtk");
+    pv::set_targets(mesh, pv::TargetOptions::from("aspect"));  // as the command line's keep: auto
+    pv::GlobalSolverOptions options;
+    options.threads = 1;
+    options.termination.max_iterations = 100;
+    const auto summary = pv::GlobalSolver(options).improve(mesh);
+    const auto& h = summary.history;
+    const auto shape = first_in(summary, "shape"), again = first_in(summary, "shape_close_start");
+    BOOST_TEST_REQUIRE((shape != h.end()));
+    BOOST_TEST_REQUIRE((again != h.end()));
+    BOOST_TEST(std::prev(again)->phase == "shape");  // right after the shape phase
+    for (auto r = shape; r != again; ++r) BOOST_TEST(r->best_worst_quality == shape->worst_quality);
+    BOOST_TEST(std::prev(again)->worst_quality < 0.01 * shape->worst_quality);  // traded away
+    BOOST_TEST(again->worst_quality == shape->worst_quality);                   // from the best iterate
+    const double shape_gap = shape->worst_quality - shape->t, close_gap = again->worst_quality - again->t;
+    BOOST_TEST(close_gap > 0.0);
+    BOOST_TEST(close_gap < shape_gap / 10.0);
+    BOOST_TEST(std::count_if(h.begin(), h.end(), [](const pv::IterationRecord& r) { return r.phase == "shape_close_start"; }) > 1);
+    BOOST_TEST(summary.worst_after > shape->worst_quality);
     check_never_worse(summary);
 }
 

@@ -2,6 +2,7 @@
 // coordinates, the interior left behind. The solvers follow a motion a valid mesh exists for, in
 // steps where one run does not untangle; an impossible motion ends with the boundary where it was
 // given, the fewest inverted elements found and a message that says so; no motion changes nothing.
+#include <algorithm>
 #include <boost/test/unit_test.hpp>
 #include <cmath>
 #include <numbers>
@@ -31,6 +32,27 @@ void check_boundary_kept(const pv::Mesh& given, const pv::Mesh& result) {
         if (!given.fixed()[static_cast<std::size_t>(v)]) continue;
         for (int c = 0; c < 3; ++c) BOOST_TEST(result.coordinates()[3 * v + c] == given.coordinates()[3 * v + c]);
     }
+}
+
+// A motion followed by the global solver or the local smoother on these budgets (iterations, or
+// sweeps), with every iteration's record (each run's numbered from its own start).
+struct ObservedRun {
+    pv::Summary summary;
+    std::vector<pv::IterationRecord> records;
+};
+ObservedRun observed_run(pv::Mesh mesh, bool global, int untangle_budget, int shape_budget) {
+    ObservedRun run;
+    auto observe = [&](const pv::IterationRecord& r) { run.records.push_back(r); };
+    auto solve = [&](auto options, auto solver_of) {
+        options.untangle_termination.max_iterations = untangle_budget;
+        options.termination.max_iterations = shape_budget;
+        auto solver = solver_of(options);
+        solver.set_observer(observe);
+        run.summary = solver.improve(mesh);
+    };
+    if (global) solve(pv::GlobalSolverOptions{}, [](const pv::GlobalSolverOptions& o) { return pv::GlobalSolver(o); });
+    else solve(pv::LocalSolverOptions{}, [](const pv::LocalSolverOptions& o) { return pv::LocalSolver(o); });
+    return run;
 }
 
 }  // namespace
@@ -75,23 +97,7 @@ BOOST_AUTO_TEST_CASE(the_first_run_untangles_on_a_fifth_of_the_budget) {
     // the next run's numbering starts again) stops after 10, and the steps follow the motion.
     const pv::Mesh given = turned_ring(500.0);
     for (const bool global : {true, false}) {
-        pv::Mesh mesh = given;
-        std::vector<pv::IterationRecord> records;
-        auto observe = [&](const pv::IterationRecord& r) { records.push_back(r); };
-        pv::Summary s;
-        if (global) {
-            pv::GlobalSolverOptions options;
-            options.untangle_termination.max_iterations = 50;
-            pv::GlobalSolver solver(options);
-            solver.set_observer(observe);
-            s = solver.improve(mesh);
-        } else {
-            pv::LocalSolverOptions options;
-            options.untangle_termination.max_iterations = 50;
-            pv::LocalSolver solver(options);
-            solver.set_observer(observe);
-            s = solver.improve(mesh);
-        }
+        const auto [s, records] = observed_run(given, global, 50, 500);
         BOOST_TEST_INFO((global ? "global: " : "local: ") << s.message);
         BOOST_TEST(s.valid());
         BOOST_TEST(s.message.find("steps") != std::string::npos);
@@ -100,6 +106,37 @@ BOOST_AUTO_TEST_CASE(the_first_run_untangles_on_a_fifth_of_the_budget) {
         BOOST_TEST_REQUIRE(first_run < records.size());
         BOOST_TEST(records[first_run - 1].iteration <= 10);
         BOOST_TEST(records[first_run - 1].phase.find("untangle") != std::string::npos);
+    }
+}
+
+BOOST_AUTO_TEST_CASE(a_step_short_of_the_end_improves_on_a_fifth_of_the_budget) {
+    // The same turn. Every run after the first (each one's records numbered from its own start)
+    // but the last improves for at most a fifth of the budget after it untangled, and no fewer
+    // than 50 iterations (sweeps) where they are left: 80 of the global solver's 400, 50 of the
+    // local smoother's 100; one of them uses its whole share (the smoother's steps would go on for
+    // longer).
+    const pv::Mesh given = turned_ring(500.0);
+    for (const bool global : {true, false}) {
+        const int share = global ? 80 : 50;
+        const auto [s, records] = observed_run(given, global, 50, global ? 400 : 100);
+        BOOST_TEST_INFO((global ? "global: " : "local: ") << s.message);
+        BOOST_TEST_REQUIRE(s.valid());
+        BOOST_TEST_REQUIRE(s.message.find("steps") != std::string::npos);
+        // Per run: its last iteration less its untangling's.
+        std::vector<int> improving{0};
+        int untangled = 0;
+        for (std::size_t i = 0; i < records.size(); ++i) {
+            if (i > 0 && records[i].iteration < records[i - 1].iteration) improving.push_back(0), untangled = 0;
+            if (records[i].phase.find("untangle") != std::string::npos) untangled = records[i].iteration;
+            improving.back() = records[i].iteration - untangled;
+        }
+        BOOST_TEST_REQUIRE(improving.size() >= 3);  // the first run, steps, the last step
+        int most = 0;
+        for (std::size_t run = 1; run + 1 < improving.size(); ++run) {
+            BOOST_TEST(improving[run] <= share, "run " << run << ": " << improving[run]);
+            most = std::max(most, improving[run]);
+        }
+        BOOST_TEST(most == share);
     }
 }
 
