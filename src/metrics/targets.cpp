@@ -399,6 +399,11 @@ double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const Fr
            determinant(ideal_frame(mesh, e, regular, d), d);
 }
 // The mean over element e's vertices of a symmetric matrix per vertex (Mesh::target_metrics' order).
+// Whether the symmetric d x d matrix m is positive definite: its leading minors are positive.
+bool positive_definite(const Matrix& m, int d) {
+    return m[0][0] > 0.0 && m[0][0] * m[1][1] - m[0][1] * m[1][0] > 0.0 && (d < 3 || determinant(m, 3) > 0.0);
+}
+
 Matrix mean_at_corners(const Mesh& mesh, ElementId e, std::span<const double> per_vertex) {
     Matrix mean{};
     for (VertexId vertex : mesh.element(e))
@@ -638,13 +643,19 @@ void set_targets(Mesh& mesh, const TargetOptions& options, const Mesh* reference
         const Factors& oriented = pick(options.orientation);
         const Matrix& source = oriented.positive ? oriented.frame : id.frame;
         Matrix shape;
+        // A simplex none of whose vertices has a simplex that is not degenerate around it has no
+        // metric (its vertices' are 0): like a degenerate corner, it gives no aspect.
+        std::optional<Matrix> mean;
         if (!metrics.empty() && is_simplex(mesh, element)) {
+            const Matrix at_corners = mean_at_corners(mesh, element, metrics);
+            if (positive_definite(surface ? in_plane(at_corners, a, b) : at_corners, d)) mean = at_corners;
+        }
+        if (mean) {
             // Rated in the mean M of its vertices' metrics, against the regular simplex turned
             // there as the aspect's source corner is (shape metrics ignore the turn, orientation
             // metrics compare with it; an ideal orientation leaves it out).
-            const Matrix mean = mean_at_corners(mesh, element, metrics);
-            const MetricSpace space = metric_space(surface ? in_plane(mean, a, b) : mean, pick(options.aspect), regular, d, a,
-                                                   b, surface);
+            const MetricSpace space = metric_space(surface ? in_plane(*mean, a, b) : *mean, pick(options.aspect), regular, d,
+                                                   a, b, surface);
             shape = space.shape;
             if (options.orientation == TargetSource::Ideal) shape = at_unit_determinant(regular, d);
             set_root(e, space.root);

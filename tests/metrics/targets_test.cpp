@@ -197,6 +197,17 @@ BOOST_AUTO_TEST_CASE(a_degenerate_or_inverted_input_element_falls_back_to_the_id
     std::swap(inverted.coordinates()[8], inverted.coordinates()[11]);
     pv::set_targets(inverted, pv::TargetOptions::from("all"));
     BOOST_TEST(rate("mean_ratio", inverted)[0] <= 0.0);
+    // With the aspect kept and the skew ideal a simplex is rated in its neighbourhood's metric;
+    // the flat tetrahedron alone has none (every simplex around it is degenerate): it is rated
+    // against the regular tetrahedron, as with no targets.
+    pv::set_targets(flat, pv::TargetOptions::from("aspect"));
+    BOOST_TEST(std::isfinite(rate("mean_ratio", flat)[0]));
+    BOOST_TEST(rate("mean_ratio", flat)[0] == 0.0);
+    // Three quadrilaterals around a triangle, every corner of which lies at one point (a Mesquite
+    // test mesh): the degenerate triangle's vertices have no metric; its aspect is ideal.
+    pv::Mesh hybrid = pv::read_mesh(pv::test::shared_data("mesquite/mixed/hybrid_3quad_1tri_tangled.vtk")).mesh;
+    pv::set_targets(hybrid, pv::TargetOptions::from("aspect"));
+    BOOST_TEST(hybrid.has_targets());
 }
 
 BOOST_AUTO_TEST_CASE(triangles_and_quadrilaterals_take_targets_in_their_plane) {
