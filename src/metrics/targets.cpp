@@ -398,12 +398,12 @@ double size_ratio(const Mesh& mesh, ElementId e, const Matrix& regular, const Fr
     return std::abs(determinant(edge_matrix(mesh, mesh.coordinates(), e, a, b), d)) /
            determinant(ideal_frame(mesh, e, regular, d), d);
 }
-// The mean over element e's vertices of a symmetric matrix per vertex (Mesh::target_metrics' order).
 // Whether the symmetric d x d matrix m is positive definite: its leading minors are positive.
 bool positive_definite(const Matrix& m, int d) {
     return m[0][0] > 0.0 && m[0][0] * m[1][1] - m[0][1] * m[1][0] > 0.0 && (d < 3 || determinant(m, 3) > 0.0);
 }
 
+// The mean over element e's vertices of a symmetric matrix per vertex (Mesh::target_metrics' order).
 Matrix mean_at_corners(const Mesh& mesh, ElementId e, std::span<const double> per_vertex) {
     Matrix mean{};
     for (VertexId vertex : mesh.element(e))
