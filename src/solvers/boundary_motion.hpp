@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <functional>
 #include <string>
+#include <utility>
 
 #include "paloverde/parallel/mesh_part.hpp"
 #include "paloverde/solvers/checkpoint.hpp"
@@ -79,6 +80,18 @@ Options within_seconds(Options options, double seconds) {
     for (TerminationCriterion* t : {&options.termination, &options.untangle_termination})
         t->max_seconds = t->max_seconds > 0.0 ? std::min(t->max_seconds, seconds) : seconds;
     return options;
+}
+
+// A solver's options for one run of a motion: its checkpoint settings, its budgets
+// (MotionRunKind) and its time limit `seconds` (0: the solver's own).
+template <class Options>
+Options for_motion_run(Options each, MotionRunKind kind, const CheckpointOptions& checkpoint, double seconds) {
+    each.checkpoint = checkpoint;
+    if (kind == MotionRunKind::First)
+        each.untangle_termination.max_iterations = first_run_untangling(each.untangle_termination.max_iterations);
+    if (kind == MotionRunKind::Step)
+        each.termination.max_iterations = step_improvement(each.termination.max_iterations);
+    return seconds == 0.0 ? each : within_seconds(std::move(each), seconds);
 }
 
 }  // namespace paloverde::detail

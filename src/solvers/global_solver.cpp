@@ -170,17 +170,11 @@ Summary GlobalSolver::improve(MeshPart part) {
                                               {options_.checkpoint, "global", options_text(options_)},
                                               [&](double seconds, const CheckpointOptions& checkpoint,
                                                   detail::MotionRunKind kind) {
-                                                  GlobalSolverOptions each = options_;
-                                                  each.checkpoint = checkpoint;
-                                                  if (kind == detail::MotionRunKind::First) {
+                                                  GlobalSolverOptions each =
+                                                      detail::for_motion_run(options_, kind, checkpoint, seconds);
+                                                  if (kind == detail::MotionRunKind::First)
                                                       each.finish = GlobalSolverOptions::Finish::None;
-                                                      each.untangle_termination.max_iterations =
-                                                          detail::first_run_untangling(each.untangle_termination.max_iterations);
-                                                  }
-                                                  if (kind == detail::MotionRunKind::Step)
-                                                      each.termination.max_iterations =
-                                                          detail::step_improvement(each.termination.max_iterations);
-                                                  GlobalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
+                                                  GlobalSolver within(each);
                                                   within.set_observer(observer());
                                                   return within.run_once(part);
                                               });

@@ -235,15 +235,8 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
                                               {options_.checkpoint, std::string(name()), options_text(options_)},
                                               [&](double seconds, const CheckpointOptions& checkpoint,
                                                   detail::MotionRunKind kind) {
-                                                  LocalSolverOptions each = options_;
-                                                  each.checkpoint = checkpoint;
-                                                  if (kind == detail::MotionRunKind::First)
-                                                      each.untangle_termination.max_iterations =
-                                                          detail::first_run_untangling(each.untangle_termination.max_iterations);
-                                                  if (kind == detail::MotionRunKind::Step)
-                                                      each.termination.max_iterations =
-                                                          detail::step_improvement(each.termination.max_iterations);
-                                                  LocalSolver within(seconds == 0.0 ? each : detail::within_seconds(each, seconds));
+                                                  LocalSolver within(
+                                                      detail::for_motion_run(options_, kind, checkpoint, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(whole_or_part);
                                               });

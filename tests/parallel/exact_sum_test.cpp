@@ -14,6 +14,26 @@
 
 namespace pv = paloverde;
 
+namespace {
+
+// x added to a BoundedSum under `bound` in runs of random lengths below 300, each with add_all, or
+// with add_all_exact where `exact`; that sum, exactly.
+pv::ExactSum summed_in_runs(const std::vector<double>& x, double bound, bool exact, pv::detail::BoundedSum::Simd simd,
+                            std::mt19937_64& random) {
+    pv::detail::BoundedSum s(bound);
+    for (std::size_t begin = 0; begin < x.size();) {
+        const std::size_t length = std::min<std::size_t>(x.size() - begin, random() % 300);
+        if (exact) s.add_all_exact(x.data() + begin, length, simd);
+        else s.add_all(x.data() + begin, length, simd);
+        begin += length;
+    }
+    pv::ExactSum e;
+    s.add_to(e);
+    return e;
+}
+
+}  // namespace
+
 BOOST_AUTO_TEST_SUITE(exact_sum)
 
 BOOST_AUTO_TEST_CASE(keeps_what_rounding_loses) {
@@ -179,15 +199,7 @@ BOOST_AUTO_TEST_CASE(exact_bounded_sums_of_whole_buffers_are_the_exact_sums) {
         return e.value();
     };
     auto in_runs = [&](const std::vector<double>& x, Simd simd) {
-        pv::detail::BoundedSum s(bound);
-        for (std::size_t begin = 0; begin < x.size();) {
-            const std::size_t length = std::min<std::size_t>(x.size() - begin, random() % 300);
-            s.add_all_exact(x.data() + begin, length, simd);
-            begin += length;
-        }
-        pv::ExactSum e;
-        s.add_to(e);
-        return e.value();
+        return summed_in_runs(x, bound, true, simd, random).value();
     };
     for (int trial = 0; trial < 4; ++trial) {
         for (const Simd simd : {Simd::best, Simd::sse2}) {
@@ -251,17 +263,7 @@ BOOST_AUTO_TEST_CASE(bounded_sums_of_whole_buffers_equal_those_of_single_terms) 
         return e;
     };
     using Simd = pv::detail::BoundedSum::Simd;
-    auto in_runs = [&](const std::vector<double>& x, Simd simd) {
-        pv::detail::BoundedSum s(bound);
-        for (std::size_t begin = 0; begin < x.size();) {
-            const std::size_t length = std::min<std::size_t>(x.size() - begin, random() % 300);
-            s.add_all(x.data() + begin, length, simd);
-            begin += length;
-        }
-        pv::ExactSum e;
-        s.add_to(e);
-        return e;
-    };
+    auto in_runs = [&](const std::vector<double>& x, Simd simd) { return summed_in_runs(x, bound, false, simd, random); };
     for (int trial = 0; trial < 4; ++trial) {
         for (const Simd simd : {Simd::best, Simd::sse2}) {
             BOOST_TEST(std::isnan(one_by_one(terms).value()));  // +inf and -inf
