@@ -147,9 +147,16 @@ std::optional<PhaseResult> Phase::reached_end(const Stats& s, bool out_of_reach)
     return std::nullopt;
 }
 
-// Over a window: the worst quality and t rose too little, the inverted count did not fall.
+// Over a window: the worst quality and t rose too little, the inverted count did not fall. In the
+// Newton finish t's rise counts only while t lies further under the best worst quality than the
+// window's tolerance: each step solves its subproblem, so t follows mu up to the worst element,
+// and once all of its rise still to come is less than progress, waiting for it buys Newton steps
+// (each a gradient pass per Hessian product) that leave the mesh as it is. Further down, t's climb
+// is how the worst element is won back after the steps traded it away.
 bool Phase::standing(const StallWindow& w) const {
-    return w.rose_too_little(best_history_) && w.rose_too_little(measure_history_) && w.did_not_fall(bad_history_);
+    const bool t_at_worst = stage_.finish() && best_worst_ - measure_history_.back() <= w.tolerance();
+    return w.rose_too_little(best_history_) && (t_at_worst || w.rose_too_little(measure_history_)) &&
+           w.did_not_fall(bad_history_);
 }
 
 // A stall ends the phase, unless a wider focus or a smaller mu may still pay (`widened`: the focus
