@@ -624,8 +624,7 @@ BOOST_AUTO_TEST_CASE(a_shape_phase_stalled_below_its_start_runs_again_with_t_clo
 // window) with t within that tolerance under it, the finish ends: what is left of t's rise cannot
 // lift the worst by a tolerance's worth, and each further Newton step costs many gradient passes.
 // The least tolerance is min_progress times the worst (one gradient pass an iteration); waiting
-// for t, the finish of tri_5_xz took four more iterations after that (and a perturbed grid of
-// 622,938 tetrahedra 21 more, 55 of its 69 seconds, for a rise of 7e-5).
+// for t, the finish of tri_5_xz took four more iterations after that.
 BOOST_AUTO_TEST_CASE(the_finish_ends_once_its_worst_stands_with_t_just_under_it) {
     const DefaultRun run("mesquite/tris/tri_5_xz.vtk");
     const auto& h = run.summary.history;
