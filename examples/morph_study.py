@@ -63,13 +63,24 @@ def bent(p, degrees, length=4.0):
     return q - p
 
 
+# examples/morph/torus.geo: the torus's major and minor radii, the box's half width and half height.
+TORUS_RADII = (1.8, 0.6)
+BOX_HALF = (3.0, 1.5)
+
+
+def to_torus(p):
+    """Each point's distance from the torus surface (negative inside it)."""
+    major, minor = TORUS_RADII
+    return np.hypot(np.hypot(p[:, 0], p[:, 1]) - major, p[:, 2]) - minor
+
+
 def torus_witness(p, degrees):
-    """Every point turned about z by `degrees` times a weight of its (rho, z): 1 on the torus
-    (major radius 1.8, minor 0.6), 0 on and beyond the box's nearest wall (rho = 3 or |z| = 1.5)."""
+    """Every point turned about z by `degrees` times a weight of its (rho, z): 1 on the torus,
+    0 on and beyond the box's nearest wall (rho = its half width, or |z| = its half height)."""
     rho = np.hypot(p[:, 0], p[:, 1])
-    to_torus = np.maximum(np.hypot(rho - 1.8, p[:, 2]) - 0.6, 0.0)
-    to_box = np.maximum(np.minimum(3.0 - rho, 1.5 - np.abs(p[:, 2])), 0.0)
-    weight = np.where(to_torus + to_box > 0.0, to_box / np.maximum(to_torus + to_box, 1e-300), 1.0)
+    torus = np.maximum(to_torus(p), 0.0)
+    box = np.maximum(np.minimum(BOX_HALF[0] - rho, BOX_HALF[1] - np.abs(p[:, 2])), 0.0)
+    weight = np.where(torus + box > 0.0, box / np.maximum(torus + box, 1e-300), 1.0)
     a = np.radians(degrees) * weight
     q = p.copy()
     q[:, 0] = np.cos(a) * p[:, 0] - np.sin(a) * p[:, 1]
@@ -88,7 +99,7 @@ def case(name, work):
     elif shape == "torus":
         m = gmsh("torus.geo", 3, os.path.join(work, "torus.msh"))
         p = m.points
-        on_torus = np.abs(np.hypot(np.hypot(p[:, 0], p[:, 1]) - 1.8, p[:, 2]) - 0.6) <= 1e-6
+        on_torus = np.abs(to_torus(p)) <= 1e-6
         cells, d = [c for c in m.cells if c.type == "tetra"], turned(p, on_torus, degrees)
     elif shape == "beam":
         m = gmsh("beam.geo", 3, os.path.join(work, "beam.msh"))
