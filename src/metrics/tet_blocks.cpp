@@ -151,9 +151,10 @@ template <class Sqrt>
 }
 
 // The lanes' 3 x 3 maps side by side, entry by entry across the lanes (m[k][i][lane]), so that
-// the loops over lanes vectorize: lane by lane with scalar loads, or with AVX-512 gathers (one
-// instruction per entry for 8 lanes; maps-only passes measured about a tenth faster with them,
-// the same values).
+// the loops over lanes vectorize: lane by lane with scalar loads, or with AVX-512 eight lanes at
+// a time, each lane's first eight entries in one load, regrouped across the lanes by shuffles,
+// and the ninth alone. (Gathers, one instruction per entry for eight lanes, made a whole pass
+// with targets about twice as slow on an AMD EPYC: docs/targets.md.) The values are the same.
 struct LayOutScalar {
     [[gnu::always_inline]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
         for (int k = 0; k < 3; ++k)
@@ -164,17 +165,39 @@ struct LayOutScalar {
 #ifdef PALOVERDE_X86
 struct LayOut512 {
     [[gnu::target("avx512f")]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
+        static_assert(sizeof(CornerMap) == 9 * sizeof(double));
+        // Index vectors for _mm512_permutex2var_pd(a, index, b): 0-7 pick a's elements, 8-15 b's.
+        const __m512i pairs_low = _mm512_set_epi64(13, 12, 5, 4, 9, 8, 1, 0);
+        const __m512i pairs_high = _mm512_set_epi64(15, 14, 7, 6, 11, 10, 3, 2);
+        const __m512i halves_low = _mm512_set_epi64(11, 10, 9, 8, 3, 2, 1, 0);
+        const __m512i halves_high = _mm512_set_epi64(15, 14, 13, 12, 7, 6, 5, 4);
+        double* entry[9];
+        for (int c = 0; c < 9; ++c) entry[c] = &m[c / 3][c % 3][0];
         for (int j = 0; j < kTetBlock; j += 8) {
-            const __m512i at = _mm512_loadu_si512(maps + j);
-            for (int k = 0; k < 3; ++k)
-                for (int i = 0; i < 3; ++i) {
-                    const auto offset = static_cast<long long>(sizeof(double)) * (3 * k + i);
-                    const __m512i entry = _mm512_add_epi64(at, _mm512_set1_epi64(offset));
-                    // The masked form with every lane set (see Sqrt512); addresses whole in `entry`.
-                    const __m512d values = _mm512_mask_i64gather_pd(_mm512_setzero_pd(), static_cast<__mmask8>(0xFF),
-                                                                    entry, nullptr, 1);
-                    _mm512_store_pd(&m[k][i][j], values);
-                }
+            __m512d row[8];
+            for (int r = 0; r < 8; ++r) row[r] = _mm512_loadu_pd(maps[j + r]->front().data());
+            // row[r]: lane j + r's entries 0..7. Rows interleaved pairwise: t[2p] holds entries
+            // 0, 2, 4, 6 of rows 2p and 2p + 1, t[2p + 1] entries 1, 3, 5, 7 (the masked forms
+            // with every lane set, as in Sqrt512).
+            __m512d t[8], u[8];
+            const auto all = static_cast<__mmask8>(0xFF);
+            for (int p = 0; p < 4; ++p) {
+                t[2 * p] = _mm512_mask_unpacklo_pd(row[2 * p], all, row[2 * p], row[2 * p + 1]);
+                t[2 * p + 1] = _mm512_mask_unpackhi_pd(row[2 * p], all, row[2 * p], row[2 * p + 1]);
+            }
+            // u[4h + e]: rows 4h..4h+3 of entry e (first half) and entry e + 4 (second half), e < 4.
+            for (int h = 0; h < 2; ++h) {
+                const __m512d* q = t + 4 * h;
+                u[4 * h + 0] = _mm512_permutex2var_pd(q[0], pairs_low, q[2]);
+                u[4 * h + 1] = _mm512_permutex2var_pd(q[1], pairs_low, q[3]);
+                u[4 * h + 2] = _mm512_permutex2var_pd(q[0], pairs_high, q[2]);
+                u[4 * h + 3] = _mm512_permutex2var_pd(q[1], pairs_high, q[3]);
+            }
+            for (int e = 0; e < 4; ++e) {
+                _mm512_store_pd(entry[e] + j, _mm512_permutex2var_pd(u[e], halves_low, u[4 + e]));
+                _mm512_store_pd(entry[e + 4] + j, _mm512_permutex2var_pd(u[e], halves_high, u[4 + e]));
+            }
+            for (int r = 0; r < 8; ++r) entry[8][j + r] = (*maps[j + r])[2][2];
         }
     }
 };
