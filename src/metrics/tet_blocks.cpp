@@ -151,10 +151,11 @@ template <class Sqrt>
 }
 
 // The lanes' 3 x 3 maps side by side, entry by entry across the lanes (m[k][i][lane]), so that
-// the loops over lanes vectorize: lane by lane with scalar loads, or with AVX-512 eight lanes at
-// a time, each lane's first eight entries in one load, regrouped across the lanes by shuffles,
-// and the ninth alone. (Gathers, one instruction per entry for eight lanes, made a whole pass
-// with targets about twice as slow on an AMD EPYC: docs/targets.md.) The values are the same.
+// the loops over lanes vectorize: lane by lane with scalar loads, or with AVX2 (AVX-512) four
+// (eight) lanes at a time, each lane's first eight entries in two loads (one), regrouped across
+// the lanes by shuffles, and the ninth alone. (Gathers, one instruction per entry for eight lanes,
+// made a whole pass with targets about twice as slow on an AMD EPYC: docs/targets.md.) The values
+// are the same.
 struct LayOutScalar {
     [[gnu::always_inline]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
         for (int k = 0; k < 3; ++k)
@@ -163,6 +164,27 @@ struct LayOutScalar {
     }
 };
 #ifdef PALOVERDE_X86
+struct LayOut256 {
+    [[gnu::target("avx2")]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
+        static_assert(sizeof(CornerMap) == 9 * sizeof(double));
+        double* entry[9];
+        for (int c = 0; c < 9; ++c) entry[c] = &m[c / 3][c % 3][0];
+        for (int j = 0; j < kTetBlock; j += 4) {
+            for (int half = 0; half < 2; ++half) {
+                __m256d row[4];
+                // row[r]: lane j + r's entries 4 half .. 4 half + 3; a 4 x 4 transpose.
+                for (int r = 0; r < 4; ++r) row[r] = _mm256_loadu_pd(maps[j + r]->front().data() + 4 * half);
+                const __m256d t0 = _mm256_unpacklo_pd(row[0], row[1]), t1 = _mm256_unpackhi_pd(row[0], row[1]);
+                const __m256d t2 = _mm256_unpacklo_pd(row[2], row[3]), t3 = _mm256_unpackhi_pd(row[2], row[3]);
+                _mm256_store_pd(entry[4 * half + 0] + j, _mm256_permute2f128_pd(t0, t2, 0x20));
+                _mm256_store_pd(entry[4 * half + 1] + j, _mm256_permute2f128_pd(t1, t3, 0x20));
+                _mm256_store_pd(entry[4 * half + 2] + j, _mm256_permute2f128_pd(t0, t2, 0x31));
+                _mm256_store_pd(entry[4 * half + 3] + j, _mm256_permute2f128_pd(t1, t3, 0x31));
+            }
+            for (int r = 0; r < 4; ++r) entry[8][j + r] = (*maps[j + r])[2][2];
+        }
+    }
+};
 struct LayOut512 {
     [[gnu::target("avx512f")]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
         static_assert(sizeof(CornerMap) == 9 * sizeof(double));
@@ -494,10 +516,10 @@ void energy_baseline(const TetBlock& x, const double* reference_volume, double e
     energy<Sqrt256>(x, reference_volume, epsilon, theta, quality, gradient);
 }
 [[gnu::target("avx2")]] void map_avx2(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& x) {
-    map_loop(maps, roots, x);
+    map_loop<LayOut256>(maps, roots, x);
 }
 [[gnu::target("avx2")]] void unmap_avx2(const CornerMap* const* maps, const CornerMap* const* roots, TetBlock& g) {
-    unmap_loop(maps, roots, g);
+    unmap_loop<LayOut256>(maps, roots, g);
 }
 [[gnu::target("avx2")]] void shape_size_avx2(const TetBlock& x, const double* reference_volume, double* quality,
                                              TetBlock* gradient) {

@@ -397,6 +397,44 @@ BOOST_AUTO_TEST_CASE(batch_passes_equal_element_by_element_sums) {
     }
 }
 
+// Target maps (and metric roots) carried over a block's lanes: every path gives the baseline's
+// bits, forward and back, whatever the lanes' maps are and wherever they lie (each path lays the
+// lanes' entries side by side in its own way).
+BOOST_AUTO_TEST_CASE(target_maps_carry_a_block_alike_on_every_path) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> entry(-2.0, 2.0);
+    // More maps than lanes, picked out of order: neighbouring lanes' maps are not neighbours.
+    std::vector<pv::CornerMap> maps(3 * pm::kTetBlock), roots(maps.size());
+    for (auto* list : {&maps, &roots})
+        for (pv::CornerMap& map : *list)
+            for (auto& row : map)
+                for (double& v : row) v = entry(random);
+    const pv::CornerMap* map_of[pm::kTetBlock];
+    const pv::CornerMap* root_of[pm::kTetBlock];
+    for (int j = 0; j < pm::kTetBlock; ++j) {
+        map_of[j] = &maps[static_cast<std::size_t>((7 * j + 3) % maps.size())];
+        root_of[j] = &roots[static_cast<std::size_t>((5 * j + 11) % roots.size())];
+    }
+    pm::TetBlock x{}, g{};
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < pm::kTetBlock; ++j) x.at[i][j] = entry(random), g.at[i][j] = entry(random);
+    for (const bool with_roots : {false, true}) {
+        const pv::CornerMap* const* r = with_roots ? root_of : nullptr;
+        pm::TetBlock x_base = x, g_base = g;
+        pm::map_tets(pm::BlockPath::baseline, map_of, r, x_base);
+        pm::unmap_tets(pm::BlockPath::baseline, map_of, r, g_base);
+        for (pm::BlockPath path : paths()) {
+            pm::TetBlock x_path = x, g_path = g;
+            pm::map_tets(path, map_of, r, x_path);
+            pm::unmap_tets(path, map_of, r, g_path);
+            BOOST_TEST_CONTEXT("path " << static_cast<int>(path) << (with_roots ? ", with roots" : "")) {
+                BOOST_TEST(std::memcmp(&x_path, &x_base, sizeof x_base) == 0);
+                BOOST_TEST(std::memcmp(&g_path, &g_base, sizeof g_base) == 0);
+            }
+        }
+    }
+}
+
 BOOST_AUTO_TEST_SUITE_END()
 
 // The listed call (the solvers' re-rating of a few elements around moved vertices) against the
