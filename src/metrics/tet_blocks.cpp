@@ -154,8 +154,8 @@ template <class Sqrt>
 // the loops over lanes vectorize: lane by lane with scalar loads, or with AVX2 (AVX-512) four
 // (eight) lanes at a time, each lane's first eight entries in two loads (one), regrouped across
 // the lanes by shuffles, and the ninth alone. (Gathers, one instruction per entry for eight lanes,
-// made a whole pass with targets about twice as slow on an AMD EPYC: docs/targets.md.) The values
-// are the same.
+// measured up to twice as slow for a whole pass with targets: docs/targets.md.) The values are the
+// same.
 struct LayOutScalar {
     [[gnu::always_inline]] static void run(const CornerMap* const* maps, double (&m)[3][3][kTetBlock]) {
         for (int k = 0; k < 3; ++k)
@@ -172,7 +172,7 @@ struct LayOut256 {
         for (int j = 0; j < kTetBlock; j += 4) {
             for (int half = 0; half < 2; ++half) {
                 __m256d row[4];
-                // row[r]: lane j + r's entries 4 half .. 4 half + 3; a 4 x 4 transpose.
+                // row[r]: lane j + r's entries 4 * half to 4 * half + 3; then a 4 x 4 transpose.
                 for (int r = 0; r < 4; ++r) row[r] = _mm256_loadu_pd(maps[j + r]->front().data() + 4 * half);
                 const __m256d t0 = _mm256_unpacklo_pd(row[0], row[1]), t1 = _mm256_unpackhi_pd(row[0], row[1]);
                 const __m256d t2 = _mm256_unpacklo_pd(row[2], row[3]), t3 = _mm256_unpackhi_pd(row[2], row[3]);
