@@ -179,6 +179,25 @@ void add_work(Summary& total, const Summary& run) {
     total.seconds += run.seconds;
 }
 
+// A restored outcome, with the counters and history a checkpoint restored into `work` and the
+// seconds it recorded.
+Summary with_work(Summary outcome, Summary work, double seconds) {
+    take_work(outcome, std::move(work));
+    outcome.seconds = seconds;
+    return outcome;
+}
+
+// A followed motion's Summary with the every-vertex run after it, whose mesh it ends with (that
+// run holds the boundary still: how far it slid stays the motion's).
+Summary with_every_vertex_run(Summary followed, const Summary& run) {
+    add_work(followed, run);
+    followed.reason = run.reason;
+    followed.message += "; then, every vertex moving: " + run.message;
+    followed.after = run.after;
+    followed.worst_after = run.worst_after;
+    return followed;
+}
+
 // The first run: from the interior carried along with the boundary from the reference when that
 // inverts fewer elements than the interior where it was given.
 Summary run_first(MeshPart part, const std::vector<double>& given, const std::vector<double>& reference,
@@ -230,7 +249,7 @@ bool has_boundary_motion(MeshPart part) {
 }
 
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
-                               const CheckpointSettings& checkpoints, const MotionRun& solve) {
+                               const CheckpointSettings& checkpoints, const MotionRun& solve, bool every_vertex_run) {
     auto start = Clock::now();
     // What is left of max_seconds (> 0), or 0 when spent or when there is no limit.
     auto seconds_left = [&] { return max_seconds > 0.0 ? std::max(0.0, max_seconds - part.reducer().max(seconds_since(start))) : 0.0; };
@@ -257,18 +276,37 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         resumed = checkpointer.resume(total);
         start -= std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(resumed->elapsed));
     }
+    // The every-vertex run from the mesh as it is, after the followed motion `followed`, within
+    // what is left of the time (none left: the followed motion as it ended).
+    auto moving_every_vertex = [&](Summary followed) {
+        const double seconds = seconds_left();
+        if (max_seconds > 0.0 && seconds == 0.0) return followed;
+        return with_every_vertex_run(std::move(followed), run(seconds, MotionRunKind::EveryVertex));
+    };
+    // A followed motion's end: with every_vertex_run, its checkpoint, then the every-vertex run.
+    auto ended = [&](Summary followed) {
+        if (!every_vertex_run) return followed;
+        if (runs.writes_now()) {
+            runs.forget();
+            SolverState state;
+            state.numbers = {{"first_run_done", 1.0}, {"every_vertex", 1.0}, {"seconds", followed.seconds}};
+            state.vertex_fields = {{"followed", std::vector<double>(xyz().begin(), xyz().end())}};
+            store_outcome(state, "followed", followed);
+            checkpointer.save(followed, state, seconds_since(start));
+        }
+        return moving_every_vertex(std::move(followed));
+    };
+    if (resumed && resumed->numbers.contains("every_vertex")) {
+        const SolverState& state = *resumed;
+        const std::vector<double>& followed = state.vertex_field("followed", given.size() / 3);
+        std::copy(followed.begin(), followed.end(), xyz().begin());
+        return moving_every_vertex(with_work(restored_outcome(state, "followed"), std::move(total), state.number("seconds")));
+    }
     if (resumed && resumed->number("first_run_done") != 0.0) {
         const SolverState& state = *resumed;
         first_run = restored_outcome(state, "first_run");
         // Every run's work on top of the first run's outcome (the Summary's before is the first run's).
-        Summary work = std::move(total);
-        total = first_run;
-        total.iterations = work.iterations;
-        total.untangle_iterations = work.untangle_iterations;
-        total.quality_passes = work.quality_passes;
-        total.gradient_passes = work.gradient_passes;
-        total.history = std::move(work.history);
-        total.seconds = state.number("seconds");
+        total = with_work(first_run, std::move(total), state.number("seconds"));
         first = state.vertex_field("first", given.size() / 3);
         valid = state.vertex_field("valid", given.size() / 3);
         done = state.number("done");
@@ -286,7 +324,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         total = run_first(part, given, reference, driven, [&] { return run(max_seconds, MotionRunKind::First); });
         if (total.reason == TerminationReason::Interrupted) return total;
         floor = 0.5 * worst_at(part, total.quality_metric, reference);
-        if (total.valid() && total.worst_after >= floor) return total;
+        if (total.valid() && total.worst_after >= floor) return ended(std::move(total));
         first.assign(xyz().begin(), xyz().end());
         first_run = total;
         valid = reference;  // fraction 0
@@ -382,7 +420,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
     total.after = last.after;
     total.worst_after = last.worst_after;
     total.boundary = last.boundary;
-    return total;
+    return followed && !interrupted && !out_of_time ? ended(std::move(total)) : total;
 }
 
 }  // namespace paloverde::detail

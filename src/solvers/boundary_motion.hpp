@@ -34,7 +34,9 @@ bool has_boundary_motion(MeshPart part);
 //     phase gets step_improvement of the budget; the last step raises the worst element.
 //   Last: a step that reaches the end of the motion, or the run from the furthest valid step: the
 //     whole budget.
-enum class MotionRunKind { First, Step, Last };
+//   EveryVertex: the run from a followed motion's mesh (follow_boundary_motion's
+//     every_vertex_run): the whole budget, every free vertex moving in every iteration.
+enum class MotionRunKind { First, Step, Last, EveryVertex };
 
 // One whole run of a solver on the part, its time limit `seconds` (0: the solver's own), with
 // `checkpoint` for its own checkpoints (not the solver's: the motion gives each run a file of its
@@ -62,17 +64,21 @@ constexpr int step_improvement(int budget) { return std::min(budget, std::max(bu
 // given and the fewer inverted elements of the first run and of a last run from the furthest
 // valid step (from the first run's mesh when no step was valid), reason CannotUntangle and a
 // message that says how far the motion was followed.
+// With `every_vertex_run`, for a solver whose runs move only the vertices near the worst elements,
+// a motion that was followed goes on with one more run from its mesh (MotionRunKind::EveryVertex):
+// the motion distorts the whole region around the moved boundary, and its best shape spreads the
+// distortion over all of it, which those runs leave undone.
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.
 // With a checkpoint file FILE (`checkpoints`, whose fingerprint takes smallest_motion_step
-// too), the motion's state is written there before the first run and before every step (what the
+// too), the motion's state is written there before the first run, before every step (what the
 // first run left, the last accepted step's mesh, the fraction reached, the step size, the Summary
-// so far), and the run under way writes its own to FILE.run (RunCheckpoints). With resume, the
+// so far) and before the every-vertex run (the followed motion's mesh and outcome), and the run under way writes its own to FILE.run (RunCheckpoints). With resume, the
 // motion goes on from its checkpoint, the run it was written before from that run's own if there
 // is one, and it ends as the uninterrupted run, bit for bit. Collective.
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
-                               const CheckpointSettings& checkpoints, const MotionRun& solve);
+                               const CheckpointSettings& checkpoints, const MotionRun& solve, bool every_vertex_run);
 
 // A solver's options with its time limits (shape and untangling) at most `seconds`, > 0.
 template <class Options>

@@ -328,6 +328,18 @@ void store_outcome(SolverState& state, const std::string& prefix, const Summary&
     state.numbers[prefix + ".worst_after"] = summary.worst_after;
     store_report(state, prefix + ".before", summary.before);
     store_report(state, prefix + ".after", summary.after);
+    if (const auto& b = summary.boundary) {
+        state.lists[prefix + ".boundary"] = {static_cast<double>(b->sliding), static_cast<double>(b->moved),
+                                             b->largest_distance, b->volume_before, b->volume_after};
+    }
+}
+
+void take_work(Summary& into, Summary&& from) {
+    into.iterations = from.iterations;
+    into.untangle_iterations = from.untangle_iterations;
+    into.quality_passes = from.quality_passes;
+    into.gradient_passes = from.gradient_passes;
+    into.history = std::move(from.history);
 }
 
 Summary restored_outcome(const SolverState& state, const std::string& prefix) {
@@ -343,6 +355,14 @@ Summary restored_outcome(const SolverState& state, const std::string& prefix) {
     summary.worst_after = state.number(prefix + ".worst_after");
     summary.before = restored_report(state, prefix + ".before");
     summary.after = restored_report(state, prefix + ".after");
+    // (Absent for a run whose boundary did not slide, and in checkpoints written before it was kept.)
+    if (state.lists.contains(prefix + ".boundary")) {
+        const std::vector<double>& b = state.list(prefix + ".boundary");
+        if (b.size() != 5)
+            throw FileError(state.source, 0,
+                            "corrupt checkpoint: " + prefix + ".boundary holds " + std::to_string(b.size()) + " numbers, not 5");
+        summary.boundary = BoundaryMotion{static_cast<long>(b[0]), static_cast<long>(b[1]), b[2], b[3], b[4]};
+    }
     return summary;
 }
 
@@ -574,11 +594,7 @@ SolverState Checkpointer::resume(Summary& summary) {
     }
     if (!r.done()) r.fail("bytes left over after the last field");
 
-    summary.iterations = restored.iterations;
-    summary.untangle_iterations = restored.untangle_iterations;
-    summary.quality_passes = restored.quality_passes;
-    summary.gradient_passes = restored.gradient_passes;
-    summary.history = std::move(restored.history);
+    take_work(summary, std::move(restored));
     state.elapsed = elapsed;
     saved_iterations_ = summary.iterations;
     saved_at_ = Clock::now();

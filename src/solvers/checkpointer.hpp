@@ -51,10 +51,13 @@ struct SolverState {
 };
 
 // A Summary's outcome (solver, metric, reason, message, the reports and worst qualities before
-// and after; not its counters, history or boundary) as entries of `state` named after `prefix`,
-// and back: what a run in steps keeps of its first run.
+// and after, how far a sliding boundary moved; not its counters or history) as entries of `state`
+// named after `prefix`, and back: what a run in steps keeps of its first run, and of the followed
+// motion before its every-vertex run.
 void store_outcome(SolverState& state, const std::string& prefix, const Summary& summary);
 Summary restored_outcome(const SolverState& state, const std::string& prefix);
+// `from`'s work (counters and history) in place of `into`'s.
+void take_work(Summary& into, Summary&& from);
 
 // A single solver run, a run that follows a moved boundary in steps (boundary_motion.hpp), or a
 // run whose boundary slides (sliding_boundary.hpp: the boundary fixed, then sliding): each

@@ -141,6 +141,12 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
     return solve(options, observer, run, work, checkpointer, sliding);
 }
 
+// Whether the shape phases move only the vertices near the worst elements (Newton directions
+// always take every vertex).
+bool focuses(const GlobalSolverOptions& o) {
+    return o.focus_band < 1.0 && o.direction != GlobalSolverOptions::Direction::Newton;
+}
+
 // A surface mesh: one run with every vertex sliding on the input surface (free moves in space
 // would leave it), untangling what the input turned over first. Newton directions are refused:
 // their Hessian solves know nothing of it.
@@ -174,10 +180,19 @@ Summary GlobalSolver::improve(MeshPart part) {
                                                       detail::for_motion_run(options_, kind, checkpoint, seconds);
                                                   if (kind == detail::MotionRunKind::First)
                                                       each.finish = GlobalSolverOptions::Finish::None;
+                                                  // Newton steps on every vertex cost many passes each;
+                                                  // sliding vertices stay where the motion's runs slid them
+                                                  // (the boundary made of them is no longer the moved one).
+                                                  if (kind == detail::MotionRunKind::EveryVertex) {
+                                                      each.focus_band = 1.0;
+                                                      each.finish = GlobalSolverOptions::Finish::None;
+                                                      each.boundary = GlobalSolverOptions::Boundary::Fixed;
+                                                  }
                                                   GlobalSolver within(each);
                                                   within.set_observer(observer());
                                                   return within.run_once(part);
-                                              });
+                                              },
+                                              focuses(options_) && !detail::is_surface_mesh(part));
     }
     return run_once(part);
 }

@@ -239,7 +239,8 @@ Summary LocalSolver::improve(MeshPart whole_or_part) {
                                                       detail::for_motion_run(options_, kind, checkpoint, seconds));
                                                   within.set_observer(observer());
                                                   return within.run_once(whole_or_part);
-                                              });
+                                              },
+                                              false);  // every sweep moves every vertex
     }
     return run_once(whole_or_part);
 }

@@ -111,10 +111,10 @@ BOOST_AUTO_TEST_CASE(the_first_run_untangles_on_a_fifth_of_the_budget) {
 
 BOOST_AUTO_TEST_CASE(a_step_short_of_the_end_improves_on_a_fifth_of_the_budget) {
     // The same turn. Every run after the first (each one's records numbered from its own start)
-    // but the last improves for at most a fifth of the budget after it untangled, and no fewer
-    // than 50 iterations (sweeps) where they are left: 80 of the global solver's 400, 50 of the
-    // local smoother's 100; one of them uses its whole share (the smoother's steps would go on for
-    // longer).
+    // but the last step improves for at most a fifth of the budget after it untangled, and no
+    // fewer than 50 iterations (sweeps) where they are left: 80 of the global solver's 400, 50 of
+    // the local smoother's 100; one of them uses its whole share (the smoother's steps would go on
+    // for longer). After the global solver's last step comes its run with every vertex moving.
     const pv::Mesh given = turned_ring(500.0);
     for (const bool global : {true, false}) {
         const int share = global ? 80 : 50;
@@ -130,14 +130,42 @@ BOOST_AUTO_TEST_CASE(a_step_short_of_the_end_improves_on_a_fifth_of_the_budget) 
             if (records[i].phase.find("untangle") != std::string::npos) untangled = records[i].iteration;
             improving.back() = records[i].iteration - untangled;
         }
-        BOOST_TEST_REQUIRE(improving.size() >= 3);  // the first run, steps, the last step
+        const std::size_t after_steps = global ? 2 : 1;  // the last step, and the global solver's every-vertex run
+        BOOST_TEST_REQUIRE(improving.size() >= 2 + after_steps);  // the first run, steps, then those
         int most = 0;
-        for (std::size_t run = 1; run + 1 < improving.size(); ++run) {
+        for (std::size_t run = 1; run + after_steps < improving.size(); ++run) {
             BOOST_TEST(improving[run] <= share, "run " << run << ": " << improving[run]);
             most = std::max(most, improving[run]);
         }
         BOOST_TEST(most == share);
     }
+}
+
+BOOST_AUTO_TEST_CASE(a_followed_motion_ends_with_a_run_that_moves_every_vertex) {
+    // The global solver's runs move the vertices near the worst elements (the records' `moved`:
+    // the focus's free vertices); once the motion is followed, one more run from its mesh moves
+    // every vertex (moved 0: no focus) and never ends lower. A turn that one run follows, and one
+    // that takes steps. The local smoother, whose sweeps move every vertex already, adds no run.
+    for (const double degrees : {60.0, 500.0}) {
+        const auto [s, records] = observed_run(turned_ring(degrees), true, 50, 400);
+        BOOST_TEST_INFO(degrees << " degrees: " << s.message);
+        BOOST_TEST_REQUIRE(s.valid());
+        BOOST_TEST(s.message.find("then, every vertex moving") != std::string::npos);
+        std::size_t last_run = records.size() - 1;
+        while (last_run > 0 && records[last_run].iteration > records[last_run - 1].iteration) --last_run;
+        BOOST_TEST_REQUIRE(last_run > 0);
+        bool focused_before = false, whole_after = true;
+        for (std::size_t i = 0; i < records.size(); ++i) {
+            if (records[i].phase != "shape") continue;
+            if (i < last_run) focused_before = focused_before || records[i].moved > 0;
+            else whole_after = whole_after && records[i].moved == 0;
+        }
+        BOOST_TEST(focused_before);
+        BOOST_TEST(whole_after);
+        BOOST_TEST(s.worst_after >= records[last_run - 1].best_worst_quality);
+    }
+    const auto [local, local_records] = observed_run(turned_ring(60.0), false, 50, 50);
+    BOOST_TEST(local.message.find("every vertex moving") == std::string::npos);
 }
 
 // Slow (tests/CMakeLists.txt): the sanitizers see the job's queue made in config_test, and motions
