@@ -28,8 +28,8 @@ bool has_boundary_motion(MeshPart part);
 //   First: the run from the whole motion at once, which steps replace when it leaves inverted
 //     elements or a poor worst element. It skips the solver's finishing stage (the global
 //     solver's Newton finish, whose iterations cost many shape iterations each), work that steps
-//     would throw away; a first run that is kept ends where its shape phase stops. Its untangling
-//     gets first_run_untangling of the solver's budget.
+//     would throw away; a first run that is kept ends where its shape phase stops (an every-vertex
+//     run may follow). Its untangling gets first_run_untangling of the solver's budget.
 //   Step: a step short of the end, whose mesh is only where the next step starts from. Its shape
 //     phase gets step_improvement of the budget; the last step raises the worst element.
 //   Last: a step that reaches the end of the motion, or the run from the furthest valid step: the
