@@ -289,7 +289,7 @@ Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double m
         if (runs.writes_now()) {
             runs.forget();
             SolverState state;
-            state.numbers = {{"first_run_done", 1.0}, {"every_vertex", 1.0}, {"seconds", followed.seconds}};
+            state.numbers = {{"every_vertex", 1.0}, {"seconds", followed.seconds}};
             state.vertex_fields = {{"followed", std::vector<double>(xyz().begin(), xyz().end())}};
             store_outcome(state, "followed", followed);
             checkpointer.save(followed, state, seconds_since(start));

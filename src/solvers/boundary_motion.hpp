@@ -71,12 +71,13 @@ constexpr int step_improvement(int budget) { return std::min(budget, std::max(bu
 // `max_seconds` (0: none) bounds the runs together: each gets what is left (the slowest
 // process's clock decides), and once it is spent the first run's mesh is handed back, reason
 // TimeLimit. One Summary of every run: before is the mesh as given.
-// With a checkpoint file FILE (`checkpoints`, whose fingerprint takes smallest_motion_step
-// too), the motion's state is written there before the first run, before every step (what the
-// first run left, the last accepted step's mesh, the fraction reached, the step size, the Summary
-// so far) and before the every-vertex run (the followed motion's mesh and outcome), and the run under way writes its own to FILE.run (RunCheckpoints). With resume, the
-// motion goes on from its checkpoint, the run it was written before from that run's own if there
-// is one, and it ends as the uninterrupted run, bit for bit. Collective.
+// With a checkpoint file FILE (`checkpoints`, whose fingerprint takes smallest_motion_step too),
+// the motion's state is written there before the first run, before every step (what the first run
+// left, the last accepted step's mesh, the fraction reached, the step size, the Summary so far) and
+// before the every-vertex run (the followed motion's mesh and outcome), and the run under way
+// writes its own to FILE.run (RunCheckpoints). With resume, the motion goes on from its checkpoint,
+// the run it was written before from that run's own if there is one, and it ends as the
+// uninterrupted run, bit for bit. Collective.
 Summary follow_boundary_motion(MeshPart part, double smallest_fraction, double max_seconds,
                                const CheckpointSettings& checkpoints, const MotionRun& solve, bool every_vertex_run);
 
