@@ -12,6 +12,7 @@
 #include "paloverde/solvers/global_solver.hpp"
 #include "paloverde/solvers/local_solver.hpp"
 #include "robustness_support.hpp"
+#include "solvers/checkpointer.hpp"
 #include "support/ring_meshes.hpp"
 #include "support/test_support.hpp"
 
@@ -150,6 +151,43 @@ BOOST_AUTO_TEST_CASE(checkpoints_of_another_motion_other_options_or_the_other_ki
     run<pv::GlobalSolver>(no_motion, single_run);
     BOOST_TEST_REQUIRE(fs::exists(single));
     check_refused<pv::GlobalSolver>(input, options, single, "of a single solver run");
+}
+
+// What a motion keeps of a run (its first run's, or the followed motion's before the every-vertex
+// run) keeps how far a sliding boundary moved; a list of the wrong length is refused naming the
+// file and the entry.
+BOOST_AUTO_TEST_CASE(a_kept_outcome_keeps_its_sliding_boundary_and_a_malformed_one_is_refused) {
+    pv::Summary slid;
+    slid.solver = "global";
+    slid.message = "followed";
+    slid.quality_metric = "shape_size";
+    slid.reason = pv::TerminationReason::IterationLimit;
+    slid.boundary = pv::BoundaryMotion{12, 7, 1e-17, 2.5, 2.5};
+    pv::detail::SolverState state;
+    state.source = "h.ckpt";
+    pv::detail::store_outcome(state, "followed", slid);
+    const pv::Summary back = pv::detail::restored_outcome(state, "followed");
+    BOOST_TEST_REQUIRE(back.boundary.has_value());
+    BOOST_TEST(back.boundary->sliding == 12);
+    BOOST_TEST(back.boundary->moved == 7);
+    BOOST_TEST(back.boundary->largest_distance == 1e-17);
+    BOOST_TEST(back.boundary->volume_after == 2.5);
+
+    pv::Summary fixed = slid;
+    fixed.boundary.reset();
+    pv::detail::SolverState plain;
+    pv::detail::store_outcome(plain, "followed", fixed);
+    BOOST_TEST(!pv::detail::restored_outcome(plain, "followed").boundary.has_value());
+
+    state.lists["followed.boundary"].pop_back();
+    try {
+        pv::detail::restored_outcome(state, "followed");
+        BOOST_FAIL("a boundary entry of 4 numbers was read");
+    } catch (const pv::FileError& e) {
+        const std::string what = e.what();
+        BOOST_TEST(what.find("h.ckpt") != std::string::npos);
+        BOOST_TEST(what.find("followed.boundary holds 4 numbers, not 5") != std::string::npos);
+    }
 }
 
 BOOST_AUTO_TEST_SUITE_END()
