@@ -241,10 +241,13 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     unit_volume->set_scale(scale);
     for_each_chunk(mesh.num_elements(), [&](ElementId first, ElementId last) {
         unit_volume->evaluate(mesh, xyz, first, last, q.data() + first);
+        element_orientations(mesh, xyz, first, last, orientation.data() + first);
         for (ElementId e = first; e < last; ++e) {
-            if (!is_counted(static_cast<std::size_t>(e))) continue;
+            if (!is_counted(static_cast<std::size_t>(e))) {
+                orientation[e] = 1;  // another process's to count
+                continue;
+            }
             group[e] = mesh.element_can_move(e) ? 1 : 2;
-            orientation[e] = static_cast<std::int8_t>(element_orientation(mesh, xyz, e));
         }
     });
     // A mesh with cells is reported by cell: a cell is movable when any corner is, inverted when

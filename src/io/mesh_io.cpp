@@ -87,6 +87,18 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
     // elements whose smallest vertex it is, by their other corners, then the element.
     std::vector<std::uint64_t> faces(3 * static_cast<std::size_t>(most_around));
     std::vector<std::pair<std::uint64_t, std::uint64_t>> own;
+    // The table of one vertex's faces, at most half full: a slot belongs to the vertex whose stamp
+    // it holds, so nothing is cleared between vertices.
+    int table_bits = 6;
+    while ((std::size_t{1} << table_bits) < 2 * faces.size()) ++table_bits;
+    const std::size_t table_mask = (std::size_t{1} << table_bits) - 1;
+    const int table_shift = 64 - table_bits;
+    std::vector<std::uint64_t> table_key(table_mask + 1);
+    std::vector<std::uint32_t> table_stamp(table_mask + 1, 0);
+    std::vector<std::uint32_t> table_count(table_mask + 1);
+    std::vector<std::uint32_t> used(faces.size());
+    std::size_t used_count = 0;
+    std::uint32_t stamp = 1;
     for (std::size_t v = 0; v < n; ++v) {
         const auto vertex = static_cast<VertexId>(v);
         const auto begin = static_cast<std::size_t>(first_around[v]), end = static_cast<std::size_t>(first_around[v + 1]);
@@ -134,6 +146,34 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
                 throw FileError(path, 0, "elements " + std::to_string(own[i].second & 0xFFFFFFFFu) + " and " +
                                              std::to_string(own[i + 1].second & 0xFFFFFFFFu) +
                                              " have the same vertices (duplicate element)");
+        // Each face counted in a small open-addressed table (sorting the list took most of the
+        // check); a face of three or more elements is named as the sorted list names it.
+        bool shared_too_often = false;
+        for (std::size_t f = 0; f < listed; ++f) {
+            std::size_t slot = static_cast<std::size_t>((faces[f] * 0x9E3779B97F4A7C15ull) >> table_shift);
+            while (table_stamp[slot] == stamp && table_key[slot] != faces[f]) slot = (slot + 1) & table_mask;
+            if (table_stamp[slot] != stamp) {
+                table_stamp[slot] = stamp;
+                table_key[slot] = faces[f];
+                table_count[slot] = 0;
+                used[used_count++] = static_cast<std::uint32_t>(slot);
+            }
+            ++table_count[slot];
+        }
+        for (std::size_t u = 0; u < used_count; ++u) {
+            const std::size_t slot = used[u];
+            shared_too_often |= table_count[slot] > 2;
+            if (table_count[slot] != 1) continue;
+            boundary[v] = 1;
+            boundary[table_key[slot] >> 32] = 1;
+            if (size == 3) boundary[table_key[slot] & 0xFFFFFFFFu] = 1;
+        }
+        used_count = 0;
+        if (++stamp == 0) {  // the stamps wrapped: start the table afresh
+            std::fill(table_stamp.begin(), table_stamp.end(), 0u);
+            stamp = 1;
+        }
+        if (!shared_too_often) continue;
         const auto last = faces.begin() + static_cast<std::ptrdiff_t>(listed);
         std::sort(faces.begin(), last);
         for (auto i = faces.begin(); i != last;) {

@@ -341,6 +341,10 @@ void LegacyReader::read_cell_types() {
         s_.fail("CELL_TYPES lists " + std::to_string(n) + " cells but CELLS declares " + std::to_string(cells_));
     end_header_line();
     have_types_ = true;
+    // At most every cell, with every id: room made once, not by doubling as the cells come.
+    raw_.cell_types.reserve(raw_.cell_types.size() + static_cast<std::size_t>(n));
+    raw_.cell_positions.reserve(raw_.cell_positions.size() + static_cast<std::size_t>(n));
+    raw_.cell_connectivity.reserve(raw_.cell_connectivity.size() + connectivity_.size());
     std::size_t typed = 0;
     s_.set_entry([&] { return "the type of cell " + std::to_string(typed); });
     read_values<std::int64_t>(static_cast<std::size_t>(n), ValueType::Int32, "a cell type",

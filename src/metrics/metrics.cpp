@@ -299,18 +299,6 @@ void for_each_listed_block(const Mesh& mesh, std::span<const double> xyz, std::s
     }
 }
 
-// A metric that rates a block of tetrahedra gathered by someone else: evaluate_together() gathers
-// each block once for all the metrics it rates.
-class BlockRater {
-public:
-    virtual bool rates_blocks() const = 0;
-    // quality[j] for the block's elements first, ..., first + count - 1.
-    virtual void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const = 0;
-
-protected:
-    ~BlockRater() = default;
-};
-
 // Gathers each element's corners into a small buffer, calls the inlined kernel, and scatters the
 // weighted gradient: one virtual call per batch, none per element.
 template <class Kernel>
@@ -517,7 +505,7 @@ private:
 
     // evaluate_together() hands rate_block() no mesh, and so no targets: a metric that rates size
     // against them takes its blocks in its own passes.
-    bool rates_blocks() const override { return (kHasBlocks || kHasValueBlocks) && !kTargetSize; }
+    bool rates_blocks(const Mesh&) const override { return (kHasBlocks || kHasValueBlocks) && !kTargetSize; }
     void rate_block(const TetBlock& x, ElementId first, int count, double* quality) const override {
         alignas(64) double reference_volume[kTetBlock], q[kTetBlock];
         for (int j = 0; j < kTetBlock; ++j)
@@ -586,7 +574,7 @@ void evaluate_together(std::span<const QualityMetric* const> metrics, const Mesh
     std::vector<const BlockRater*> raters(metrics.size(), nullptr);
     if (mesh.kind() == ElementKind::Tetrahedron && last - first >= kTetBlock)
         for (std::size_t i = 0; i < metrics.size(); ++i)
-            if (const auto* r = dynamic_cast<const BlockRater*>(metrics[i]); r && r->rates_blocks()) raters[i] = r;
+            if (const auto* r = dynamic_cast<const BlockRater*>(metrics[i]); r && r->rates_blocks(mesh)) raters[i] = r;
     for (std::size_t i = 0; i < metrics.size(); ++i)
         if (!raters[i]) metrics[i]->evaluate(mesh, xyz, first, last, quality[i]);
     if (std::none_of(raters.begin(), raters.end(), [](const BlockRater* r) { return r != nullptr; })) return;

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <vector>
 
+#include "evaluate_together.hpp"
 #include "geometry.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/cell_types.hpp"
@@ -78,7 +79,7 @@ const std::vector<double>& ideal_corner_jacobians() {
     return table;
 }
 
-class ScaledJacobian final : public QualityMetric {
+class ScaledJacobian final : public QualityMetric, public BlockRater {
 public:
     std::string_view name() const override { return "scaled_jacobian"; }
     bool has_gradient() const override { return false; }
@@ -141,6 +142,17 @@ public:
     }
     void accumulate_gradient(const Mesh&, std::span<const double>, ElementId, ElementId, const GradientTarget&) const override {
         throw OptionError("metric 'scaled_jacobian' is for assessment only and has no gradient");
+    }
+
+    // A report's blocks (evaluate_together) of a mesh of tetrahedra alone: a cell's corner is rated
+    // on its own corners, which a block carries mapped.
+    bool rates_blocks(const Mesh& mesh) const override {
+        return mesh.corners() == 4 && mesh.corner_maps().empty();
+    }
+    void rate_block(const TetBlock& x, ElementId, int count, double* quality) const override {
+        alignas(64) double q[kTetBlock];
+        tet_values_block(best_block_path(), TetValueMetric::scaled_jacobian, x, nullptr, q);
+        std::copy(q, q + count, quality);
     }
 
 private:

@@ -153,7 +153,7 @@ BOOST_AUTO_TEST_CASE(triangles_follow_their_plane_normal) {
 // The floating-point filter in front of the exact predicate answers only where it is sure: tets
 // flat to within an ulp or two, and tets far from unit scale (where products underflow or
 // overflow), get the exact predicate's sign.
-BOOST_AUTO_TEST_CASE(element_orientation_is_the_exact_sign_near_flat_and_far_from_unit_scale) {
+BOOST_AUTO_TEST_CASE(element_orientation_is_the_exact_sign_near_flat_and_far_from_unit_scale_one_by_one_or_in_blocks) {
     using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
     // Coordinates on a grid of 2^-20 and plane weights in eighths: corner 3 lies exactly on the
     // plane of the others until nudged.
@@ -185,6 +185,14 @@ BOOST_AUTO_TEST_CASE(element_orientation_is_the_exact_sign_near_flat_and_far_fro
         BOOST_TEST(pv::element_orientation(mesh, mesh.coordinates(), e) == exact, "tet " << e);
     }
     BOOST_TEST(flat > 0);  // some stayed exactly flat: the filter had to pass them on
+    // The blocks of element_orientations, over ranges that start and end inside a block.
+    for (const auto& [first, last] : {std::pair<pv::ElementId, pv::ElementId>{0, 2000}, {3, 1000}, {77, 78}, {1999, 2000}}) {
+        std::vector<std::int8_t> batch(static_cast<std::size_t>(last - first), 9);
+        pv::element_orientations(mesh, mesh.coordinates(), first, last, batch.data());
+        for (pv::ElementId e = first; e < last; ++e)
+            BOOST_TEST(batch[static_cast<std::size_t>(e - first)] == pv::element_orientation(mesh, mesh.coordinates(), e),
+                       "tet " << e << " of " << first << ".." << last);
+    }
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -15,6 +15,10 @@ namespace paloverde {
 // +1 positively oriented, 0 degenerate (flat), -1 inverted. Triangles are oriented by the mesh's
 // plane normal; in a non-planar surface mesh they are +1 unless degenerate.
 int element_orientation(const Mesh& mesh, std::span<const double> coordinates, ElementId element);
+// element_orientation() of the elements first..last-1, into out[0..last-first): the same answers,
+// a mesh of tetrahedra's filtered a block at a time.
+void element_orientations(const Mesh& mesh, std::span<const double> coordinates, ElementId first, ElementId last,
+                          std::int8_t* out);
 
 // Cells, for a mesh with cells: inverted when any corner is, degenerate when none is and one is flat.
 struct OrientationCounts {
