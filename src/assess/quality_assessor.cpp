@@ -354,6 +354,25 @@ QualityReport QualityAssessor::assess(const Mesh& mesh, std::span<const double> 
     return report;
 }
 
+std::optional<QualityReport> QualityAssessor::taken_from(const QualityReport& report, const QualityAssessor& other) const {
+    if (bins_ != other.bins_) return std::nullopt;
+    for (const auto& name : names_)
+        if (std::find(other.names_.begin(), other.names_.end(), name) == other.names_.end()) return std::nullopt;
+    // A metric `other` rates but the report lacks does not support the mesh: assess() leaves it
+    // out too. Metrics and each type's worst values go in this assessor's order.
+    QualityReport out = report;
+    out.metrics.clear();
+    for (const auto& name : names_)
+        if (const MetricReport* m = report.metric(name)) out.metrics.push_back(*m);
+    for (std::size_t t = 0; t < out.by_type.size(); ++t) {
+        out.by_type[t].worst.clear();
+        for (const auto& name : names_)
+            for (const auto& entry : report.by_type[t].worst)
+                if (entry.first == name) out.by_type[t].worst.push_back(entry);
+    }
+    return out;
+}
+
 const MetricReport* QualityReport::metric(std::string_view name) const {
     for (const auto& m : metrics)
         if (m.name == name) return &m;

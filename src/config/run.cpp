@@ -328,11 +328,16 @@ void run_methods(const RunSpec& spec, const RunHooks& hooks, MeshPart part, std:
         r.name = method.name;
         r.metric = spec.output.metric;
         r.before = report();
+        // Shared with the queue's solvers, which take their report of the input from it and make
+        // the report of the result with their own (a surface mesh's is about normals the solver
+        // sets itself).
+        const auto shared = normals.empty() ? std::make_shared<RunReports>(RunReports{assessor, r.before, std::nullopt})
+                                            : nullptr;
         part.reducer().max(0.0);  // the ranks start the clock together
         const auto start = std::chrono::steady_clock::now();
-        r.queue = built.queue.run(part);
+        r.queue = built.queue.run(part, shared);
         r.seconds = part.reducer().max(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-        r.after = report();
+        r.after = shared && shared->output ? std::move(*shared->output) : report();
         finish_method(r, built.targets);
         write_outputs(r);
         result.methods.push_back(std::move(r));

@@ -122,11 +122,12 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
     return run.finish(result.reason, result.message);
 }
 
-// One run on the part, with the boundary sliding (`sliding`) or not (nullptr).
+// One run on the part, with the boundary sliding (`sliding`) or not (nullptr); `shared`: the
+// run's reports, for the solver's one run (Solver::shared_reports).
 Summary improve_part(const GlobalSolverOptions& options, const IterationObserver& observer, MeshPart part,
-                     detail::SlidingBoundary* sliding) {
+                     detail::SlidingBoundary* sliding, SharedReports shared = {}) {
     const std::string name = "global";
-    detail::SolverRun run(part, name, options.shape_metric);
+    detail::SolverRun run(part, name, options.shape_metric, shared);
     if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
     // A run whose vertices slide depends on the surface they keep to.
@@ -199,7 +200,8 @@ Summary GlobalSolver::improve(MeshPart part) {
 
 Summary GlobalSolver::run_once(MeshPart part) {
     if (detail::is_surface_mesh(part)) return improve_surface(options_, observer(), part);
-    if (options_.boundary != GlobalSolverOptions::Boundary::Slide) return improve_part(options_, observer(), part, nullptr);
+    if (options_.boundary != GlobalSolverOptions::Boundary::Slide)
+        return improve_part(options_, observer(), part, nullptr, shared_reports());
     // The sliding run is a shape phase from the valid mesh the first run left: untangling would
     // not keep the boundary on the surface.
     return detail::fixed_then_sliding(part, options_.surface, options_.termination, options_.improve_shape,

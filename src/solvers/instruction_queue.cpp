@@ -1,5 +1,6 @@
 #include "paloverde/solvers/instruction_queue.hpp"
 
+#include <algorithm>
 #include <sstream>
 
 #include "paloverde/core/error.hpp"
@@ -72,11 +73,20 @@ InstructionQueue& InstructionQueue::targets(TargetOptions options) {
     return *this;
 }
 
-QueueResult InstructionQueue::run(MeshPart part) const {
+QueueResult InstructionQueue::run(MeshPart part, std::shared_ptr<RunReports> reports) const {
     QueueResult result;
     std::optional<KeptTargets> kept;
-    for (const Instruction& step : steps_) {
+    // The run's reports, for one improve().
+    struct Shared {
+        Solver& solver;
+        ~Shared() { solver.share_reports(nullptr, false, false); }
+    };
+    const bool sets_targets = std::any_of(steps_.begin(), steps_.end(), [](const Instruction& s) { return s.targets.has_value(); });
+    bool changed = false;  // by a step before this one
+    for (std::size_t i = 0; i < steps_.size(); ++i) {
+        const Instruction& step = steps_[i];
         if (step.targets) {
+            changed = true;
             if (!kept) kept.emplace(part.mesh());
             // Targets from a reference: the mesh at its reference coordinates (morphing).
             set_targets(part, *step.targets);
@@ -86,6 +96,9 @@ QueueResult InstructionQueue::run(MeshPart part) const {
             result.steps.push_back({step.label, step.assessor->assess(part)});
             continue;
         }
+        step.solver->share_reports(reports, !changed, !sets_targets && i + 1 == steps_.size());
+        const Shared shared{*step.solver};
+        changed = true;
         Summary summary = step.solver->improve(part);
         const bool ok = summary.success();
         const bool interrupted = summary.reason == TerminationReason::Interrupted;

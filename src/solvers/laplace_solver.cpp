@@ -26,7 +26,7 @@ Summary LaplaceSolver::improve(MeshPart part) {
         throw OptionError("'" + std::string(name()) + "' has no distributed version: smooth the whole mesh serially");
     Mesh& mesh = part.mesh();
     detail::ThreadScope threads(options_.threads);
-    detail::SolverRun run(part, std::string(name()), options_.metric);
+    detail::SolverRun run(part, std::string(name()), options_.metric, shared_reports());
     Summary& summary = run.summary;
     const auto start = run.start();
     const bool smart = options_.smart;

@@ -252,7 +252,7 @@ Summary LocalSolver::run_once(MeshPart whole_or_part) {
         return detail::on_surface(whole_or_part, options_.surface, open_edges_slide,
                                   [&](detail::SlidingBoundary* sliding) { return improve_part(whole_or_part, sliding); });
     }
-    if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr);
+    if (options_.boundary != LocalSolverOptions::Boundary::Slide) return improve_part(whole_or_part, nullptr, shared_reports());
     return detail::fixed_then_sliding(whole_or_part, options_.surface, options_.termination, true,
                                       {options_.checkpoint, std::string(name()), options_text(options_)},
                                       [&](const TerminationCriterion& budget, detail::SlidingBoundary* sliding,
@@ -266,8 +266,8 @@ Summary LocalSolver::run_once(MeshPart whole_or_part) {
                                       });
 }
 
-Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding) {
-    detail::SolverRun run(whole_or_part, std::string(name()), options_.metric);
+Summary LocalSolver::improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding, SharedReports shared) {
+    detail::SolverRun run(whole_or_part, std::string(name()), options_.metric, shared);
     if (sliding) sliding->set_scale_exponent(run.scale_exponent());
     if (auto nothing = run.nothing_to_move()) return *nothing;
     // A run whose vertices slide depends on the surface they keep to.

@@ -20,6 +20,7 @@
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/metrics/quality_metric.hpp"
 #include "paloverde/parallel/mesh_part.hpp"
+#include "paloverde/solvers/solver.hpp"
 #include "paloverde/solvers/summary.hpp"
 
 namespace paloverde::detail {
@@ -48,11 +49,14 @@ private:
 class SolverRun {
 public:
     // Solvers run at unit scale (an exact power-of-two rescaling, undone by finish() or, if the
-    // run throws, by the destructor): every metric is scale-free, and volumes of coordinates near
-    // 1e300 or 1e-300 would overflow or underflow. On a distributed part (collective), reports and
-    // decisions are the whole mesh's, on every rank.
-    SolverRun(MeshPart part, std::string solver, std::string metric)
-        : part_(part), mesh_(part.mesh()), start_(Clock::now()),
+    // run throws, by the destructor): volumes of coordinates near 1e300 or 1e-300 would overflow or
+    // underflow. The reports before and after are of the mesh at its own scale, as its caller's
+    // are: a metric is scale-free, but its cube roots may round otherwise at another scale. On a
+    // distributed part (collective), reports and decisions are the whole mesh's, on every rank.
+    // `shared`: the run's reports (Solver::shared_reports), which the first report is taken from
+    // and the report of the result is made for.
+    SolverRun(MeshPart part, std::string solver, std::string metric, SharedReports shared = {})
+        : part_(part), mesh_(part.mesh()), start_(Clock::now()), shared_(shared),
           original_(mesh_.coordinates().begin(), mesh_.coordinates().end()) {
         double largest = 0.0;
         for (double c : mesh_.coordinates()) largest = std::max(largest, std::abs(c));
@@ -62,7 +66,7 @@ public:
     }
     ~SolverRun() {
         if (finished_) return;
-        mesh_.scale(-exponent_);  // the target volumes
+        if (at_unit_scale_) mesh_.scale(-exponent_);  // the target volumes
         std::copy(original_.begin(), original_.end(), mesh_.coordinates().begin());
     }
     SolverRun(const SolverRun&) = delete;
@@ -103,18 +107,28 @@ public:
     Summary finish(TerminationReason reason, std::string message, bool safety_net = true) {
         summary.reason = reason;
         summary.message = std::move(message);
-        summary.after = assess();
+        mesh_.scale(-exponent_);
+        at_unit_scale_ = false;
+        std::optional<QualityReport> result;  // the run's report of it
+        if (output_assessor_) {
+            const QualityReport both = output_assessor_->assess(part_);
+            result = shared_.output->assessor.taken_from(both, *output_assessor_);
+            summary.after = *assessor_.taken_from(both, *output_assessor_);
+        } else {
+            summary.after = assess();
+        }
         summary.worst_after = worst_movable(summary.after);
         const bool worse = summary.after.inverted > summary.before.inverted ||
                            (summary.after.inverted == summary.before.inverted && summary.worst_after < summary.worst_before);
         const double jacobian_before = worst_scaled_jacobian(summary.before), jacobian_after = worst_scaled_jacobian(summary.after);
-        mesh_.scale(-exponent_);
         if (safety_net && worse) {
             hand_back_input("the result was worse than the input");
         } else if (safety_net && jacobian_after < jacobian_before) {
             std::ostringstream why;
             why << "the result lowered the minimum scaled Jacobian from " << jacobian_before << " to " << jacobian_after;
             hand_back_input(why.str());
+        } else if (shared_.output) {
+            shared_.output->output = std::move(result);
         }
         finished_ = true;
         summary.seconds = seconds_since(start_);
@@ -125,7 +139,6 @@ public:
 
 private:
     void begin(std::string solver, std::string metric) {
-        mesh_.scale(exponent_);
         summary.solver = std::move(solver);
         // The solver's own metric (and the aspect ratio, which rates every element kind): a run's
         // full report is the caller's to make (config::run assesses every metric around the
@@ -135,8 +148,19 @@ private:
         if (guards_scaled_jacobian()) metrics.push_back("scaled_jacobian");
         assessor_ = QualityAssessor(metrics);
         summary.quality_metric = std::move(metric);
-        summary.before = assess();
+        std::optional<QualityReport> known;
+        if (shared_.input) known = assessor_.taken_from(shared_.input->input, shared_.input->assessor);
+        summary.before = known ? std::move(*known) : assess();
+        // The report of the result, where the run's is made here too: both in one assessment.
+        if (shared_.output && shared_.output->assessor.histogram_bins() == assessor_.histogram_bins()) {
+            std::vector<std::string> both = shared_.output->assessor.metric_names();
+            for (const auto& name : metrics)
+                if (std::find(both.begin(), both.end(), name) == both.end()) both.push_back(name);
+            output_assessor_ = QualityAssessor(both, shared_.output->assessor.histogram_bins());
+        }
         summary.worst_before = worst_movable(summary.before);
+        mesh_.scale(exponent_);
+        at_unit_scale_ = true;
     }
     QualityReport assess() const { return assessor_.assess(part_); }
     // A mesh of cells with targets (the command line's default for cells), or a surface of cells,
@@ -172,9 +196,12 @@ private:
     MeshPart part_;
     Mesh& mesh_;
     Clock::time_point start_;
+    SharedReports shared_;
     QualityAssessor assessor_;
+    std::optional<QualityAssessor> output_assessor_;  // the run's metrics and the solver's
     std::vector<double> original_;  // the input, at its own scale
     int exponent_ = 0;
+    bool at_unit_scale_ = false;
     bool finished_ = false;
 };
 

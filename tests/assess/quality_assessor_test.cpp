@@ -104,6 +104,30 @@ BOOST_AUTO_TEST_CASE(json_has_the_documented_keys) {
     BOOST_TEST(j["inverted"].get<int>() == 9);
 }
 
+// A report taken from another assessor's report of the same mesh is the one assess() makes, for
+// tetrahedra, cells (by type) and triangles (whose report has no dihedral angle); it is refused
+// where the other did not rate a metric or counted other bins.
+BOOST_AUTO_TEST_CASE(a_report_taken_from_a_fuller_one_is_the_report_assessed) {
+    const pv::QualityAssessor full;
+    const pv::QualityAssessor small({"min_dihedral_deg", "aspect_ratio", "scaled_jacobian"});
+    for (const char* file : {"mesquite/tets/tire.vtk", "mesquite/hexes/sph-10-zsquare.vtk",
+                             "mesquite/mixed/mixed-hex-pyr-tet.vtk", "mesquite/tris/tri_20258.vtk"}) {
+        const auto mesh = pv::read_mesh(pv::test::shared_data(file)).mesh;
+        const auto taken = small.taken_from(full.assess(mesh), full);
+        BOOST_REQUIRE_MESSAGE(taken.has_value(), file);
+        BOOST_TEST(taken->to_json() == small.assess(mesh).to_json(), file);
+        BOOST_TEST(taken->metrics.front().name == (mesh.kind() == pv::ElementKind::Tetrahedron && !mesh.has_cells()
+                                                       ? "min_dihedral_deg"
+                                                       : "aspect_ratio"),
+                   file);
+    }
+    const auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
+    const pv::QualityAssessor shape({"aspect_ratio", "mean_ratio"});
+    BOOST_TEST(!pv::QualityAssessor({"shape_size"}).taken_from(full.assess(mesh), full).has_value());
+    BOOST_TEST(!shape.taken_from(shape.assess(mesh), pv::QualityAssessor({"aspect_ratio", "mean_ratio"}, 20)).has_value());
+    BOOST_TEST(pv::QualityAssessor({"mean_ratio"}).taken_from(shape.assess(mesh), shape).has_value());
+}
+
 BOOST_AUTO_TEST_CASE(unknown_metrics_and_bad_bins_are_rejected) {
     BOOST_CHECK_THROW(pv::QualityAssessor({"nope"}), std::exception);
     BOOST_CHECK_THROW(pv::QualityAssessor({"aspect_ratio"}, 0), std::exception);

@@ -3,6 +3,7 @@
 // move (at least one free vertex) and those it cannot (all vertices fixed).
 #include <memory>
 #include <span>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,6 +69,13 @@ public:
     // The report of the whole mesh the part belongs to. A distributed part's is collective, the
     // same on every rank, and equal to the serial report except that worst_element is -1.
     QualityReport assess(const MeshPart& part) const;
+    // This assessor's report of a mesh, taken from a report `other` made of the same mesh (the same
+    // coordinates, fixed vertices and targets; the scale aside): what assess() would give, without
+    // a pass over the elements. Empty unless `other` rates every metric this one rates, in as many
+    // histogram bins.
+    std::optional<QualityReport> taken_from(const QualityReport& report, const QualityAssessor& other) const;
+    const std::vector<std::string>& metric_names() const { return names_; }
+    int histogram_bins() const { return bins_; }
 
 private:
     // Elements with counted[e] (all when empty) and vertices with owned[v] enter the report;

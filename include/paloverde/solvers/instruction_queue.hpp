@@ -50,8 +50,12 @@ public:
     InstructionQueue& observe(StepObserver observer);
     std::size_t size() const { return steps_.size(); }
 
-    // On the whole mesh or, collectively, on this rank's part of a distributed one.
-    QueueResult run(MeshPart part) const;
+    // On the whole mesh or, collectively, on this rank's part of a distributed one. `reports`: the
+    // caller's report of the mesh as given, and where its report of the result goes (RunReports):
+    // the first step that changes the mesh takes the one (a solver, with no targets set before
+    // it), the last makes the other (a solver, in a queue that sets no targets, whose targets are
+    // handed back before the caller's report).
+    QueueResult run(MeshPart part, std::shared_ptr<RunReports> reports = nullptr) const;
 
 private:
     struct Instruction {

@@ -85,7 +85,8 @@ private:
         MetricScale scale;
     };
     // The run on the part, with the boundary sliding (`sliding`) or not (nullptr).
-    Summary improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding);
+    // `shared`: the run's reports, for the solver's one run (Solver::shared_reports).
+    Summary improve_part(MeshPart whole_or_part, detail::SlidingBoundary* sliding, SharedReports shared = {});
     Summary sweep_colors(detail::SolverRun& run, const Domain& domain, detail::Checkpointer& checkpointer,
                          const detail::SlidingBoundary* sliding = nullptr);
 
