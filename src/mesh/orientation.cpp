@@ -44,23 +44,26 @@ int planar_triangle_orientation(const Mesh& mesh, std::span<const double> xyz, s
     return n[axis] >= 0.0 ? sign : -sign;
 }
 
-// det(p1 - p0, p2 - p0, p3 - p0) from the rounded differences, the bound on its error where no
-// product underflows, and the largest coordinate of p1 - p0, the row that multiplies the minors.
+// det(a, b, c) of the rows a = p1 - p0, b = p2 - p0, c = p3 - p0 (rounded differences), the bound
+// on its error where no product underflows, and the largest coordinate of a, the row that
+// multiplies the minors. Inlined into loops over blocks of elements, it runs several to an
+// instruction.
 struct TetDeterminant {
     double det, error, first_row;
 };
+inline TetDeterminant determinant_of(double a0, double a1, double a2, double b0, double b1, double b2, double c0,
+                                     double c1, double c2) {
+    const double m0 = b1 * c2, m1 = b2 * c1;
+    const double m2 = b0 * c2, m3 = b2 * c0;
+    const double m4 = b0 * c1, m5 = b1 * c0;
+    const double det = a0 * (m0 - m1) - a1 * (m2 - m3) + a2 * (m4 - m5);
+    const double permanent = std::abs(a0) * (std::abs(m0) + std::abs(m1)) + std::abs(a1) * (std::abs(m2) + std::abs(m3)) +
+                             std::abs(a2) * (std::abs(m4) + std::abs(m5));
+    return {det, kTetBound * permanent, std::max(std::max(std::abs(a0), std::abs(a1)), std::abs(a2))};
+}
 TetDeterminant tet_determinant(const double* p0, const double* p1, const double* p2, const double* p3) {
-    double d[3][3];
-    for (int j = 0; j < 3; ++j) d[0][j] = p1[j] - p0[j], d[1][j] = p2[j] - p0[j], d[2][j] = p3[j] - p0[j];
-    const double m0 = d[1][1] * d[2][2], m1 = d[1][2] * d[2][1];
-    const double m2 = d[1][0] * d[2][2], m3 = d[1][2] * d[2][0];
-    const double m4 = d[1][0] * d[2][1], m5 = d[1][1] * d[2][0];
-    const double det = d[0][0] * (m0 - m1) - d[0][1] * (m2 - m3) + d[0][2] * (m4 - m5);
-    const double permanent = std::abs(d[0][0]) * (std::abs(m0) + std::abs(m1)) +
-                             std::abs(d[0][1]) * (std::abs(m2) + std::abs(m3)) +
-                             std::abs(d[0][2]) * (std::abs(m4) + std::abs(m5));
-    const double first_row = std::max({std::abs(d[0][0]), std::abs(d[0][1]), std::abs(d[0][2])});
-    return {det, kTetBound * permanent, first_row};
+    return determinant_of(p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2], p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2],
+                          p3[0] - p0[0], p3[1] - p0[1], p3[2] - p0[2]);
 }
 }  // namespace
 
@@ -99,10 +102,9 @@ void element_orientations(const Mesh& mesh, std::span<const double> xyz, Element
         return;
     }
     // The filter of element_orientation() on a block of elements at once: the corners' differences
-    // gathered into rows, then the determinants and their bounds in loops the compiler runs
-    // several elements to an instruction (the same operations in the same order as
-    // tet_determinant, without contracting them). Only where the filter cannot tell is the element
-    // asked again, one at a time.
+    // gathered into rows, then the determinants and their bounds in a loop the compiler runs
+    // several elements to an instruction. Only where the filter cannot tell is the element asked
+    // again, one at a time.
     constexpr int kBlock = 64;
     const VertexId* corners = mesh.connectivity().data();
     for (ElementId start = first; start < last; start += kBlock) {
@@ -118,15 +120,11 @@ void element_orientations(const Mesh& mesh, std::span<const double> xyz, Element
         }
         alignas(64) double det[kBlock], margin[kBlock], first_row[kBlock];
         for (int i = 0; i < count; ++i) {
-            const double m0 = d[4][i] * d[8][i], m1 = d[5][i] * d[7][i];
-            const double m2 = d[3][i] * d[8][i], m3 = d[5][i] * d[6][i];
-            const double m4 = d[3][i] * d[7][i], m5 = d[4][i] * d[6][i];
-            det[i] = d[0][i] * (m0 - m1) - d[1][i] * (m2 - m3) + d[2][i] * (m4 - m5);
-            const double permanent = std::abs(d[0][i]) * (std::abs(m0) + std::abs(m1)) +
-                                     std::abs(d[1][i]) * (std::abs(m2) + std::abs(m3)) +
-                                     std::abs(d[2][i]) * (std::abs(m4) + std::abs(m5));
-            margin[i] = kTetBound * permanent + kUnderflowSlack;
-            first_row[i] = std::max(std::max(std::abs(d[0][i]), std::abs(d[1][i])), std::abs(d[2][i]));
+            const TetDeterminant t = determinant_of(d[0][i], d[1][i], d[2][i], d[3][i], d[4][i], d[5][i], d[6][i],
+                                                    d[7][i], d[8][i]);
+            det[i] = t.det;
+            margin[i] = t.error + kUnderflowSlack;
+            first_row[i] = t.first_row;
         }
         for (int i = 0; i < count; ++i) {
             const bool sure = first_row[i] <= 0x1p64 && (det[i] > margin[i] || det[i] < -margin[i]);

@@ -144,8 +144,8 @@ public:
         throw OptionError("metric 'scaled_jacobian' is for assessment only and has no gradient");
     }
 
-    // A report's blocks (evaluate_together) of a mesh of tetrahedra alone: a cell's corner is rated
-    // on its own corners, which a block carries mapped.
+    // A report's blocks (evaluate_together), for a mesh of tetrahedra alone: with corner maps a
+    // block carries each corner mapped, and a cell's corners are rated as they are (evaluate()).
     bool rates_blocks(const Mesh& mesh) const override {
         return mesh.corners() == 4 && mesh.corner_maps().empty();
     }
