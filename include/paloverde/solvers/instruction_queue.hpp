@@ -51,10 +51,10 @@ public:
     std::size_t size() const { return steps_.size(); }
 
     // On the whole mesh or, collectively, on this rank's part of a distributed one. `reports`: the
-    // caller's report of the mesh as given, and where its report of the result goes (RunReports):
-    // the first step that changes the mesh takes the one (a solver, with no targets set before
-    // it), the last makes the other (a solver, in a queue that sets no targets, whose targets are
-    // handed back before the caller's report).
+    // caller's report of the mesh as given, and the slot for its report of the result
+    // (RunReports). The first step to change the mesh, if a solver, takes its own report of the
+    // input from them; the last step, if a solver, fills the slot, unless the queue sets targets
+    // (it hands the mesh's own targets back after its last step, which the caller's report rates).
     QueueResult run(MeshPart part, std::shared_ptr<RunReports> reports = nullptr) const;
 
 private:
