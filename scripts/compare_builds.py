@@ -8,8 +8,8 @@ For a change meant to make things faster and nothing else (docs/benchmarks.md).
 
 OLD_BIN, NEW_BIN: the folders holding each build's `paloverde` (a worktree of the old commit built
 with `bash scripts/setup.sh build`, say). Without --case, the shared meshes below (hexahedra, mixed
-cells, tetrahedra, triangles, quadrilaterals, a sliding boundary, the local smoother), with the
-solvers' defaults unless the case says otherwise; each --case adds a mesh of your own (a Gmsh or
+cells, tetrahedra with and without targets, triangles, quadrilaterals, a sliding boundary, the
+local smoother), with the solvers' defaults unless the case says otherwise; each --case adds a mesh of your own (a Gmsh or
 TetGen mesh, fandisk-2M) with the flags after it. Prints one line per case; exits 1 if any differ.
 """
 import argparse
@@ -29,6 +29,7 @@ CASES = [
     "mesquite/mixed/mixed-hex-pyr-tet.vtk",
     "mesquite/tets/tire.vtk",
     "mesquite/tets/tet_4_tangled.vtk",
+    "mesquite/tets/tire.vtk --keep size,aspect",
     "mesquite/tris/tri_20258.vtk",
     "mesquite/tris/tangled_tri.vtk",
     "mesquite/quads/tangled_horse1.vtk",

@@ -144,10 +144,11 @@ public:
         throw OptionError("metric 'scaled_jacobian' is for assessment only and has no gradient");
     }
 
-    // A report's blocks (evaluate_together), for a mesh of tetrahedra alone: with corner maps a
-    // block carries each corner mapped, and a cell's corners are rated as they are (evaluate()).
+    // A report's blocks (evaluate_together), for a mesh of tetrahedra alone without targets: a
+    // block carries each element mapped by its corner map or its target, and the scaled Jacobian
+    // rates the corners as they are (evaluate()).
     bool rates_blocks(const Mesh& mesh) const override {
-        return mesh.corners() == 4 && mesh.corner_maps().empty();
+        return mesh.corners() == 4 && mesh.corner_maps().empty() && !mesh.has_targets();
     }
     void rate_block(const TetBlock& x, ElementId, int count, double* quality) const override {
         alignas(64) double q[kTetBlock];

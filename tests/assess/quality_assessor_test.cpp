@@ -1,11 +1,14 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Kernel/global_functions.h>
 #include <boost/test/unit_test.hpp>
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "paloverde/assess/quality_assessor.hpp"
 #include "paloverde/io/mesh_io.hpp"
+#include "paloverde/metrics/quality_metric.hpp"
+#include "paloverde/metrics/targets.hpp"
 #include "support/test_support.hpp"
 
 namespace pv = paloverde;
@@ -126,6 +129,28 @@ BOOST_AUTO_TEST_CASE(a_report_taken_from_a_fuller_one_is_the_report_assessed) {
     BOOST_TEST(!pv::QualityAssessor({"shape_size"}).taken_from(full.assess(mesh), full).has_value());
     BOOST_TEST(!shape.taken_from(shape.assess(mesh), pv::QualityAssessor({"aspect_ratio", "mean_ratio"}, 20)).has_value());
     BOOST_TEST(pv::QualityAssessor({"mean_ratio"}).taken_from(shape.assess(mesh), shape).has_value());
+}
+
+// The report's scaled Jacobian is the corners' own, the users' measure, whatever targets the
+// mesh carries (the report's other metrics rate its elements against them): with targets and
+// without, its worst and mean are those of the metric's own evaluate().
+BOOST_AUTO_TEST_CASE(the_reported_scaled_jacobian_rates_the_corners_as_they_are_with_targets_too) {
+    auto mesh = pv::read_mesh(pv::test::shared_data("mesquite/tets/tire.vtk")).mesh;
+    const auto own = [&] {
+        std::vector<double> q(static_cast<std::size_t>(mesh.num_elements()));
+        auto metric = pv::make_metric("scaled_jacobian");
+        metric->set_scale(pv::MetricScale::of(mesh));
+        metric->evaluate(mesh, mesh.coordinates(), 0, mesh.num_elements(), q.data());
+        return *std::min_element(q.begin(), q.end());
+    };
+    const pv::QualityAssessor assessor({"shape_size", "scaled_jacobian"});
+    const double plain = assessor.assess(mesh).metric("scaled_jacobian")->all.min;
+    BOOST_TEST(plain == own());
+    pv::set_targets(mesh, pv::TargetOptions::from("all"));
+    BOOST_REQUIRE(mesh.has_targets());
+    const pv::QualityReport targeted = assessor.assess(mesh);
+    BOOST_TEST(targeted.metric("scaled_jacobian")->all.min == plain);
+    BOOST_TEST(targeted.metric("shape_size")->all.min > 0.99);  // every element is its own target
 }
 
 BOOST_AUTO_TEST_CASE(unknown_metrics_and_bad_bins_are_rejected) {
