@@ -286,11 +286,7 @@ Summary fixed_then_sliding(MeshPart part, const SurfaceOptions& surface, const T
         const SolverState state = checkpointer.resume(work);
         if (state.number("fixed_run_done") != 0.0) {
             fixed = restored_outcome(state, "fixed_run");
-            fixed->iterations = work.iterations;
-            fixed->untangle_iterations = work.untangle_iterations;
-            fixed->quality_passes = work.quality_passes;
-            fixed->gradient_passes = work.gradient_passes;
-            fixed->history = std::move(work.history);
+            take_work(*fixed, std::move(work));
             fixed->seconds = state.number("seconds");
             const std::vector<double>& left = state.vertex_field("fixed_run_mesh", n);
             std::copy(left.begin(), left.end(), mesh.coordinates().begin());
