@@ -524,6 +524,17 @@ BOOST_AUTO_TEST_CASE(coordinates_near_1e300_and_1e_minus_300) {
     check_text_fails_fast(dir, "junk_small.vtk", replaced(vtk, "1e+308 0 0", "1e-999junk 0 0"), {"'1e-999junk'"});
     check_text_fails_fast(dir, "junk_large.mesh", replaced(medit_text(huge, tet), "1e+308 0 0", "1e999x 0 0"),
                           {"'1e999x'"});
+    // A number run into other characters, an id or a coordinate, is refused whole, at its line;
+    // a sign, leading zeros and more digits than fit in a word go the general way.
+    check_text_fails_fast(dir, "junk_id.vtk", replaced(vtk, "4 0 1 2 3", "4 0 1 2x 3"), {":11:", "'2x'", "(in cell 0)"});
+    check_text_fails_fast(dir, "junk_coordinate.vtk", replaced(vtk, "1e+308 0 0", "1e+308 0q 0"), {":7:", "'0q'"});
+    check_text_fails_fast(dir, "huge_id.vtk", replaced(vtk, "4 0 1 2 3", "4 0 1 2 99999999999999999999"),
+                          {":11:", "(an integer)", "'99999999999999999999'"});
+    write_file(dir / "signed.vtk",
+               replaced(replaced(vtk, "4 0 1 2 3", "4 +0 001 2 0000000000000000000003"), "1e+308 0 0", "+1e+308 0 0"));
+    const Mesh signed_mesh = read_mesh(dir / "signed.vtk").mesh;
+    BOOST_TEST(signed_mesh.coordinates()[3] == 1e308);
+    BOOST_TEST(signed_mesh.element(0)[3] == 3);
 
     // Orientation by total volume (TetGen) and the plane of a triangle mesh work at unit scale:
     // near 1e300 volumes and cross products overflow, near 1e-300 they underflow to zero.
