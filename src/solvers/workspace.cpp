@@ -36,19 +36,25 @@ struct MovableFirst {
     ElementId movable = 0;
 };
 MovableFirst movable_first(const Mesh& mesh, std::span<const GlobalId> element_order) {
-    const ElementId m = mesh.num_elements();
-    MovableFirst result;
-    std::vector<ElementId>& order = result.order;
-    order.resize(static_cast<std::size_t>(m));
-    std::iota(order.begin(), order.end(), ElementId{0});
+    const auto m = static_cast<std::size_t>(mesh.num_elements());
+    std::vector<ElementId> canonical(m);
     const bool numbered = std::all_of(element_order.begin(), element_order.end(),
-                                      [m](GlobalId position) { return position >= 0 && position < m; });
-    if (numbered)
-        for (ElementId e = 0; e < m; ++e) order[static_cast<std::size_t>(element_order[e])] = e;
-    else
-        std::sort(order.begin(), order.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
-    const auto frozen = std::stable_partition(order.begin(), order.end(), [&](ElementId e) { return mesh.element_can_move(e); });
-    result.movable = static_cast<ElementId>(frozen - order.begin());
+                                      [m](GlobalId position) { return position >= 0 && static_cast<std::size_t>(position) < m; });
+    if (numbered) {
+        for (std::size_t e = 0; e < m; ++e) canonical[static_cast<std::size_t>(element_order[e])] = static_cast<ElementId>(e);
+    } else {
+        std::iota(canonical.begin(), canonical.end(), ElementId{0});
+        std::sort(canonical.begin(), canonical.end(), [&](ElementId a, ElementId b) { return element_order[a] < element_order[b]; });
+    }
+    // Split stably: whether each element moves is asked in the mesh's own order (its corners
+    // read in turn), then each goes to its group's next place.
+    std::vector<std::uint8_t> moves(m);
+    for (std::size_t e = 0; e < m; ++e) moves[e] = mesh.element_can_move(static_cast<ElementId>(e));
+    MovableFirst result;
+    result.movable = static_cast<ElementId>(std::count(moves.begin(), moves.end(), std::uint8_t{1}));
+    result.order.resize(m);
+    auto movable = result.order.begin(), frozen = movable + result.movable;
+    for (ElementId e : canonical) *(moves[static_cast<std::size_t>(e)] ? movable++ : frozen++) = e;
     return result;
 }
 
