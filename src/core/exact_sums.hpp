@@ -16,21 +16,6 @@
 
 namespace paloverde::detail {
 
-// Calls term(i, sums) for i in [0, n); `term` adds its K contributions with sums[k].add(x).
-template <int K, class Term>
-std::array<ExactSum, K> exact_sums(std::size_t n, Term term) {
-    std::array<ExactSum, K> total{};
-#pragma omp parallel if (n > kParallelThreshold)
-    {
-        std::array<ExactSum, K> mine{};
-#pragma omp for schedule(static) nowait
-        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) term(static_cast<std::size_t>(i), mine);
-#pragma omp critical(paloverde_exact_sums)
-        for (int k = 0; k < K; ++k) total[k] += mine[k];
-    }
-    return total;
-}
-
 // A fast accumulator for terms whose magnitude is known not to exceed `bound`, the same on every
 // process. With 2^e >= bound, each term is rounded to a multiple of about 2^(e - 84), the same
 // way wherever it is added, by splitting it against two fixed pivots: (pivot + x) - pivot keeps
@@ -105,6 +90,49 @@ private:
     int count_ = 0;
     ExactSum exact_;
 };
+
+// Calls term(i, sums) for i in [0, n); `term` adds its K contributions with sums[k].add(x). The
+// terms are collected a block at a time and added as bounded sums under the block's own largest
+// finite magnitude (BoundedSum::add_all_exact): exactly, so the result is ExactSum's of the terms
+// one by one, bit for bit, at a few additions per term instead of a digit update each.
+template <int K, class Term>
+std::array<ExactSum, K> exact_sums(std::size_t n, Term term) {
+    // What `term` sees as acc[k].
+    struct Collector {
+        std::size_t filled = 0;
+        alignas(32) std::array<double, BoundedSum::kFlush> buffer;
+        ExactSum sum;
+        void add(double x) {
+            buffer[filled] = x;
+            if (++filled == buffer.size()) empty();
+        }
+        void empty() {
+            if (filled == 0) return;
+            double bound = 0.0;  // an infinite or NaN term is above it, and takes the exact path
+            for (std::size_t i = 0; i < filled; ++i) {
+                const double magnitude = std::abs(buffer[i]);
+                bound = magnitude > bound && magnitude <= std::numeric_limits<double>::max() ? magnitude : bound;
+            }
+            BoundedSum pieces(bound);
+            pieces.add_all_exact(buffer.data(), filled);
+            pieces.add_to(sum);
+            filled = 0;
+        }
+    };
+    std::array<ExactSum, K> total{};
+#pragma omp parallel if (n > kParallelThreshold)
+    {
+        std::array<Collector, K> mine;
+#pragma omp for schedule(static) nowait
+        for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(n); ++i) term(static_cast<std::size_t>(i), mine);
+#pragma omp critical(paloverde_exact_sums)
+        for (int k = 0; k < K; ++k) {
+            mine[k].empty();
+            total[k] += mine[k].sum;
+        }
+    }
+    return total;
+}
 
 // As exact_sums, for terms bounded as BoundedSum says: bounds[k] for the k-th sum. The terms are
 // collected in small buffers and added a buffer at a time with BoundedSum::add_all (the sums
