@@ -63,17 +63,18 @@ std::string listed(const std::vector<Id>& ids) {
 // boundary_vertices() finds them, and the checks that no two elements have the same vertices
 // and that no face is in more than two elements: such a mesh no vertex placement can make valid
 // (untangling could not succeed, and the face would pass for an interior one). Each vertex in
-// turn lists the elements and the faces whose smallest vertex it is, from the elements around it,
+// turn lists the faces whose smallest vertex it is, and the elements whose smallest vertex it is,
 // and sorts those short lists (the elements as check_no_duplicate_elements does, so the same pair
-// is named). Those elements lie scattered in a mesh in file order, so their corners are asked for
-// a few elements ahead; the loads overlap, where scattering every face into rows wrote to a cache
-// line of its own at nearly every face (twice as slow).
+// is named). Only an element's two smallest vertices are the smallest of any of its faces, so each
+// element is listed at those two (a counting sort of the element ids, in a pass in file order),
+// not at all of its vertices. Those elements lie scattered in a mesh in file order, so their
+// corners are asked for a few elements ahead; the loads overlap, where scattering every face into
+// rows wrote to a cache line of its own at nearly every face (twice as slow).
 std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string& path) {
     const int k = mesh.corners();
     const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    const auto m = static_cast<std::size_t>(mesh.num_elements());
     const VertexId* corners = mesh.connectivity().data();
-    const auto first_around = mesh.vertex_element_offsets();
-    const auto around = mesh.vertex_elements();
     const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
     std::vector<std::uint8_t> boundary(n, 0);
     const auto size = static_cast<std::size_t>(k - 1);
@@ -81,11 +82,36 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
     auto key = [](VertexId a, VertexId b) {  // a face's others, packed increasing (a triangle's edge: b = 0)
         return static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32 | static_cast<std::uint32_t>(b);
     };
-    std::int64_t most_around = 0;
-    for (std::size_t v = 0; v < n; ++v) most_around = std::max(most_around, first_around[v + 1] - first_around[v]);
+    // An element's two smallest vertices, without branching on the ids.
+    auto two_smallest = [&](const VertexId* c) {
+        VertexId low = std::min(c[0], c[1]), second = std::max(c[0], c[1]);
+        for (int j = 2; j < k; ++j) {
+            second = std::min(second, std::max(low, c[j]));
+            low = std::min(low, c[j]);
+        }
+        return std::pair{low, second};
+    };
+    std::vector<std::int64_t> first_listed(n + 1, 0);
+    for (std::size_t e = 0; e < m; ++e) {
+        const auto [low, second] = two_smallest(corners + k * e);
+        ++first_listed[static_cast<std::size_t>(low) + 1];
+        ++first_listed[static_cast<std::size_t>(second) + 1];
+    }
+    std::partial_sum(first_listed.begin(), first_listed.end(), first_listed.begin());
+    std::vector<ElementId> listed_at(2 * m);
+    {
+        std::vector<std::int64_t> next(first_listed.begin(), first_listed.end() - 1);
+        for (std::size_t e = 0; e < m; ++e) {
+            const auto [low, second] = two_smallest(corners + k * e);
+            listed_at[static_cast<std::size_t>(next[static_cast<std::size_t>(low)]++)] = static_cast<ElementId>(e);
+            listed_at[static_cast<std::size_t>(next[static_cast<std::size_t>(second)]++)] = static_cast<ElementId>(e);
+        }
+    }
+    std::int64_t most_listed = 0;
+    for (std::size_t v = 0; v < n; ++v) most_listed = std::max(most_listed, first_listed[v + 1] - first_listed[v]);
     // At this vertex: the others of each face, packed increasing (at most three per element); the
     // elements whose smallest vertex it is, by their other corners, then the element.
-    std::vector<std::uint64_t> faces(3 * static_cast<std::size_t>(most_around));
+    std::vector<std::uint64_t> faces(3 * static_cast<std::size_t>(most_listed));
     std::vector<std::pair<std::uint64_t, std::uint64_t>> own;
     // The table of one vertex's faces, at most half full: a slot belongs to the vertex whose stamp
     // it holds, so nothing is cleared between vertices.
@@ -101,12 +127,12 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
     std::uint32_t stamp = 1;
     for (std::size_t v = 0; v < n; ++v) {
         const auto vertex = static_cast<VertexId>(v);
-        const auto begin = static_cast<std::size_t>(first_around[v]), end = static_cast<std::size_t>(first_around[v + 1]);
+        const auto begin = static_cast<std::size_t>(first_listed[v]), end = static_cast<std::size_t>(first_listed[v + 1]);
         std::size_t listed = 0;
         own.clear();
         for (std::size_t i = begin; i < end; ++i) {
-            if (i + ahead < around.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(around[i + ahead]));
-            const VertexId* c = corners + k * static_cast<std::size_t>(around[i]);
+            if (i + ahead < listed_at.size()) __builtin_prefetch(corners + k * static_cast<std::size_t>(listed_at[i + ahead]));
+            const VertexId* c = corners + k * static_cast<std::size_t>(listed_at[i]);
             // v is the smallest vertex of the faces through it whose other corners are all larger:
             // with L corners above v, a tetrahedron has C(L, 2) such faces, a triangle L edges. The
             // larger corners are gathered and sorted without branching on their values (which
@@ -129,14 +155,14 @@ std::vector<std::uint8_t> manifold_boundary(const Mesh& mesh, const std::string&
                 out[1] = key(larger[0], larger[2]);
                 out[2] = key(larger[1], larger[2]);
                 listed += static_cast<std::size_t>(count * (count - 1) / 2);
-                if (count == 3) own.emplace_back(out[0], key(larger[2], static_cast<VertexId>(around[i])));
+                if (count == 3) own.emplace_back(out[0], key(larger[2], static_cast<VertexId>(listed_at[i])));
             } else {
                 out[0] = key(larger[0], 0);
                 out[1] = key(larger[1], 0);
                 listed += static_cast<std::size_t>(count);
                 if (count == 2) {
                     order(0, 1);
-                    own.emplace_back(key(larger[0], larger[1]), key(0, static_cast<VertexId>(around[i])));
+                    own.emplace_back(key(larger[0], larger[1]), key(0, static_cast<VertexId>(listed_at[i])));
                 }
             }
         }
