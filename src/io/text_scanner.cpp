@@ -143,6 +143,29 @@ std::int64_t TextScanner::integer(std::string_view what) {
     return value;
 }
 
+std::size_t TextScanner::plain_integers(std::int64_t* out, std::size_t* ends, std::size_t count) {
+    const char* data = data_.data();
+    const std::size_t size = data_.size();
+    std::size_t pos = pos_, line = line_, got = 0;
+    for (; got < count; ++got) {
+        while (pos < size && is_space(data[pos])) line += data[pos++] == '\n';
+        // What follows stands where integer() takes it up (its skip of whitespace done).
+        pos_ = pos, line_ = line;
+        if (pos == size || data[pos] == comment_) break;
+        const char* begin = data + pos;
+        const char* end = data + std::min(size, pos + 18);
+        const char* next = begin;
+        std::int64_t value = 0;
+        while (next < end && static_cast<unsigned char>(*next - '0') < 10) value = 10 * value + (*next++ - '0');
+        if (next == begin || (next != data + size && !is_space(*next))) break;
+        pos = static_cast<std::size_t>(next - data);
+        out[got] = value;
+        ends[got] = pos;
+    }
+    pos_ = pos, line_ = line;
+    return got;
+}
+
 std::int64_t TextScanner::count(std::string_view what, std::int64_t max_plausible) {
     const std::int64_t value = integer(what);
     if (value < 0) fail(std::string(what) + " is negative (" + std::to_string(value) + ")");
@@ -189,6 +212,13 @@ void TextScanner::fail(const std::string& message) const {
 }
 
 void TextScanner::fail_at_byte(const std::string& message) const { throw FileError::at_byte(path_, pos_, message); }
+
+void TextScanner::fail_at(std::size_t offset, const std::string& message) const {
+    if (byte_offsets_) throw FileError::at_byte(path_, offset, message);
+    const auto newlines = std::count(data_.begin() + static_cast<std::ptrdiff_t>(offset),
+                                     data_.begin() + static_cast<std::ptrdiff_t>(pos_), '\n');
+    throw FileError(path_, line_ - static_cast<std::size_t>(newlines), message);
+}
 
 bool parse_real(std::string_view token, double& value) {
     if (!token.empty() && token.front() == '+') token.remove_prefix(1);

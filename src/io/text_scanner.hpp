@@ -39,6 +39,11 @@ public:
     double real(std::string_view what);              // finite or not: see finite_real
     double finite_real(std::string_view what);       // rejects NaN and infinity
     std::int64_t integer(std::string_view what);
+    // Up to `count` plain integers (digits only, at most 18 of them, then whitespace or the end of
+    // the file) into out, each one's end offset into ends: integer() on each, in one loop. Stops
+    // before the first value that is not plain, which integer() then reads or refuses as usual.
+    // Returns how many it read.
+    std::size_t plain_integers(std::int64_t* out, std::size_t* ends, std::size_t count);
     // A count: non-negative, and at most `max_plausible` (e.g. bounded by the remaining bytes).
     std::int64_t count(std::string_view what, std::int64_t max_plausible);
     // The rest of the current line (without the newline), then moves to the next line.
@@ -58,6 +63,9 @@ public:
     std::string in_entry() const { return entry_ ? " (in " + entry_() + ")" : std::string(); }
 
     [[noreturn]] void fail(const std::string& message) const;          // at the current line
+    // As fail(), as if the scanner stood at `offset`, a place already read past (the end of a
+    // value plain_integers() read, found wrong after it).
+    [[noreturn]] void fail_at(std::size_t offset, const std::string& message) const;
     [[noreturn]] void fail_at_byte(const std::string& message) const;  // at the current offset
     // For files that mix text headers with binary blocks, where line numbers stop meaning
     // anything after the first block: from now on fail() reports the byte offset instead.

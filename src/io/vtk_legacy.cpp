@@ -113,10 +113,14 @@ private:
     std::int64_t early_point_data_ = -1;
     std::int64_t early_cell_data_ = -1;
     std::size_t value_byte_ = 0;
+    // Where the text value being consumed ends, while read_values() consumes values read ahead.
+    static constexpr std::size_t kNoValue = static_cast<std::size_t>(-1);
+    std::size_t value_end_ = kNoValue;
 };
 
 void LegacyReader::fail_value(const std::string& message) const {
     if (binary_) throw FileError::at_byte(s_.path(), value_byte_, message);
+    if (value_end_ != kNoValue) s_.fail_at(value_end_, message);
     s_.fail(message);
 }
 
@@ -142,11 +146,29 @@ void LegacyReader::read_values(std::size_t n, ValueType type, std::string_view w
         }
         return;
     }
-    for (std::size_t i = 0; i < n; ++i) {
-        if constexpr (std::is_integral_v<T>)
-            consume(i, s_.integer(what));
-        else
-            consume(i, s_.real(what));
+    if constexpr (std::is_integral_v<T>) {
+        // Plain integers a chunk at a time; each is consumed as if just read (fail_value names
+        // the line it ends on), and one that is not plain is read the usual way.
+        constexpr std::size_t kChunk = 1024;
+        std::int64_t values[kChunk];
+        std::size_t ends[kChunk];
+        for (std::size_t i = 0; i < n;) {
+            const std::size_t asked = std::min(kChunk, n - i);
+            const std::size_t got = s_.plain_integers(values, ends, asked);
+            for (std::size_t j = 0; j < got; ++j, ++i) {
+                value_end_ = ends[j];
+                consume(i, values[j]);
+            }
+            if (got < asked) {
+                value_end_ = kNoValue;  // integer() refuses at the scanner's own place
+                const std::int64_t v = s_.integer(what);
+                value_end_ = s_.offset();
+                consume(i++, v);
+            }
+        }
+        value_end_ = kNoValue;
+    } else {
+        for (std::size_t i = 0; i < n; ++i) consume(i, s_.real(what));
     }
 }
 

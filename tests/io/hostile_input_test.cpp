@@ -564,6 +564,38 @@ BOOST_AUTO_TEST_CASE(coordinates_near_1e300_and_1e_minus_300) {
     }
 }
 
+// The legacy reader takes plain integers ahead, a chunk at a time (TextScanner::plain_integers): a
+// value found wrong once read names its own line (and cell); one that is not plain, far into the
+// list, goes the general way. Tetrahedra on the moment curve, 2000 points, far more ids than a chunk.
+BOOST_AUTO_TEST_CASE(integers_read_ahead_are_refused_at_their_own_line) {
+    const ScratchDir dir("hostile_read_ahead");
+    std::vector<Point> curve;
+    std::vector<Element> strip;
+    for (int i = 0; i < 2000; ++i) {
+        const double t = 1.0 + 1e-3 * i;
+        curve.push_back({t, t * t, t * t * t});
+        if (i >= 3) strip.push_back({i - 3, i - 2, i - 1, i});
+    }
+    const std::string long_vtk = vtk_text(curve, strip);
+    const auto line_of = [](const std::string& text, std::string_view needle, std::size_t from = 0) {
+        const auto at = static_cast<std::ptrdiff_t>(text.find(needle, from));
+        return ":" + std::to_string(1 + std::count(text.begin(), text.begin() + at, '\n')) + ":";
+    };
+    const std::string far_id = replaced(long_vtk, "4 1500 1501 1502 1503", "4 1500 1501 7777 1503");
+    check_text_fails_fast(dir, "far_id.vtk", far_id, {line_of(far_id, "4 1500 1501 7777"), "cell 1500 refers to point 7777"});
+    const std::string far_word = replaced(long_vtk, "4 1500 1501 1502 1503", "4 1500 1501 x 1503");
+    check_text_fails_fast(dir, "far_word.vtk", far_word, {line_of(far_word, "4 1500 1501 x"), "'x'", "(in cell 1500)"});
+    const std::string types = long_vtk.substr(0, long_vtk.find("CELL_TYPES"));
+    std::string far_type = types + "CELL_TYPES " + std::to_string(strip.size()) + "\n";
+    for (std::size_t c = 0; c < strip.size(); ++c) far_type += c == 1500 ? "99\n" : "10\n";
+    check_text_fails_fast(dir, "far_type.vtk", far_type, {line_of(far_type, "99\n", types.size()), "cell 1500"});
+    write_file(dir / "far_signed.vtk", replaced(long_vtk, "4 1500 1501 1502 1503", "4 1500 +1501 001502 1503"));
+    const Mesh far_signed = read_mesh(dir / "far_signed.vtk").mesh;
+    BOOST_TEST(far_signed.num_elements() == static_cast<ElementId>(strip.size()));
+    for (VertexId v : {1500, 1501, 1502, 1503})
+        BOOST_TEST(std::count(far_signed.element(1500).begin(), far_signed.element(1500).end(), v) == 1);
+}
+
 // The plane of a triangle mesh whose coordinates span a wide range of magnitudes: even at unit
 // scale the small triangles' areas are tiny, and squaring their sum underflowed (found by the fuzz
 // targets: a planar mesh with a plane normal of length 0.9997); without the rescaling the same
