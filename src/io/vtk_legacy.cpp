@@ -160,7 +160,6 @@ void LegacyReader::read_values(std::size_t n, ValueType type, std::string_view w
                 consume(i, values[j]);
             }
             if (got < asked) {
-                value_end_ = kNoValue;  // integer() refuses at the scanner's own place
                 const std::int64_t v = s_.integer(what);
                 value_end_ = s_.offset();
                 consume(i++, v);
