@@ -17,6 +17,17 @@ namespace paloverde::io {
 
 namespace {
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\f' || c == '\v'; }
+
+// The plain integer at `begin`: at most 18 digits (which cannot overflow), then whitespace or the
+// end of the data. Where it ends, or nullptr for anything else (which the general path reads or
+// refuses).
+const char* plain_integer(const char* begin, const char* data_end, std::int64_t& value) {
+    const char* end = begin + std::min<std::ptrdiff_t>(data_end - begin, 18);
+    const char* next = begin;
+    value = 0;
+    while (next < end && static_cast<unsigned char>(*next - '0') < 10) value = 10 * value + (*next++ - '0');
+    return next > begin && (next == data_end || is_space(*next)) ? next : nullptr;
+}
 }  // namespace
 
 TextScanner::TextScanner(std::string path, char comment) : path_(std::move(path)), comment_(comment) {
@@ -124,14 +135,9 @@ double TextScanner::finite_real(std::string_view what) {
 std::int64_t TextScanner::integer(std::string_view what) {
     skip_space();
     {
-        // At most 18 digits, which cannot overflow.
-        const char* begin = data_.data() + pos_;
-        const char* end = data_.data() + std::min(data_.size(), pos_ + 18);
-        const char* next = begin;
         std::int64_t value = 0;
-        while (next < end && static_cast<unsigned char>(*next - '0') < 10) value = 10 * value + (*next++ - '0');
-        if (next > begin && (next == data_.data() + data_.size() || is_space(*next))) {
-            pos_ += static_cast<std::size_t>(next - begin);
+        if (const char* next = plain_integer(data_.data() + pos_, data_.data() + data_.size(), value)) {
+            pos_ = static_cast<std::size_t>(next - data_.data());
             return value;
         }
     }
@@ -151,15 +157,10 @@ std::size_t TextScanner::plain_integers(std::int64_t* out, std::size_t* ends, st
         while (pos < size && is_space(data[pos])) line += data[pos++] == '\n';
         // What follows stands where integer() takes it up (its skip of whitespace done).
         pos_ = pos, line_ = line;
-        if (pos == size || data[pos] == comment_) break;
-        const char* begin = data + pos;
-        const char* end = data + std::min(size, pos + 18);
-        const char* next = begin;
-        std::int64_t value = 0;
-        while (next < end && static_cast<unsigned char>(*next - '0') < 10) value = 10 * value + (*next++ - '0');
-        if (next == begin || (next != data + size && !is_space(*next))) break;
+        if (pos == size || data[pos] == comment_) break;  // the end, or a comment for skip_space()
+        const char* next = plain_integer(data + pos, data + size, out[got]);
+        if (!next) break;
         pos = static_cast<std::size_t>(next - data);
-        out[got] = value;
         ends[got] = pos;
     }
     pos_ = pos, line_ = line;
