@@ -567,8 +567,8 @@ std::vector<ObjectInfo> section_infos() {
         if (o.key == "queue") o.default_value = "[improve: global]";
     out.push_back({"section", "run", "The top level of a config file.", run_options});
     out.push_back({"section", "input", "", input_table().describe(defaults.input)});
-    out.push_back({"section", "partition", "Partitioned (MPI) runs; see \"Partitioned runs\".", partition_table().describe(defaults.partition)});
-    out.push_back({"section", "parallel", "Partitioned (MPI) runs; see \"Partitioned runs\".", parallel_table().describe(defaults.parallel)});
+    out.push_back({"section", "partition", "Partitioned (MPI) runs; docs/parallel.md, \"From a config file\".", partition_table().describe(defaults.partition)});
+    out.push_back({"section", "parallel", "Partitioned (MPI) runs; docs/parallel.md, \"From a config file\".", parallel_table().describe(defaults.parallel)});
     out.push_back({"section", "output", "", output_table().describe(defaults.output)});
     out.push_back({"section", "study method", "One entry of `study`.",
                    keys_info({{"name", "text", "(required)", "Unique: the method's name in the table, the summary and {method}."},

@@ -1,7 +1,7 @@
 // Medit .mesh files (ASCII), as written by MMG, TetWild, Medit and many others.
 //
-// Orientation: Medit files from TetWild (armadillo, octopus-vol) have det(v1-v0, v2-v0, v3-v0) > 0
-// for every tetrahedron, the convention Paloverde uses, so elements are read as written. Quadrilaterals,
+// Orientation: Medit files (TetWild's among them) have det(v1-v0, v2-v0, v3-v0) > 0 for every
+// tetrahedron, the convention Paloverde uses, so elements are read as written. Quadrilaterals,
 // hexahedra and pyramids have VTK's vertex order; a prism's first triangle points towards the
 // second, the mirror of a VTK wedge (CellInfo::gmsh_order, as in Gmsh).
 #include <algorithm>

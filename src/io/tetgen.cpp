@@ -1,9 +1,8 @@
 // TetGen / Triangle .node + .ele files.
 //
 // Orientation: the format does not fix one. TetGen 1.6 writes tetrahedra with
-// det(v1-v0, v2-v0, v3-v0) > 0 (checked on its output here), Paloverde's convention. Stellar writes
-// the opposite: it keeps Shewchuk's orient3d(v0, v1, v2, v3) > 0, which is det(...) < 0, and every
-// tetrahedron of stellar/house2.ele is negative by our measure. So the reader asks finish_mesh to
+// det(v1-v0, v2-v0, v3-v0) > 0, Paloverde's convention. Stellar writes the opposite: it keeps
+// Shewchuk's orient3d(v0, v1, v2, v3) > 0, which is det(...) < 0. So the reader asks finish_mesh to
 // orient the mesh by its total signed volume (the enclosed volume, positive in our convention
 // even when some elements are tangled), which flips exactly the meshes written the other way.
 #include <cctype>
