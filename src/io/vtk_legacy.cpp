@@ -190,16 +190,27 @@ ValueType LegacyReader::value_type(std::string_view name) {
         {"vtkIdType", ValueType::Int32},
         {"unsigned_long", ValueType::UInt64},
         {"long", ValueType::Int64},
-        {"vtktypeint64", ValueType::Int64},
-        {"vtktypeuint64", ValueType::UInt64},
         {"float", ValueType::Float32},
         {"double", ValueType::Float64},
+        // VTK 9's names by size (its own writer uses them for OFFSETS and CONNECTIVITY; meshio for
+        // any array).
+        {"vtktypeint8", ValueType::Int8},
+        {"vtktypeuint8", ValueType::UInt8},
+        {"vtktypeint16", ValueType::Int16},
+        {"vtktypeuint16", ValueType::UInt16},
+        {"vtktypeint32", ValueType::Int32},
+        {"vtktypeuint32", ValueType::UInt32},
+        {"vtktypeint64", ValueType::Int64},
+        {"vtktypeuint64", ValueType::UInt64},
+        {"vtktypefloat32", ValueType::Float32},
+        {"vtktypefloat64", ValueType::Float64},
     };
     for (const Known& k : known)
         if (iequals(name, k.name)) return k.type;
     s_.fail("unsupported data type '" + printable(name) +
             "' (expected float, double, int, unsigned_int, short, unsigned_short, char, unsigned_char, long, "
-            "unsigned_long, vtkIdType, vtktypeint64, vtktypeuint64 or bit)");
+            "unsigned_long, vtkIdType, bit, or vtktypeint8 to vtktypeint64, vtktypeuint8 to vtktypeuint64, "
+            "vtktypefloat32 or vtktypefloat64)");
 }
 
 ValueType LegacyReader::integer_type(std::string_view name, std::string_view what) {

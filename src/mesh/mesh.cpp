@@ -157,6 +157,118 @@ void Mesh::carry_element_data_from(const Mesh& source, std::span<const VertexId>
 }
 
 namespace {
+// Vertex -> incident elements of `connectivity` (k corners per element, n vertices), compressed
+// rows, each row in increasing element order.
+void element_rows(std::span<const VertexId> connectivity, std::size_t n, int k, std::vector<std::int64_t>& offsets,
+                  std::vector<ElementId>& elements) {
+    offsets.assign(n + 1, 0);
+    for (VertexId v : connectivity) ++offsets[static_cast<std::size_t>(v) + 1];
+    std::partial_sum(offsets.begin(), offsets.end(), offsets.begin());
+    elements.resize(connectivity.size());
+    std::vector<std::int64_t> next(offsets.begin(), offsets.end() - 1);
+    const auto m = static_cast<ElementId>(connectivity.size() / static_cast<std::size_t>(k));
+    const VertexId* corner = connectivity.data();
+    for (ElementId e = 0; e < m; ++e)
+        for (int c = 0; c < k; ++c) elements[static_cast<std::size_t>(next[*corner++]++)] = e;
+}
+
+// Throws MeshError unless `order` lists each of 0..size-1 once.
+template <class Id>
+void check_permutation(std::span<const Id> order, std::size_t size, const char* what) {
+    if (order.size() != size)
+        throw MeshError("renumbering: " + std::to_string(order.size()) + " " + what + " given for " + std::to_string(size));
+    std::vector<std::uint8_t> seen(size, 0);
+    for (std::size_t i = 0; i < size; ++i) {
+        const Id id = order[i];
+        if (id < 0 || static_cast<std::size_t>(id) >= size || seen[static_cast<std::size_t>(id)])
+            throw MeshError(std::string("renumbering: the new ") + what + " are not a permutation of the old (" +
+                            std::to_string(id) + " at " + std::to_string(i) + ")");
+        seen[static_cast<std::size_t>(id)] = 1;
+    }
+}
+
+// out[w i + c] = values[w order[i] + c]; empty values give an empty result.
+template <class T, class Id>
+std::vector<T> gathered(const std::vector<T>& values, std::span<const Id> order, std::size_t width) {
+    if (values.empty()) return {};
+    std::vector<T> out(width * order.size());
+    for (std::size_t i = 0; i < order.size(); ++i)
+        for (std::size_t c = 0; c < width; ++c) out[width * i + c] = values[width * static_cast<std::size_t>(order[i]) + c];
+    return out;
+}
+}  // namespace
+
+void Mesh::permute(std::span<const VertexId> old_vertex, std::span<const ElementId> old_element) {
+    const auto n = static_cast<std::size_t>(num_vertices());
+    const auto m = static_cast<std::size_t>(num_elements());
+    const bool renumbers = !old_vertex.empty();
+    if (renumbers) check_permutation(old_vertex, n, "vertices");
+    check_permutation(old_element, m, "elements");
+    std::vector<VertexId> new_id;
+    if (renumbers) {
+        new_id.resize(n);
+        for (std::size_t i = 0; i < n; ++i) new_id[static_cast<std::size_t>(old_vertex[i])] = static_cast<VertexId>(i);
+    }
+    const auto name = [&](VertexId v) { return renumbers ? new_id[static_cast<std::size_t>(v)] : v; };
+    // Everything new is made before anything is replaced (all or nothing).
+    const auto k = static_cast<std::size_t>(corners());
+    std::vector<VertexId> connectivity(connectivity_.size());
+    {
+        // The elements in their new order lie scattered in the old: each is asked for a few ahead.
+        const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
+        const VertexId* corners = connectivity_.data();
+        for (std::size_t i = 0; i < m; ++i) {
+            if (i + ahead < m) __builtin_prefetch(corners + k * static_cast<std::size_t>(old_element[i + ahead]));
+            const VertexId* old = corners + k * static_cast<std::size_t>(old_element[i]);
+            for (std::size_t c = 0; c < k; ++c) connectivity[k * i + c] = name(old[c]);
+        }
+    }
+    std::vector<VertexId> cell_connectivity(cell_connectivity_.size());
+    for (std::size_t i = 0; i < cell_connectivity.size(); ++i) cell_connectivity[i] = name(cell_connectivity_[i]);
+    auto element_cell = gathered(element_cell_, old_element, 1);
+    auto corner_map = gathered(corner_map_, old_element, 1);
+    auto target_maps = gathered(target_maps_, old_element, 1);
+    auto target_volumes = gathered(target_volumes_, old_element, 1);
+    auto target_metric_roots = gathered(target_metric_roots_, old_element, 1);
+    auto surface_normals = gathered(surface_normals_, old_element, 1);
+    std::vector<double> coordinates, reference_coordinates, target_edge_lengths, target_metrics;
+    std::vector<std::uint8_t> fixed, freedom;
+    std::vector<GlobalId> global_ids;
+    if (renumbers) {
+        coordinates = gathered(coordinates_, old_vertex, 3);
+        fixed = gathered(fixed_, old_vertex, 1);
+        freedom = gathered(freedom_, old_vertex, 1);
+        global_ids = gathered(global_ids_, old_vertex, 1);
+        reference_coordinates = gathered(reference_coordinates_, old_vertex, 3);
+        target_edge_lengths = gathered(target_edge_lengths_, old_vertex, 1);
+        target_metrics = gathered(target_metrics_, old_vertex, kMetricValues);
+    }
+    std::vector<std::int64_t> offsets;
+    std::vector<ElementId> around;
+    element_rows(connectivity, n, corners(), offsets, around);
+
+    connectivity_ = std::move(connectivity);
+    vertex_element_offsets_ = std::move(offsets);
+    vertex_elements_ = std::move(around);
+    cell_connectivity_ = std::move(cell_connectivity);
+    element_cell_ = std::move(element_cell);
+    corner_map_ = std::move(corner_map);
+    target_maps_ = std::move(target_maps);
+    target_volumes_ = std::move(target_volumes);
+    target_metric_roots_ = std::move(target_metric_roots);
+    surface_normals_ = std::move(surface_normals);
+    if (renumbers) {
+        coordinates_ = std::move(coordinates);
+        fixed_ = std::move(fixed);
+        freedom_ = std::move(freedom);
+        global_ids_ = std::move(global_ids);
+        reference_coordinates_ = std::move(reference_coordinates);
+        target_edge_lengths_ = std::move(target_edge_lengths);
+        target_metrics_ = std::move(target_metrics);
+    }
+}
+
+namespace {
 bool finite(const CornerMap& a) {
     for (const auto& row : a)
         for (double x : row)
@@ -276,18 +388,10 @@ Mesh Mesh::copy_of(const MeshInterface& source) {
     return mesh;
 }
 
+
 void Mesh::build_adjacency() {
-    const VertexId n = num_vertices();
-    const int k = corners();
-    vertex_element_offsets_.assign(static_cast<std::size_t>(n) + 1, 0);
-    for (VertexId v : connectivity_) ++vertex_element_offsets_[static_cast<std::size_t>(v) + 1];
-    std::partial_sum(vertex_element_offsets_.begin(), vertex_element_offsets_.end(), vertex_element_offsets_.begin());
-    vertex_elements_.resize(connectivity_.size());
-    std::vector<std::int64_t> next(vertex_element_offsets_.begin(), vertex_element_offsets_.end() - 1);
-    const ElementId m = num_elements();
-    const VertexId* corner = connectivity_.data();
-    for (ElementId e = 0; e < m; ++e)
-        for (int c = 0; c < k; ++c) vertex_elements_[static_cast<std::size_t>(next[*corner++]++)] = e;
+    element_rows(connectivity_, static_cast<std::size_t>(num_vertices()), corners(), vertex_element_offsets_,
+                 vertex_elements_);
 }
 
 void Mesh::find_plane() {

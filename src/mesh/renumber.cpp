@@ -234,34 +234,8 @@ Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_
 }
 
 Mesh renumbered(const Mesh& mesh, const Renumbering& order) {
-    const VertexId n = mesh.num_vertices();
-    std::vector<VertexId> new_id(static_cast<std::size_t>(n));
-    for (VertexId i = 0; i < n; ++i) new_id[order.old_vertex[i]] = i;
-    std::vector<double> xyz(3 * static_cast<std::size_t>(n));
-    std::vector<std::uint8_t> freedom(static_cast<std::size_t>(n));
-    std::vector<GlobalId> global(static_cast<std::size_t>(n));
-    for (VertexId i = 0; i < n; ++i) {
-        const VertexId old = order.old_vertex[i];
-        for (int c = 0; c < 3; ++c) xyz[3 * i + c] = mesh.coordinates()[3 * static_cast<std::size_t>(old) + c];
-        freedom[i] = static_cast<std::uint8_t>(mesh.degrees_of_freedom(old));
-        global[i] = mesh.global_ids()[old];
-    }
-    // The elements in their new order lie scattered in the old: each is asked for a few ahead.
-    const auto k = static_cast<std::size_t>(mesh.corners());
-    const std::size_t m = order.old_element.size();
-    const VertexId* corners = mesh.connectivity().data();
-    const auto ahead = static_cast<std::size_t>(detail::kPrefetchAroundAhead);
-    std::vector<VertexId> connectivity(k * m);
-    for (std::size_t i = 0; i < m; ++i) {
-        if (i + ahead < m) __builtin_prefetch(corners + k * static_cast<std::size_t>(order.old_element[i + ahead]));
-        const VertexId* old = corners + k * static_cast<std::size_t>(order.old_element[i]);
-        for (std::size_t c = 0; c < k; ++c) connectivity[k * i + c] = new_id[static_cast<std::size_t>(old[c])];
-    }
-    Mesh out(mesh.kind(), std::move(xyz), std::move(connectivity));
-    out.set_degrees_of_freedom(std::move(freedom));
-    out.set_global_ids(std::move(global));
-    out.set_elements_flipped(mesh.elements_flipped());  // corners keep their order within each element
-    out.carry_element_data_from(mesh, new_id, order.old_element);
+    Mesh out = mesh;
+    out.permute(order.old_vertex, order.old_element);
     return out;
 }
 

@@ -495,14 +495,9 @@ void DistributedMesh::reorder_elements(std::span<const ElementId> order) {
         for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
         return out;
     };
-    Renumbering elements;
-    elements.old_vertex.resize(static_cast<std::size_t>(mesh_.num_vertices()));
-    std::iota(elements.old_vertex.begin(), elements.old_vertex.end(), VertexId{0});
-    elements.old_element.assign(order.begin(), order.end());
-    Mesh reordered = renumbered(mesh_, elements);
     std::vector<GlobalId> positions = permuted(element_order_);
     std::vector<std::uint8_t> flags = permuted(counted_);
-    mesh_ = std::move(reordered);
+    mesh_.permute({}, order);  // all or nothing, as the moves after it cannot fail
     element_order_ = std::move(positions);
     counted_ = std::move(flags);
 }

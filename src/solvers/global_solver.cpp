@@ -80,10 +80,13 @@ std::string options_text(const GlobalSolverOptions& o) {
     return t.text();
 }
 
-// Untangling (when needed) and shape improvement on the workspace; the caller frames the run.
-// With `sliding`, its vertices slide in the shape phase (and, on a surface mesh, untangling).
-Summary solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
-              detail::Workspace& work, detail::Checkpointer& checkpointer, const detail::SlidingBoundary* sliding) {
+// Untangling (when needed) and shape improvement on the workspace, the result handed back to the
+// part; returns why the run ended, for the caller to finish the run once the workspace is gone
+// (the result's report then reuses the memory the workspace held). With `sliding`, its vertices slide in
+// the shape phase (and, on a surface mesh, untangling).
+detail::PhaseResult solve(const GlobalSolverOptions& options, const IterationObserver& observer, detail::SolverRun& run,
+                          detail::Workspace& work, detail::Checkpointer& checkpointer,
+                          const detail::SlidingBoundary* sliding) {
     Summary& summary = run.summary;
     // A resumed run enters the stage (and untangling round) it was checkpointed in.
     std::optional<detail::SolverState> resume;
@@ -99,8 +102,8 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         // valid mesh its boundary-fixed run left.
         result = detail::untangle(context, xyz, sliding, resume);
         if (result.reason != TerminationReason::TargetReached) {
-            work.copy_back(xyz);
-            return run.finish(result.reason, result.message);
+            work.hand_back(xyz);
+            return result;
         }
     }
     if (resume && resume_untangling)
@@ -110,16 +113,14 @@ Summary solve(const GlobalSolverOptions& options, const IterationObserver& obser
         result = detail::improve_shape(context, xyz, sliding, resume, std::move(result));
     else if (resume)
         throw FileError(resume->source, 0, "this checkpoint is of a shape phase, which this run does not have");
-    work.copy_back(xyz);
+    work.hand_back(xyz);
     if (result.reason == TerminationReason::Interrupted || result.reason == TerminationReason::NumericalFailure)
-        return run.finish(result.reason, result.message);
+        return result;
     if (summary.before.inverted_frozen > 0)
-        return run.finish(TerminationReason::CannotUntangle,
-                          std::to_string(summary.before.inverted_frozen) +
-                              " inverted elements have all their vertices fixed; no smoother can move them");
-    if (still_tangled)
-        return run.finish(TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off");
-    return run.finish(result.reason, result.message);
+        return {TerminationReason::CannotUntangle, std::to_string(summary.before.inverted_frozen) +
+                                                       " inverted elements have all their vertices fixed; no smoother can move them"};
+    if (still_tangled) return {TerminationReason::CannotUntangle, "the mesh is tangled and untangling was turned off"};
+    return result;
 }
 
 // One run on the part, with the boundary sliding (`sliding`) or not (nullptr); `shared`: the
@@ -138,8 +139,11 @@ Summary improve_part(const GlobalSolverOptions& options, const IterationObserver
     const Mesh& mesh = part.mesh();
     const bool angle_terms = options.improve_shape && options.shape_metric == "dihedral_sine" &&
                              mesh.kind() == ElementKind::Tetrahedron && !mesh.has_cells();
-    detail::Workspace work(part, options.renumber, angle_terms);
-    return solve(options, observer, run, work, checkpointer, sliding);
+    detail::PhaseResult ending = [&] {
+        detail::Workspace work(part, options.renumber, angle_terms);
+        return solve(options, observer, run, work, checkpointer, sliding);
+    }();
+    return run.finish(ending.reason, std::move(ending.message));
 }
 
 // Whether the shape phases move only the vertices near the worst elements (Newton directions

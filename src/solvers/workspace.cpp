@@ -100,76 +100,92 @@ std::vector<GlobalId> term_positions(std::span<const GlobalId> positions) {
 }  // namespace
 
 Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
-    : original_(&part.mesh()), part_(part), mesh_(!part.whole() && !angle_terms ? part.mesh() : own_),
-      angle_terms_(angle_terms) {
+    : original_(&part.mesh()), part_(part), mesh_(angle_terms ? own_ : part.mesh()), angle_terms_(angle_terms) {
     if (angle_terms && (part.mesh().kind() != ElementKind::Tetrahedron || part.mesh().has_cells()))
         throw OptionError("angle terms are for meshes of tetrahedra only");
     // Each copy permutes its element's corners, which a target's map is written for.
     if (angle_terms && part.mesh().has_targets())
         throw OptionError("the dihedral angles are rated against the regular tetrahedron: they take no targets");
+    Mesh& held = part.mesh();
+    const auto n = static_cast<std::size_t>(held.num_vertices());
+    std::vector<GlobalId> whole_positions;  // a part's are its own
+    std::span<const GlobalId> positions = part.element_positions();
+    ElementId movable = 0;
     if (!part.whole()) {
         reducer_ = &part.reducer();
         halo_ = &part.halo();
-        const Mesh& held = part.mesh();
-        const VertexId n = held.num_vertices();
-        owned_.resize(static_cast<std::size_t>(n));
-        for (VertexId v = 0; v < n; ++v) {
+        owned_.resize(n);
+        for (VertexId v = 0; v < static_cast<VertexId>(n); ++v) {
             owned_[v] = part.owns(v);
             if (!owned_[v]) ghosts_.push_back(v);
         }
-        // The part's elements in the working order, in place.
-        auto [order, movable] = movable_first(held, part.element_positions());
+        // A part's vertices are in canonical order already: only its elements are reordered.
+        auto [order, movable_count] = movable_first(held, part.element_positions());
         part.reorder_elements(order);
         part_order_ = std::move(order);
+        movable = movable_count;
+        positions = part.element_positions();  // reordered with the elements
+    } else {
+        // The whole mesh: its vertices in locality order (or as given) too.
+        std::vector<VertexId> old_vertex;
+        if (renumber) old_vertex = locality_vertex_order(held);
+        std::vector<GlobalId> new_id(n);
+        for (std::size_t i = 0; i < n; ++i)
+            new_id[renumber ? static_cast<std::size_t>(old_vertex[i]) : i] = static_cast<GlobalId>(i);
+        whole_positions = canonical_element_positions(held, new_id);
+        auto [order, movable_count] = movable_first(held, whole_positions);
+        whole_positions = permuted(whole_positions, order);
+        positions = whole_positions;
+        held.permute(old_vertex, order);
+        part_order_ = std::move(order);
+        old_vertex_ = std::move(old_vertex);
+        movable = movable_count;
+        was_locality_ordered_ = held.locality_ordered();
+        held.set_locality_ordered(renumber);
+        owned_.assign(n, 1);
+    }
+    // From here on the part is in the workspace's order: should the rest fail, it gets its own back.
+    try {
+        const GlobalId global_elements = part.whole() ? held.num_elements() : part.global_elements();
         if (angle_terms_) {  // the copies in a mesh of the workspace's own, the part as it is
             own_ = with_angle_terms(held);
-            for (std::uint8_t c : part.counted()) term_counted_.insert(term_counted_.end(), kAngleTerms, c);
-            finish(term_positions(part.element_positions()), term_counted_, kAngleTerms * part.global_elements(),
-                   kAngleTerms * movable);
+            if (!part.whole())
+                for (std::uint8_t c : part.counted()) term_counted_.insert(term_counted_.end(), kAngleTerms, c);
+            finish(term_positions(positions), term_counted_, kAngleTerms * global_elements, kAngleTerms * movable);
         } else {
-            finish(part.element_positions(), part.counted(), part.global_elements(), movable);
+            finish(positions, part.counted(), global_elements, movable);
         }
-        if (held.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal();
-        return;
+        if (!part.whole() && held.kind() == ElementKind::Triangle) scale_.plane_normal = part.plane_normal();
+    } catch (...) {
+        restore_part();
+        throw;
     }
-    // Serially the mesh is copied once, with its vertices in locality order (or as given) and its
-    // elements in the working order.
-    const Mesh& mesh = part.mesh();
-    const auto n = static_cast<std::size_t>(mesh.num_vertices());
-    Renumbering order;
-    if (renumber) {
-        order.old_vertex = locality_vertex_order(mesh);
-    } else {
-        order.old_vertex.resize(n);
-        std::iota(order.old_vertex.begin(), order.old_vertex.end(), VertexId{0});
-    }
-    std::vector<GlobalId> new_id(n);
-    for (std::size_t i = 0; i < n; ++i) new_id[static_cast<std::size_t>(order.old_vertex[i])] = static_cast<GlobalId>(i);
-    std::vector<GlobalId> positions = canonical_element_positions(mesh, new_id);
-    auto [element_order, movable] = movable_first(mesh, positions);
-    order.old_element = std::move(element_order);
-    own_ = renumbered(mesh, order);
-    own_.set_locality_ordered(renumber);
-    positions = permuted(positions, order.old_element);
-    if (angle_terms_) {
-        own_ = with_angle_terms(own_);
-        positions = term_positions(positions);
-        movable *= kAngleTerms;
-    }
-    if (renumber) old_vertex_ = std::move(order.old_vertex);
-    owned_.assign(n, 1);
-    std::vector<std::uint8_t> all_counted;
-    finish(positions, all_counted, own_.num_elements(), movable);
 }
 
 Workspace::~Workspace() {
-    if (part_.whole()) return;
-    // The local smoother's sums follow the part's element order: hand the part back in it. All
-    // or nothing: should memory run out, the part stays whole, in the workspace's order.
+    // Unwinding: the part is put back as hand_back() would. All or nothing: should memory run out
+    // here, the part stays in the workspace's order.
     try {
-        part_.reorder_elements(inverse(part_order_));
+        restore_part();
     } catch (const std::exception&) {
     }
+}
+
+void Workspace::restore_part() {
+    if (restored_) return;
+    if (part_.whole()) {
+        original_->permute(old_vertex_.empty() ? std::vector<VertexId>{} : inverse(old_vertex_), inverse(part_order_));
+        original_->set_locality_ordered(was_locality_ordered_);
+    } else {
+        // The local smoother's sums follow the part's element order: it gets that order back.
+        part_.reorder_elements(inverse(part_order_));
+    }
+    restored_ = true;
+}
+
+void Workspace::hand_back(std::span<const double> xyz) {
+    std::copy(xyz.begin(), xyz.end(), original_->coordinates().begin());
+    restore_part();
 }
 
 void Workspace::finish(std::span<const GlobalId> element_order, std::span<const std::uint8_t> counted,
@@ -421,19 +437,6 @@ void Workspace::gradient(const QualityMetric& metric, std::span<const double> xy
             gather(gradient, lanes.gradient, 3, low, high);
             if (with_curvature) gather(curvature, lanes.curvature, 6, low, high);
         }
-    }
-}
-
-void Workspace::copy_back(std::span<const double> xyz) const {
-    // A distributed part keeps its own vertex order (only its elements were reordered).
-    if (!part_.whole()) {
-        std::copy(xyz.begin(), xyz.end(), original_->coordinates().begin());
-        return;
-    }
-    auto out = original_->coordinates();
-    for (VertexId v = 0; v < mesh_.num_vertices(); ++v) {
-        const VertexId old = caller_vertex(v);
-        for (int c = 0; c < 3; ++c) out[3 * static_cast<std::size_t>(old) + c] = xyz[3 * static_cast<std::size_t>(v) + c];
     }
 }
 

@@ -26,10 +26,11 @@ namespace paloverde::detail {
 
 class Workspace {
 public:
-    // The whole mesh, renumbered for locality unless `renumber` is false, in a copy. A part of a
-    // distributed mesh is in canonical order already: the workspace orders the part's elements in
-    // place rather than holding a reordered copy (a copy would cost as much as the part's mesh),
-    // and puts them back in the part's order when it is destroyed.
+    // The part in the workspace's order, in place (a copy would cost as much as the mesh): the
+    // whole mesh has its vertices renumbered for locality (unless `renumber` is false) and its
+    // elements put in the working order; a part of a distributed mesh, in canonical order
+    // already, has only its elements reordered. Until hand_back() (or the destructor, when a run
+    // throws) the part's mesh is numbered as the workspace's; caller_vertex() names its vertices.
     //
     // With `angle_terms` (tetrahedra without cells), each element is held as kAngleTerms copies,
     // corners permuted (evenly: the orientation stays) so that each of its edges comes first in one
@@ -100,8 +101,9 @@ public:
 
     // The id in the part it was made from of the workspace's vertex v.
     VertexId caller_vertex(VertexId v) const { return old_vertex_.empty() ? v : old_vertex_[v]; }
-    // Coordinates xyz (the workspace's) into the part it was made from, in the part's numbering.
-    void copy_back(std::span<const double> xyz) const;
+    // Coordinates xyz (the workspace's) into the part, which gets back its own order: the
+    // workspace's last act (its mesh is the part's no longer).
+    void hand_back(std::span<const double> xyz);
 
 private:
     struct Lane {
@@ -141,15 +143,19 @@ private:
                             GlobalId global_elements, bool compact);
     std::vector<double> absolute_volumes() const;  // per element, at the mesh's coordinates
     static std::vector<VertexId> free_vertices_of(const Mesh& mesh);
+    // Gives the part its own order back (once).
+    void restore_part();
 
-    Mesh* original_;             // the part's mesh
-    Mesh own_;                   // serial runs: the mesh in canonical order
-    MeshPart part_;                      // a distributed run's part has its elements reordered
-    std::vector<ElementId> part_order_;  // distributed: workspace element i is the part's part_order_[i]
-    Mesh& mesh_;                  // own_, or the part's mesh (own_, the copies, with angle terms)
+    Mesh* original_;                     // the part's mesh, in the workspace's order until restored
+    Mesh own_;                           // with angle terms: the copies of its elements
+    MeshPart part_;
+    std::vector<ElementId> part_order_;  // workspace element i is the part's part_order_[i]
+    Mesh& mesh_;                         // the part's mesh, or own_ with angle terms
     bool angle_terms_ = false;
+    bool restored_ = false;
+    bool was_locality_ordered_ = false;       // the whole mesh's mark, given back with its order
     std::vector<std::uint8_t> term_counted_;  // distributed, angle terms: counted, per copy
-    std::vector<VertexId> old_vertex_;  // serial, renumbered: caller's id of each vertex
+    std::vector<VertexId> old_vertex_;  // the whole mesh, renumbered: caller's id of each vertex
     ElementId movable_ = 0;
     std::vector<std::uint8_t> owned_;
     std::vector<VertexId> ghosts_;

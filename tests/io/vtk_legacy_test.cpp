@@ -300,6 +300,22 @@ BOOST_AUTO_TEST_CASE(reads_the_vtk_5_cells_form_with_metadata) {
     BOOST_TEST(file.mesh.fixed()[1] == 0);
     BOOST_TEST(file.point_fields.size() == 1u);  // the dataset's TimeValue is not a point field
 
+    // VTK 9's type names by size read as the classic names of the same sizes (meshio writes them).
+    std::string sized = replaced(text, "OFFSETS vtktypeint64", "OFFSETS vtktypeint32");
+    sized = replaced(sized, "CONNECTIVITY vtktypeint64", "CONNECTIVITY vtktypeuint32");
+    sized = replaced(sized, "id 1 3 int", "id 1 3 vtktypeint16");
+    sized = replaced(sized, "dir 3 3 double", "dir 3 3 vtktypefloat32");
+    sized = replaced(sized, "SCALARS fixed unsigned_char 1", "SCALARS fixed vtktypeuint8 1");
+    write_file(dir / "sized.vtk", sized);
+    const MeshFile same = read_mesh(dir / "sized.vtk");
+    BOOST_TEST((std::vector<VertexId>(same.mesh.connectivity().begin(), same.mesh.connectivity().end()) ==
+                std::vector<VertexId>(file.mesh.connectivity().begin(), file.mesh.connectivity().end())));
+    BOOST_TEST((same.cell_field("id")->values == std::vector<double>{7, 8}));
+    BOOST_TEST((same.cell_field("dir")->values == std::vector<double>{1, 2, 3, 4, 5, 6}));
+    BOOST_TEST((std::vector<std::uint8_t>(same.mesh.fixed().begin(), same.mesh.fixed().end()) ==
+                std::vector<std::uint8_t>(file.mesh.fixed().begin(), file.mesh.fixed().end())));
+    check_error_text(dir, replaced(text, "OFFSETS vtktypeint64", "OFFSETS vtktypefloat64"), {":15:", "integer type"});
+
     // Wrong offsets and ids are reported on their line, naming the cell.
     check_error_text(dir, replaced(text, "0 4 8 9\n", "0 4 3 9\n"), {":16:", "offset 2 (3)", "previous offset (4)"});
     check_error_text(dir, replaced(text, "0 4 8 9\n", "1 4 8 9\n"), {":16:", "first offset must be 0"});

@@ -13,6 +13,7 @@
 #include "paloverde/mesh/openmesh_adapter.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
+#include "support/mesh_checks.hpp"
 
 namespace pv = paloverde;
 
@@ -252,6 +253,90 @@ BOOST_AUTO_TEST_CASE(openmesh_triangles_copy_in_and_out_through_the_batch_interf
     adapter.set_coordinates(centre, xyz);
     BOOST_TEST(om.point(v[4])[0] == 1.25);
     BOOST_TEST(om.point(v[4])[1] == 0.75);
+}
+
+// Solvers renumber the caller's mesh in place and back: every field must follow its vertex or
+// element there, and come back bit for bit.
+BOOST_AUTO_TEST_CASE(permuting_in_place_carries_every_field_and_undoes_exactly) {
+    pv::Mesh mesh = pv::read_mesh(shared + "/mesquite/mixed/mixed-hex-pyr-tet.vtk").mesh;
+    const auto n = static_cast<std::size_t>(mesh.num_vertices());
+    const auto m = static_cast<std::size_t>(mesh.num_elements());
+    std::vector<std::uint8_t> freedom(n);
+    std::vector<pv::GlobalId> ids(n);
+    std::vector<double> reference(3 * n), lengths(n), metrics;
+    for (std::size_t v = 0; v < n; ++v) {
+        freedom[v] = static_cast<std::uint8_t>(v % 4);
+        ids[v] = static_cast<pv::GlobalId>(1000 + 7 * v);
+        for (int c = 0; c < 3; ++c) reference[3 * v + c] = mesh.coordinates()[3 * v + c] + 0.001 * double(v);
+        lengths[v] = 1.0 + 0.01 * double(v);
+        metrics.insert(metrics.end(), {1.0 + double(v), 2.0, 3.0, 0.1, 0.0, 0.2});
+    }
+    mesh.set_degrees_of_freedom(freedom);
+    mesh.set_global_ids(ids);
+    mesh.set_reference_coordinates(reference);
+    mesh.set_target_edge_lengths(lengths);
+    mesh.set_target_metrics(metrics);
+    std::vector<pv::CornerMap> maps(m), roots(m);
+    std::vector<double> volumes(m);
+    for (std::size_t e = 0; e < m; ++e) {
+        maps[e] = {{{1.0 + 0.01 * double(e), 0.0, 0.0}, {0.0, 1.0, 0.0}, {0.0, 0.0, 1.0}}};
+        roots[e] = {{{1.0, 0.0, 0.0}, {0.0, 2.0 + 0.01 * double(e), 0.0}, {0.0, 0.0, 1.0}}};
+        volumes[e] = 0.5 + 0.001 * double(e);
+    }
+    mesh.set_targets(maps, volumes, roots);
+    mesh.set_locality_ordered(true);
+    const pv::Mesh before = mesh;
+
+    // Reversed vertices, elements in a scrambled order.
+    std::vector<pv::VertexId> old_vertex(n);
+    std::vector<pv::ElementId> old_element(m);
+    for (std::size_t i = 0; i < n; ++i) old_vertex[i] = static_cast<pv::VertexId>(n - 1 - i);
+    for (std::size_t i = 0; i < m; ++i) old_element[i] = static_cast<pv::ElementId>((7 * i + 3) % m);
+    BOOST_REQUIRE(std::gcd(std::size_t{7}, m) == 1u);
+    mesh.permute(old_vertex, old_element);
+    std::vector<pv::VertexId> new_id(n);
+    for (std::size_t i = 0; i < n; ++i) new_id[static_cast<std::size_t>(old_vertex[i])] = static_cast<pv::VertexId>(i);
+    for (std::size_t i = 0; i < m; ++i) {
+        const auto e = static_cast<pv::ElementId>(i), old = old_element[i];
+        for (std::size_t c = 0; c < 4; ++c) BOOST_TEST(mesh.element(e)[c] == new_id[before.element(old)[c]]);
+        BOOST_TEST(mesh.cell_of(e) == before.cell_of(old));
+        BOOST_TEST(mesh.corner_maps()[i] == before.corner_maps()[old]);
+        BOOST_TEST(mesh.target_volumes()[i] == before.target_volumes()[old]);
+        BOOST_TEST((mesh.target_maps()[i] == before.target_maps()[old] && mesh.target_metric_roots()[i] == before.target_metric_roots()[old]));
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto v = static_cast<pv::VertexId>(i), old = old_vertex[i];
+        BOOST_TEST((mesh.point(v) == before.point(old)));
+        BOOST_TEST(mesh.degrees_of_freedom(v) == before.degrees_of_freedom(old));
+        BOOST_TEST(mesh.global_ids()[i] == before.global_ids()[old]);
+        BOOST_TEST(mesh.reference_coordinates()[3 * i + 2] == before.reference_coordinates()[3 * old + 2]);
+        BOOST_TEST(mesh.target_edge_lengths()[i] == before.target_edge_lengths()[old]);
+        BOOST_TEST(mesh.target_metrics()[6 * i] == before.target_metrics()[6 * old]);
+        for (pv::ElementId e : mesh.elements_of(v))
+            BOOST_TEST((std::find(mesh.element(e).begin(), mesh.element(e).end(), v) != mesh.element(e).end()));
+        BOOST_TEST(mesh.elements_of(v).size() == before.elements_of(old).size());
+    }
+    for (std::size_t i = 0; i < mesh.cell_connectivity().size(); ++i)
+        BOOST_TEST(mesh.cell_connectivity()[i] == new_id[before.cell_connectivity()[i]]);
+
+    // Back: the inverse orders give the mesh it was.
+    std::vector<pv::ElementId> new_element(m);
+    for (std::size_t i = 0; i < m; ++i) new_element[static_cast<std::size_t>(old_element[i])] = static_cast<pv::ElementId>(i);
+    mesh.permute(new_id, new_element);
+    pv::test::check_same_mesh(mesh, before);
+
+    // Orders that are not permutations change nothing.
+    old_element[1] = old_element[0];
+    BOOST_CHECK_EXCEPTION(mesh.permute(old_vertex, old_element), pv::MeshError,
+                          [](const auto& e) { return message_has(e, "not a permutation"); });
+    BOOST_CHECK_THROW(mesh.permute(std::vector<pv::VertexId>(n - 1, 0), new_element), pv::MeshError);
+    old_vertex[0] = static_cast<pv::VertexId>(n);
+    BOOST_CHECK_THROW(mesh.permute(old_vertex, new_element), pv::MeshError);
+    pv::test::check_same_mesh(mesh, before);
+    // Vertices kept, elements moved.
+    mesh.permute({}, new_element);
+    for (std::size_t i = 0; i < m; ++i)
+        BOOST_TEST(mesh.element(static_cast<pv::ElementId>(i))[0] == before.element(new_element[i])[0]);
 }
 
 BOOST_AUTO_TEST_SUITE_END()

@@ -266,7 +266,7 @@ BOOST_DATA_TEST_CASE(planar_meshes_are_smoothed_as_before_surfaces,
     pv::Mesh mesh = which == 0 ? tilted_square() : pv::read_mesh(pv::test::shared_data("mesquite/tris/horseshoe.vtk")).mesh;
     BOOST_REQUIRE(mesh.is_planar());
     improve(solver, mesh, pv::SurfaceDomain{});
-    const std::uint64_t expected[2][2] = {{10669647457569678885ull, 773925202846960635ull},
+    const std::uint64_t expected[2][2] = {{10177187697036529528ull, 773925202846960635ull},
                                           {13550463711065524843ull, 13608774603244712129ull}};
     BOOST_TEST(hash_of(mesh.coordinates()) == expected[std::string(solver) == "global" ? 0 : 1][which]);
 }

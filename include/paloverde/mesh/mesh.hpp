@@ -78,10 +78,17 @@ public:
     // corner); without cells, a copy.
     std::vector<double> cell_minimum(std::span<const double> per_element) const;
     // Renumbers or reorders: the cells' vertices by new_id (new_id[old]), the elements' cell, map
-    // and target by old_element (new element i was old_element[i]). For renumbered() and for any
-    // mesh made of some of another's elements.
+    // and target by old_element (new element i was old_element[i]). For any mesh made of some of
+    // another's elements.
     void carry_element_data_from(const Mesh& source, std::span<const VertexId> new_id,
                                  std::span<const ElementId> old_element);
+    // Renumbers the mesh in place: vertex i becomes the one that was old_vertex[i] (empty: the
+    // vertices keep their ids), element i the one that was old_element[i]. Every per-vertex and
+    // per-element field goes with them, and the cells' corners are renamed; the cells keep their
+    // order, and the plane and the marks (flipped, locality ordered) stay as they were: nothing
+    // moved. All or nothing: should memory run out, the mesh is as it was. Throws MeshError for
+    // orders that are not permutations of the vertices and elements.
+    void permute(std::span<const VertexId> old_vertex, std::span<const ElementId> old_element);
 
     // Targets (metrics/targets.hpp): per element, the map that carries its corner simplex to the
     // simplex a metric rates in its place (instead of its cell's corner map), so that an element

@@ -20,7 +20,8 @@ Renumbering locality_order(const Mesh& mesh, std::span<const std::uint8_t> last_
 // The vertex order alone (new id -> original id), for callers that order the elements themselves.
 std::vector<VertexId> locality_vertex_order(const Mesh& mesh);
 
-// The mesh with vertices and elements in the new order (fixed flags and global ids follow).
+// A copy of the mesh with its vertices and elements in the new order (Mesh::permute: every field
+// follows).
 Mesh renumbered(const Mesh& mesh, const Renumbering& order);
 
 // The vertex-to-vertex graph (compressed rows, sorted neighbours, no self loops).
