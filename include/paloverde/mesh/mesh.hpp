@@ -207,8 +207,8 @@ public:
     // output keeps the convention of its input. Copies keep the mark.
     bool elements_flipped() const noexcept { return elements_flipped_; }
     void set_elements_flipped(bool flipped) noexcept { elements_flipped_ = flipped; }
-    // Whether the numbering keeps neighbours near each other (a solver's renumbered copy, set by
-    // whoever renumbered it): a pass over the elements then reads their corners almost in order,
+    // Whether the numbering keeps neighbours near each other (a mesh a solver has renumbered, set
+    // by whoever renumbered it): a pass over the elements then reads their corners almost in order,
     // and the processor's own prefetching does better than asking for each corner ahead. Copies
     // keep the mark.
     bool locality_ordered() const noexcept { return locality_ordered_; }
