@@ -388,7 +388,6 @@ Mesh Mesh::copy_of(const MeshInterface& source) {
     return mesh;
 }
 
-
 void Mesh::build_adjacency() {
     element_rows(connectivity_, static_cast<std::size_t>(num_vertices()), corners(), vertex_element_offsets_,
                  vertex_elements_);
