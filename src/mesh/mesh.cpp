@@ -8,6 +8,7 @@
 #include <string>
 
 #include "paloverde/core/error.hpp"
+#include "core/permutation.hpp"
 #include "core/prefetch.hpp"
 #include "mesh/small_matrix.hpp"
 
@@ -187,15 +188,6 @@ void check_permutation(std::span<const Id> order, std::size_t size, const char* 
     }
 }
 
-// out[w i + c] = values[w order[i] + c]; empty values give an empty result.
-template <class T, class Id>
-std::vector<T> gathered(const std::vector<T>& values, std::span<const Id> order, std::size_t width) {
-    if (values.empty()) return {};
-    std::vector<T> out(width * order.size());
-    for (std::size_t i = 0; i < order.size(); ++i)
-        for (std::size_t c = 0; c < width; ++c) out[width * i + c] = values[width * static_cast<std::size_t>(order[i]) + c];
-    return out;
-}
 }  // namespace
 
 void Mesh::permute(std::span<const VertexId> old_vertex, std::span<const ElementId> old_element) {
@@ -204,11 +196,7 @@ void Mesh::permute(std::span<const VertexId> old_vertex, std::span<const Element
     const bool renumbers = !old_vertex.empty();
     if (renumbers) check_permutation(old_vertex, n, "vertices");
     check_permutation(old_element, m, "elements");
-    std::vector<VertexId> new_id;
-    if (renumbers) {
-        new_id.resize(n);
-        for (std::size_t i = 0; i < n; ++i) new_id[static_cast<std::size_t>(old_vertex[i])] = static_cast<VertexId>(i);
-    }
+    const std::vector<VertexId> new_id = detail::inverse(old_vertex);  // empty when the ids stay
     const auto name = [&](VertexId v) { return renumbers ? new_id[static_cast<std::size_t>(v)] : v; };
     // Everything new is made before anything is replaced (all or nothing).
     const auto k = static_cast<std::size_t>(corners());
@@ -225,23 +213,23 @@ void Mesh::permute(std::span<const VertexId> old_vertex, std::span<const Element
     }
     std::vector<VertexId> cell_connectivity(cell_connectivity_.size());
     for (std::size_t i = 0; i < cell_connectivity.size(); ++i) cell_connectivity[i] = name(cell_connectivity_[i]);
-    auto element_cell = gathered(element_cell_, old_element, 1);
-    auto corner_map = gathered(corner_map_, old_element, 1);
-    auto target_maps = gathered(target_maps_, old_element, 1);
-    auto target_volumes = gathered(target_volumes_, old_element, 1);
-    auto target_metric_roots = gathered(target_metric_roots_, old_element, 1);
-    auto surface_normals = gathered(surface_normals_, old_element, 1);
+    auto element_cell = detail::gathered(element_cell_, old_element);
+    auto corner_map = detail::gathered(corner_map_, old_element);
+    auto target_maps = detail::gathered(target_maps_, old_element);
+    auto target_volumes = detail::gathered(target_volumes_, old_element);
+    auto target_metric_roots = detail::gathered(target_metric_roots_, old_element);
+    auto surface_normals = detail::gathered(surface_normals_, old_element);
     std::vector<double> coordinates, reference_coordinates, target_edge_lengths, target_metrics;
     std::vector<std::uint8_t> fixed, freedom;
     std::vector<GlobalId> global_ids;
     if (renumbers) {
-        coordinates = gathered(coordinates_, old_vertex, 3);
-        fixed = gathered(fixed_, old_vertex, 1);
-        freedom = gathered(freedom_, old_vertex, 1);
-        global_ids = gathered(global_ids_, old_vertex, 1);
-        reference_coordinates = gathered(reference_coordinates_, old_vertex, 3);
-        target_edge_lengths = gathered(target_edge_lengths_, old_vertex, 1);
-        target_metrics = gathered(target_metrics_, old_vertex, kMetricValues);
+        coordinates = detail::gathered(coordinates_, old_vertex, 3);
+        fixed = detail::gathered(fixed_, old_vertex);
+        freedom = detail::gathered(freedom_, old_vertex);
+        global_ids = detail::gathered(global_ids_, old_vertex);
+        reference_coordinates = detail::gathered(reference_coordinates_, old_vertex, 3);
+        target_edge_lengths = detail::gathered(target_edge_lengths_, old_vertex);
+        target_metrics = detail::gathered(target_metrics_, old_vertex, kMetricValues);
     }
     std::vector<std::int64_t> offsets;
     std::vector<ElementId> around;

@@ -13,6 +13,7 @@
 #include "paloverde/io/mesh_io.hpp"
 #include "paloverde/mesh/renumber.hpp"
 #include "paloverde/parallel/partition.hpp"
+#include "core/permutation.hpp"
 #include "parallel/collective.hpp"
 #include "parallel/exchange.hpp"
 #include "parallel/mpi_support.hpp"
@@ -490,13 +491,8 @@ BoundaryFacets DistributedMesh::gather_boundary(bool surface) const {
 void DistributedMesh::update_ghost_coordinates() { halo_->update(mesh_.coordinates(), 3); }
 
 void DistributedMesh::reorder_elements(std::span<const ElementId> order) {
-    const auto permuted = [&](const auto& values) {
-        std::remove_cvref_t<decltype(values)> out(values.size());
-        for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
-        return out;
-    };
-    std::vector<GlobalId> positions = permuted(element_order_);
-    std::vector<std::uint8_t> flags = permuted(counted_);
+    std::vector<GlobalId> positions = detail::gathered(element_order_, order);
+    std::vector<std::uint8_t> flags = detail::gathered(counted_, order);
     mesh_.permute({}, order);  // all or nothing, as the moves after it cannot fail
     element_order_ = std::move(positions);
     counted_ = std::move(flags);

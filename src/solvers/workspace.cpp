@@ -7,6 +7,7 @@
 
 #include "core/blocked_sum.hpp"
 #include "core/exact_sums.hpp"
+#include "core/permutation.hpp"
 #include "paloverde/core/error.hpp"
 #include "paloverde/mesh/orientation.hpp"
 #include "paloverde/mesh/renumber.hpp"
@@ -19,14 +20,6 @@ constexpr ElementId kEvaluateChunk = 2048;
 // The canonical element order is cut into this many blocks; each vertex sums its elements'
 // contributions block by block. The blocks depend only on the whole mesh.
 constexpr GlobalId kGradientBlocks = 64;
-
-// out[i] = values[order[i]]
-template <class T>
-std::vector<T> permuted(const std::vector<T>& values, std::span<const ElementId> order) {
-    std::vector<T> out(values.size());
-    for (std::size_t i = 0; i < out.size(); ++i) out[i] = values[static_cast<std::size_t>(order[i])];
-    return out;
-}
 
 // The elements' working order: the movable ones first, each group in canonical order (the
 // elements placed by their positions when these number them from 0, as serially; else sorted,
@@ -56,13 +49,6 @@ MovableFirst movable_first(const Mesh& mesh, std::span<const GlobalId> element_o
     auto movable = result.order.begin(), frozen = movable + result.movable;
     for (ElementId e : canonical) *(moves[static_cast<std::size_t>(e)] ? movable++ : frozen++) = e;
     return result;
-}
-
-// The order that undoes `order`.
-std::vector<ElementId> inverse(std::span<const ElementId> order) {
-    std::vector<ElementId> out(order.size());
-    for (std::size_t i = 0; i < order.size(); ++i) out[static_cast<std::size_t>(order[i])] = static_cast<ElementId>(i);
-    return out;
 }
 
 // The corners of copy k of a tetrahedron: edge k of (0 1), (0 2), (0 3), (1 2), (1 3), (2 3) first,
@@ -134,7 +120,7 @@ Workspace::Workspace(MeshPart part, bool renumber, bool angle_terms)
             new_id[renumber ? static_cast<std::size_t>(old_vertex[i]) : i] = static_cast<GlobalId>(i);
         whole_positions = canonical_element_positions(held, new_id);
         auto [order, movable_count] = movable_first(held, whole_positions);
-        whole_positions = permuted(whole_positions, order);
+        whole_positions = gathered(whole_positions, std::span<const ElementId>(order));
         positions = whole_positions;
         held.permute(old_vertex, order);
         part_order_ = std::move(order);
@@ -174,11 +160,11 @@ Workspace::~Workspace() {
 void Workspace::restore_part() {
     if (restored_) return;
     if (part_.whole()) {
-        original_->permute(old_vertex_.empty() ? std::vector<VertexId>{} : inverse(old_vertex_), inverse(part_order_));
+        original_->permute(inverse(std::span<const VertexId>(old_vertex_)), inverse(std::span<const ElementId>(part_order_)));
         original_->set_locality_ordered(was_locality_ordered_);
     } else {
         // The local smoother's sums follow the part's element order: it gets that order back.
-        part_.reorder_elements(inverse(part_order_));
+        part_.reorder_elements(inverse(std::span<const ElementId>(part_order_)));
     }
     restored_ = true;
 }
